@@ -1,0 +1,17 @@
+//! sgbem: contact and detachment of 2D elastic bodies by the symmetric Galerkin boundary
+//! element method (SGBEM).
+//!
+//! The modules follow the data flow; each depends only on those listed before it:
+//! `error` → `expr` → `scene` → `mesh` → `model` → `kernels` → `quadrature` → `galerkin`
+//! → `plan` (the effects a scene calls for) → `report` (what `sgbem check` prints).
+
+pub mod error;
+pub mod expr;
+pub mod galerkin;
+pub mod kernels;
+pub mod mesh;
+pub mod model;
+pub mod plan;
+pub mod quadrature;
+pub mod report;
+pub mod scene;
