@@ -977,3 +977,94 @@ fn element_fix(kind: i32) -> &'static str {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cursor(bytes: &[u8], binary: bool) -> Cursor<'_> {
+        Cursor {
+            bytes,
+            pos: 0,
+            source: Path::new("t.msh"),
+            binary,
+            section: "$Nodes",
+        }
+    }
+
+    #[test]
+    fn shown_cuts_long_tokens_on_character_boundaries() {
+        let long = "é".repeat(50);
+        let short = shown(long.as_bytes());
+        assert_eq!(short.chars().count(), 41);
+        assert!(short.ends_with('…'));
+        assert_eq!(shown(b"abc"), "abc");
+        assert_eq!(shown(&[0xff, b'1']), "\u{fffd}1");
+    }
+
+    #[test]
+    fn locations_are_lines_in_text_and_bytes_in_binary() {
+        let text = cursor(b"a\nb\n\nc", false);
+        assert_eq!(text.location(0), "line 1");
+        assert_eq!(text.location(2), "line 2");
+        assert_eq!(text.location(5), "line 4");
+        assert_eq!(text.location(999), "line 4");
+        assert_eq!(cursor(b"a\nb", true).location(2), "byte 2");
+        let message = text.error_at(2, "boom").to_string();
+        assert_eq!(message, "t.msh: in $Nodes at line 2: boom");
+    }
+
+    #[test]
+    fn binary_fields_stop_at_the_end_of_input() {
+        let mut c = cursor(&[1, 0, 0, 0, 7, 0, 0], true);
+        assert_eq!(c.int("an int").unwrap(), 1);
+        let err = c.int("an int").unwrap_err().to_string();
+        assert!(
+            err.contains("byte 4") && err.contains("end of file"),
+            "{err}"
+        );
+        assert_eq!(c.pos, 4, "a failed read consumes nothing");
+        assert!(c.size("a size").is_err());
+        assert!(c.real("a real").is_err());
+    }
+
+    #[test]
+    fn text_numbers_are_checked() {
+        let mut c = cursor(b" 12 -3 x 1.5e3 18446744073709551616", false);
+        assert_eq!(c.size("a size").unwrap(), 12);
+        assert!(c.size("a size").unwrap_err().to_string().contains("'-3'"));
+        assert!(c.int("an int").unwrap_err().to_string().contains("'x'"));
+        assert_eq!(c.real("a real").unwrap(), 1500.0);
+        assert!(c.size("a size").is_err(), "beyond u64");
+        assert!(c
+            .token("more")
+            .unwrap_err()
+            .to_string()
+            .contains("end of file"));
+    }
+
+    #[test]
+    fn count_guards_refuse_what_cannot_fit_without_overflow() {
+        let c = cursor(&[0; 64], true);
+        assert!(c.check_count(0, 8, 8, 1, "things").is_ok());
+        assert!(c.check_count(0, 9, 8, 1, "things").is_err());
+        assert!(c.check_count(0, usize::MAX, 8, 1, "things").is_err());
+        let t = cursor(b"1 2 3", false);
+        assert!(t.check_count(0, 3, 0, 1, "numbers").is_ok());
+        assert!(t.check_count(0, 4, 0, 1, "numbers").is_err());
+        assert!(t
+            .check_count(0, usize::MAX, 0, usize::MAX, "numbers")
+            .is_err());
+    }
+
+    #[test]
+    fn end_of_line_before_binary_data() {
+        let mut c = cursor(b" \r\n\x0a", true);
+        c.end_of_line("data").unwrap();
+        assert_eq!(c.pos, 3, "the 0x0a after the newline is data");
+        let mut c = cursor(b" x\n", true);
+        assert!(c.end_of_line("data").is_err());
+        let mut c = cursor(b"  ", true);
+        assert!(c.end_of_line("data").is_err());
+    }
+}
