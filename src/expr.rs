@@ -1,1 +1,299 @@
-//! (in progress)
+//! Prescribed values: a number, or an expression in `x` and `y`.
+//!
+//! Place in the flow: used by `scene` (parsing and validation) and later stages (evaluation
+//! at nodes and quadrature points). Expressions are parsed once by the `evalexpr` crate and
+//! evaluated through a small context of our own that knows exactly `x`, `y`, `pi` and the
+//! functions SPEC.md lists (`sqrt sin cos tan exp ln abs atan2 min max`), so any other name is
+//! refused when the scene is read, not in the middle of a solve.
+//!
+//! Integer literals are read as floating-point numbers: `"1/2*x"` means 0.5·x, as an engineer
+//! would expect, not integer division.
+
+use crate::error::did_you_mean;
+use evalexpr::{
+    build_operator_tree, Context, DefaultNumericTypes, EvalexprError, EvalexprResult, Node, Value,
+};
+
+/// Functions an expression may call, with their number of arguments.
+pub const FUNCTIONS: [(&str, usize); 10] = [
+    ("sqrt", 1),
+    ("sin", 1),
+    ("cos", 1),
+    ("tan", 1),
+    ("exp", 1),
+    ("ln", 1),
+    ("abs", 1),
+    ("atan2", 2),
+    ("min", 2),
+    ("max", 2),
+];
+
+/// Variables an expression may read.
+pub const VARIABLES: [&str; 3] = ["x", "y", "pi"];
+
+/// A prescribed scalar: constant or a function of the point (x, y).
+#[derive(Debug, Clone)]
+pub enum Scalar {
+    Const(f64),
+    Expr(Expr),
+}
+
+impl Scalar {
+    pub fn eval(&self, p: [f64; 2]) -> f64 {
+        match self {
+            Scalar::Const(v) => *v,
+            Scalar::Expr(e) => e.eval(p),
+        }
+    }
+
+    /// The constant value, if the value does not depend on the point.
+    pub fn as_const(&self) -> Option<f64> {
+        match self {
+            Scalar::Const(v) => Some(*v),
+            Scalar::Expr(_) => None,
+        }
+    }
+
+    /// True when the value is the constant 0.
+    pub fn is_zero(&self) -> bool {
+        self.as_const() == Some(0.0)
+    }
+}
+
+impl std::fmt::Display for Scalar {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Scalar::Const(v) => write!(f, "{v}"),
+            Scalar::Expr(e) => write!(f, "\"{}\"", e.text),
+        }
+    }
+}
+
+/// A parsed expression in `x` and `y`.
+#[derive(Debug, Clone)]
+pub struct Expr {
+    pub text: String,
+    tree: Node<DefaultNumericTypes>,
+}
+
+impl Expr {
+    /// Parses and checks an expression; the error message says what is wrong with it.
+    pub fn parse(text: &str) -> Result<Expr, String> {
+        if text.trim().is_empty() {
+            return Err("the expression is empty".into());
+        }
+        if let Some(c) = text
+            .chars()
+            .find(|c| matches!(c, '=' | ';' | '"' | '&' | '|' | '!'))
+        {
+            return Err(format!(
+                "`{c}` is not allowed: an expression is arithmetic in x and y \
+                 (+ - * / ^, parentheses, {}, pi)",
+                function_list()
+            ));
+        }
+        let tree = build_operator_tree::<DefaultNumericTypes>(&floats_for_integers(text))
+            .map_err(|e| format!("it does not parse ({e})"))?;
+        for name in tree.iter_read_variable_identifiers() {
+            if !VARIABLES.contains(&name) {
+                return Err(format!(
+                    "unknown name `{name}`: an expression may use x, y and pi{}",
+                    did_you_mean(name, VARIABLES.iter().copied())
+                ));
+            }
+        }
+        for name in tree.iter_function_identifiers() {
+            if !FUNCTIONS.iter().any(|(f, _)| *f == name) {
+                return Err(format!(
+                    "unknown function `{name}`: use one of {}{}",
+                    function_list(),
+                    did_you_mean(name, FUNCTIONS.iter().map(|(f, _)| *f))
+                ));
+            }
+        }
+        let expr = Expr {
+            text: text.to_string(),
+            tree,
+        };
+        // Evaluate once: wrong argument counts and non-numeric results show up here.
+        expr.try_eval([0.25, 0.75])?;
+        Ok(expr)
+    }
+
+    /// Value at p; NaN where the expression is undefined (the caller checks finiteness).
+    pub fn eval(&self, p: [f64; 2]) -> f64 {
+        self.try_eval(p).unwrap_or(f64::NAN)
+    }
+
+    fn try_eval(&self, p: [f64; 2]) -> Result<f64, String> {
+        let ctx = PointContext {
+            x: Value::Float(p[0]),
+            y: Value::Float(p[1]),
+            pi: Value::Float(std::f64::consts::PI),
+        };
+        match self.tree.eval_with_context(&ctx) {
+            Ok(Value::Float(v)) => Ok(v),
+            Ok(Value::Int(v)) => Ok(v as f64),
+            Ok(other) => Err(format!("it gives {other:?}, not a number")),
+            Err(e) => Err(format!("it cannot be evaluated ({e})")),
+        }
+    }
+}
+
+fn function_list() -> String {
+    FUNCTIONS
+        .iter()
+        .map(|(f, _)| *f)
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+/// Rewrites integer literals as float literals (`2` → `2.0`) so that `/` never truncates.
+fn floats_for_integers(text: &str) -> String {
+    let chars: Vec<char> = text.chars().collect();
+    let mut out = String::with_capacity(text.len() + 8);
+    let mut i = 0;
+    while i < chars.len() {
+        let c = chars[i];
+        let starts_number = c.is_ascii_digit()
+            && (i == 0
+                || !(chars[i - 1].is_alphanumeric() || chars[i - 1] == '_' || chars[i - 1] == '.'));
+        if !starts_number {
+            out.push(c);
+            i += 1;
+            continue;
+        }
+        let start = i;
+        while i < chars.len() && chars[i].is_ascii_digit() {
+            i += 1;
+        }
+        let mut is_float = false;
+        if i < chars.len() && chars[i] == '.' {
+            is_float = true;
+            i += 1;
+            while i < chars.len() && chars[i].is_ascii_digit() {
+                i += 1;
+            }
+        }
+        if i < chars.len() && (chars[i] == 'e' || chars[i] == 'E') {
+            let mut j = i + 1;
+            if j < chars.len() && (chars[j] == '+' || chars[j] == '-') {
+                j += 1;
+            }
+            if j < chars.len() && chars[j].is_ascii_digit() {
+                is_float = true;
+                i = j;
+                while i < chars.len() && chars[i].is_ascii_digit() {
+                    i += 1;
+                }
+            }
+        }
+        out.extend(&chars[start..i]);
+        if !is_float {
+            out.push_str(".0");
+        }
+    }
+    out
+}
+
+/// The evaluation context: x, y, pi and the functions of [`FUNCTIONS`], nothing else.
+struct PointContext {
+    x: Value,
+    y: Value,
+    pi: Value,
+}
+
+impl Context for PointContext {
+    type NumericTypes = DefaultNumericTypes;
+
+    fn get_value(&self, identifier: &str) -> Option<&Value> {
+        match identifier {
+            "x" => Some(&self.x),
+            "y" => Some(&self.y),
+            "pi" => Some(&self.pi),
+            _ => None,
+        }
+    }
+
+    fn call_function(&self, identifier: &str, argument: &Value) -> EvalexprResult<Value> {
+        let one = |f: fn(f64) -> f64| -> EvalexprResult<Value> {
+            Ok(Value::Float(f(argument.as_number()?)))
+        };
+        let two = |f: fn(f64, f64) -> f64| -> EvalexprResult<Value> {
+            let args = argument.as_fixed_len_tuple(2)?;
+            Ok(Value::Float(f(args[0].as_number()?, args[1].as_number()?)))
+        };
+        match identifier {
+            "sqrt" => one(f64::sqrt),
+            "sin" => one(f64::sin),
+            "cos" => one(f64::cos),
+            "tan" => one(f64::tan),
+            "exp" => one(f64::exp),
+            "ln" => one(f64::ln),
+            "abs" => one(f64::abs),
+            "atan2" => two(f64::atan2),
+            "min" => two(f64::min),
+            "max" => two(f64::max),
+            _ => Err(EvalexprError::FunctionIdentifierNotFound(
+                identifier.to_string(),
+            )),
+        }
+    }
+
+    fn are_builtin_functions_disabled(&self) -> bool {
+        true
+    }
+
+    fn set_builtin_functions_disabled(&mut self, _disabled: bool) -> EvalexprResult<()> {
+        Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn ev(text: &str, p: [f64; 2]) -> f64 {
+        Expr::parse(text).expect("parses").eval(p)
+    }
+
+    #[test]
+    fn arithmetic_and_functions() {
+        assert_eq!(ev("-9.81e-3*(40 - y)", [0.0, 10.0]), -9.81e-3 * 30.0);
+        assert_eq!(ev("x^2/(2*50)", [10.0, 0.0]), 1.0);
+        assert_eq!(ev("1/2*x", [3.0, 0.0]), 1.5);
+        assert_eq!(ev("7/2", [0.0, 0.0]), 3.5);
+        assert_eq!(ev("2E2 + 1.5e+1 + 3.", [0.0, 0.0]), 218.0);
+        assert!(
+            (ev("sin(pi/2) + cos(0) + tan(0) + exp(0) + ln(1)", [0.0, 0.0]) - 3.0).abs() < 1e-15
+        );
+        assert_eq!(ev("sqrt(abs(-16))", [0.0, 0.0]), 4.0);
+        assert_eq!(ev("atan2(y, x)", [0.0, 1.0]), std::f64::consts::FRAC_PI_2);
+        assert_eq!(ev("min(x, y) + max(x, y)", [2.0, 5.0]), 7.0);
+        assert_eq!(ev("-(x+y)^2", [1.0, 1.0]), -4.0);
+    }
+
+    #[test]
+    fn identifiers_with_digits_are_untouched() {
+        assert_eq!(floats_for_integers("x2 + 3*y_1"), "x2 + 3.0*y_1");
+        assert_eq!(floats_for_integers("1.5e-3 + 10"), "1.5e-3 + 10.0");
+    }
+
+    #[test]
+    fn bad_expressions_are_refused_with_a_reason() {
+        let e = Expr::parse("z + 1").unwrap_err();
+        assert!(e.contains("`z`"), "{e}");
+        let e = Expr::parse("sinh(x)").unwrap_err();
+        assert!(
+            e.contains("`sinh`") && e.contains("did you mean `sin`"),
+            "{e}"
+        );
+        let e = Expr::parse("x = 3").unwrap_err();
+        assert!(e.contains("`=`"), "{e}");
+        assert!(Expr::parse("(x + 1").is_err());
+        assert!(Expr::parse("").is_err());
+        assert!(Expr::parse("atan2(x)").is_err());
+        assert!(Expr::parse("\"text\"").is_err());
+        assert!(Expr::parse("math::sin(x)").is_err());
+    }
+}

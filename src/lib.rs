@@ -3,7 +3,8 @@
 //!
 //! The modules follow the data flow; each depends only on those listed before it:
 //! `error` → `expr` → `scene` → `mesh` → `model` → `kernels` → `quadrature` → `galerkin`
-//! → `plan` (the effects a scene calls for) → `report` (what `sgbem check` prints).
+//! → `plan` (the effects a scene calls for) → `report` (what `sgbem check` prints)
+//! → `pipeline` (the stage order).
 
 pub mod error;
 pub mod expr;
@@ -11,6 +12,7 @@ pub mod galerkin;
 pub mod kernels;
 pub mod mesh;
 pub mod model;
+pub mod pipeline;
 pub mod plan;
 pub mod quadrature;
 pub mod report;

@@ -1,1 +1,115 @@
-fn main() {}
+//! The `sgbem` command line: a thin front over the pipeline.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand, ValueEnum};
+
+use sgbem::error::Error;
+use sgbem::{pipeline, report};
+
+#[derive(Parser)]
+#[command(
+    name = "sgbem",
+    version,
+    about = "Contact and detachment of 2D elastic bodies by the symmetric Galerkin BEM",
+    long_about = "Contact and detachment of 2D elastic bodies by the symmetric Galerkin boundary \
+                  element method.\n\nExit status: 0 success; 2 invalid input; 3 numerical \
+                  failure; 1 anything else (I/O)."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum MethodArg {
+    Lcp,
+    Qp,
+    Both,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Read, validate, solve and write all outputs.
+    Run {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Mesh file (MSH 4.1); overrides the scene's `mesh`.
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+        /// Output directory; overrides the scene's `output.directory`.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        /// Contact solver; overrides the scene's `solve.method`.
+        #[arg(long, value_enum)]
+        method: Option<MethodArg>,
+        /// No progress bars.
+        #[arg(long)]
+        quiet: bool,
+    },
+    /// Read and validate only; print the model and the plan.
+    Check {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// Mesh file (MSH 4.1); overrides the scene's `mesh`.
+        #[arg(long)]
+        mesh: Option<PathBuf>,
+    },
+    /// Print what an archive holds.
+    Inspect {
+        /// An archive.h5 written by `sgbem run`.
+        archive: PathBuf,
+    },
+    /// Write the VTK files again from an archive, without solving.
+    Export {
+        /// An archive.h5 written by `sgbem run`.
+        archive: PathBuf,
+        /// Directory for the VTK files.
+        #[arg(long)]
+        vtk: PathBuf,
+    },
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Check { scene, mesh } => pipeline::load(&scene, mesh.as_deref()).map(|l| {
+            print!(
+                "{}",
+                report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
+            );
+        }),
+        Command::Run {
+            scene,
+            mesh,
+            out: _,
+            method: _,
+            quiet: _,
+        } => pipeline::load(&scene, mesh.as_deref()).and_then(|l| {
+            Err(Error::io(
+                &l.scene.path,
+                format!(
+                    "the scene is valid (plan: {}), but this build of sgbem cannot solve yet; \
+                     `sgbem check` prints the model and the plan",
+                    l.plan.effects_line()
+                ),
+            ))
+        }),
+        Command::Inspect { archive } => Err(Error::io(
+            &archive,
+            "this build of sgbem does not read archives yet",
+        )),
+        Command::Export { archive, vtk: _ } => Err(Error::io(
+            &archive,
+            "this build of sgbem does not read archives yet",
+        )),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("sgbem: {e}");
+            ExitCode::from(e.exit_code() as u8)
+        }
+    }
+}

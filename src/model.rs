@@ -1,1 +1,1658 @@
-//! (in progress)
+//! The model: bodies with oriented boundary loops, boundary parts, interfaces with matched
+//! node pairs, and the class of every displacement degree of freedom.
+//!
+//! Place in the flow: `scene` + `mesh` → [`Model`] → assembly. Everything geometric that
+//! the boundary element method needs is decided here, once:
+//!
+//! * **Bodies** are Physical Surfaces. A body's boundary is the set of bounding curves of its
+//!   surfaces (a curve bounding two surfaces of the same body is internal and dropped); its
+//!   2-node line elements are chained into closed loops. The outer loop is oriented
+//!   counter-clockwise and holes clockwise, by signed area and nesting, whatever direction
+//!   gmsh drew each curve in (formulation §1.1).
+//! * **Nodes are per body**: a mesh node on an interface appears once in each of the two
+//!   bodies (formulation §5.1).
+//! * **Boundary parts** are Physical Curves with per-component conditions; curves the scene
+//!   does not list are traction-free.
+//! * **Interfaces** are Physical Curves shared by exactly two bodies, turned into node pairs
+//!   (matched by mesh node, or by position when the two sides were drawn as separate
+//!   coincident curves) with the outward normal of the first body (formulation §5.4–§5.5).
+//! * **Double traction nodes** (`traction_break`) at corners and changes of condition
+//!   (formulation §2.2, §8.3).
+//! * **Node classes** per displacement component (formulation §2.2): U1 known (touching a
+//!   displacement condition in that direction), U0 unknown on an interface, U2 unknown
+//!   elsewhere.
+//!
+//! Checks made here (all input errors, exit 2): group names and kinds, open loops (with the
+//! gmsh hint about untagged curves), zero-length elements, crossing or overlapping bodies,
+//! interface nodes that do not match, expressions undefined at a node, and bodies that
+//! nothing holds against rigid motion.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+use crate::error::{did_you_mean, Error, Result};
+use crate::mesh::Mesh;
+use crate::scene::{BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene};
+
+/// Turning angle above which two elements meet at a corner, within one gmsh curve.
+const CORNER_ANGLE_IN_CURVE: f64 = 10.0 * std::f64::consts::PI / 180.0;
+/// Turning angle above which two elements meet at a corner, where two gmsh curves join.
+const CORNER_ANGLE_AT_JOIN: f64 = 1.0 * std::f64::consts::PI / 180.0;
+
+/// Where a boundary element belongs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// A boundary part (index into [`Model::parts`]).
+    Boundary(usize),
+    /// An interface (index into [`Model::interfaces`]).
+    Interface(usize),
+}
+
+/// A straight 2-node boundary element of one body, oriented along its loop (body on the left).
+#[derive(Debug, Clone)]
+pub struct Element {
+    /// Body-local node indices, start then end.
+    pub nodes: [usize; 2],
+    /// gmsh element tag.
+    pub tag: usize,
+    /// gmsh curve entity the element lies on.
+    pub curve: i32,
+    pub role: Role,
+    pub length: f64,
+    /// Unit tangent, start → end.
+    pub tangent: [f64; 2],
+    /// Unit outward normal `(τ_y, −τ_x)`.
+    pub normal: [f64; 2],
+    /// Index of the loop the element belongs to.
+    pub loop_index: usize,
+    /// True when tractions are discontinuous at the start node: a double traction node
+    /// (corner, or change of part or condition).
+    pub traction_break: bool,
+    /// True when the element runs against the direction gmsh drew its curve in.
+    pub reversed: bool,
+}
+
+/// A closed boundary loop: element indices in traversal order.
+#[derive(Debug, Clone)]
+pub struct Loop {
+    pub elements: Vec<usize>,
+    /// Signed area enclosed (positive: counter-clockwise outer loop; negative: hole).
+    pub area: f64,
+    pub is_hole: bool,
+}
+
+/// Class of one displacement component at a node (formulation §2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DofClass {
+    /// U1: prescribed by a displacement condition.
+    Known,
+    /// U0: unknown, on an interface.
+    Interface,
+    /// U2: unknown, elsewhere.
+    Free,
+}
+
+/// The two displacement components of a node: their directions and classes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeDofs {
+    /// Unit directions of components 0 and 1 (orthonormal).
+    pub frame: [[f64; 2]; 2],
+    pub class: [DofClass; 2],
+}
+
+/// One elastic body: a Physical Surface.
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub name: String,
+    pub young: f64,
+    pub poisson: f64,
+    pub body_force: Option<[f64; 2]>,
+    /// gmsh surface entities of the body.
+    pub surfaces: Vec<i32>,
+    /// Boundary node coordinates (body-local numbering).
+    pub nodes: Vec<[f64; 2]>,
+    /// Index into `Mesh::nodes` of each body node.
+    pub mesh_nodes: Vec<usize>,
+    pub elements: Vec<Element>,
+    pub loops: Vec<Loop>,
+    pub dofs: Vec<NodeDofs>,
+    /// Mesh triangles of the body (mesh node indices), the grid for interior fields.
+    pub triangles: Vec<[usize; 3]>,
+    pub area: f64,
+}
+
+impl Body {
+    pub fn perimeter(&self) -> f64 {
+        self.elements.iter().map(|e| e.length).sum()
+    }
+
+    /// Number of nodes in each class (U1, U0, U2), counting a node once per component.
+    pub fn dof_counts(&self) -> [usize; 3] {
+        let mut c = [0; 3];
+        for d in &self.dofs {
+            for k in d.class {
+                match k {
+                    DofClass::Known => c[0] += 1,
+                    DofClass::Interface => c[1] += 1,
+                    DofClass::Free => c[2] += 1,
+                }
+            }
+        }
+        c
+    }
+}
+
+/// A boundary part: a Physical Curve that is not an interface.
+#[derive(Debug, Clone)]
+pub struct Part {
+    pub spec: BoundarySpec,
+    /// False for a Physical Curve the scene does not list (traction-free).
+    pub listed: bool,
+    /// Elements per body (body index → count).
+    pub elements: BTreeMap<usize, usize>,
+    pub length: f64,
+}
+
+/// A matched interface node pair.
+#[derive(Debug, Clone)]
+pub struct Pair {
+    /// Body-local node index in the first body (A) and in the second (B).
+    pub node_a: usize,
+    pub node_b: usize,
+    /// Position (of A's node).
+    pub x: [f64; 2],
+    /// Unit outward normal of A at the node (averaged over A's adjacent interface elements).
+    pub normal: [f64; 2],
+    /// Unit tangent `(−n_y, n_x)`.
+    pub tangent: [f64; 2],
+    /// Arc length from the curve's first node.
+    pub s: f64,
+    /// Initial normal gap h ≥ 0 (open zones).
+    pub gap: f64,
+    /// Cohesion c ≥ 0 (closed zones).
+    pub cohesion: f64,
+}
+
+/// An interface element: the same segment seen from both bodies.
+#[derive(Debug, Clone, Copy)]
+pub struct InterfaceElement {
+    /// Element index in body A and in body B.
+    pub elem_a: usize,
+    pub elem_b: usize,
+    /// Pair indices at A's start and end nodes.
+    pub pairs: [usize; 2],
+}
+
+/// A Physical Curve shared by two bodies.
+#[derive(Debug, Clone)]
+pub struct Interface {
+    pub spec: InterfaceSpec,
+    /// Body indices; A comes first in the scene.
+    pub body_a: usize,
+    pub body_b: usize,
+    /// Pairs in order of arc length.
+    pub pairs: Vec<Pair>,
+    pub elements: Vec<InterfaceElement>,
+    pub length: f64,
+    /// True when the two sides were separate coincident curves matched by position.
+    pub matched_by_position: bool,
+}
+
+/// Element size figures for `sgbem check`.
+#[derive(Debug, Clone, Default)]
+pub struct SizeStats {
+    pub smallest: (f64, String),
+    pub largest: (f64, String),
+    /// Largest length ratio between neighbouring elements of a loop.
+    pub grading: (f64, String),
+}
+
+/// The validated model.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub mesh_path: PathBuf,
+    pub bodies: Vec<Body>,
+    pub parts: Vec<Part>,
+    pub interfaces: Vec<Interface>,
+    /// Diagonal of the bounding box of all boundary nodes.
+    pub scale: f64,
+    pub sizes: SizeStats,
+    /// Physical Curves that lie on no body boundary (ignored).
+    pub unused_curves: Vec<String>,
+}
+
+impl Model {
+    pub fn element_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.elements.len()).sum()
+    }
+    pub fn pair_count(&self) -> usize {
+        self.interfaces.iter().map(|i| i.pairs.len()).sum()
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Small 2-vector helpers.
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+fn norm(a: [f64; 2]) -> f64 {
+    a[0].hypot(a[1])
+}
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+fn unit(a: [f64; 2]) -> [f64; 2] {
+    let n = norm(a);
+    [a[0] / n, a[1] / n]
+}
+fn fmt_point(p: [f64; 2]) -> String {
+    format!("({}, {})", fmt_num(p[0]), fmt_num(p[1]))
+}
+/// Compact number formatting for messages and reports.
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e6).contains(&a) {
+        let s = format!("{v:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
+const OPEN_LOOP_HINT: &str = "gmsh drops the elements of curves that are in no Physical Curve \
+once any physical group exists: add every boundary curve to a named Physical Curve \
+(e.g. Physical Curve(\"free\") = {...};) and mesh again";
+
+/// What each physical curve of the mesh is, after reading the scene.
+enum CurveUse {
+    Boundary(usize),
+    Interface(usize),
+}
+
+/// Builds and validates the model of a scene on a mesh.
+pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
+    let mfile = mesh_path;
+    let sfile = scene.path.as_path();
+    let named = |dim: i32| -> Vec<&str> {
+        mesh.physical_names
+            .iter()
+            .filter(|p| p.dim == dim)
+            .map(|p| p.name.as_str())
+            .collect()
+    };
+    let group_tag = |dim: i32, name: &str| -> Option<i32> {
+        mesh.physical_names
+            .iter()
+            .find(|p| p.dim == dim && p.name == name)
+            .map(|p| p.tag)
+    };
+    let wrong_kind = |key: &str, name: &str, want: i32| -> Error {
+        let kinds = [
+            "Physical Point",
+            "Physical Curve",
+            "Physical Surface",
+            "Physical Volume",
+        ];
+        let found = mesh
+            .physical_names
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| kinds.get(p.dim as usize).copied().unwrap_or("group"));
+        let want_s = kinds[want as usize];
+        match found {
+            Some(kind) => Error::input(
+                sfile,
+                format!(
+                    "[{key}.{name}] names a {kind} of {}, but a {key} must be a {want_s}",
+                    mfile.display()
+                ),
+            ),
+            None => Error::input(
+                sfile,
+                format!(
+                    "[{key}.{name}]: {} has no {want_s} named \"{name}\"{}; its {want_s}s are: {}",
+                    mfile.display(),
+                    did_you_mean(name, named(want).into_iter()),
+                    list_or_none(&named(want))
+                ),
+            ),
+        }
+    };
+
+    // --- Bodies: physical surfaces -----------------------------------------------------
+    let mut surface_owner: HashMap<i32, usize> = HashMap::new();
+    let mut body_surfaces: Vec<Vec<i32>> = Vec::new();
+    for (bi, spec) in scene.bodies.iter().enumerate() {
+        let tag = group_tag(2, &spec.name).ok_or_else(|| wrong_kind("body", &spec.name, 2))?;
+        let surfaces: Vec<i32> = mesh
+            .surfaces
+            .values()
+            .filter(|s| s.physical_tags.contains(&tag))
+            .map(|s| s.tag)
+            .collect();
+        if surfaces.is_empty() {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "Physical Surface \"{}\" holds no surface entity: mesh the .geo again",
+                    spec.name
+                ),
+            ));
+        }
+        for &s in &surfaces {
+            if let Some(&other) = surface_owner.get(&s) {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "surface {s} belongs to both Physical Surfaces \"{}\" and \"{}\": bodies \
+                         overlap; put each surface in one body only",
+                        scene.bodies[other].name, spec.name
+                    ),
+                ));
+            }
+            surface_owner.insert(s, bi);
+        }
+        body_surfaces.push(surfaces);
+    }
+    for p in mesh.physical_names.iter().filter(|p| p.dim == 2) {
+        if scene.body(&p.name).is_none() {
+            return Err(Error::input(
+                sfile,
+                format!(
+                    "{} has a Physical Surface \"{}\" but the scene has no [body.{}]: add it with \
+                     its young and poisson{}",
+                    mfile.display(),
+                    p.name,
+                    p.name,
+                    did_you_mean(&p.name, scene.bodies.iter().map(|b| b.name.as_str()))
+                        .replace("did you mean", "or rename")
+                ),
+            ));
+        }
+    }
+
+    // --- Boundary curves of each body ---------------------------------------------------
+    let mut body_curves: Vec<BTreeSet<i32>> = Vec::new();
+    for (bi, surfaces) in body_surfaces.iter().enumerate() {
+        let mut count: BTreeMap<i32, usize> = BTreeMap::new();
+        for s in surfaces {
+            let ent = &mesh.surfaces[s];
+            if ent.bounding.is_empty() {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "surface {s} of body \"{}\" has no bounding curves in $Entities",
+                        scene.bodies[bi].name
+                    ),
+                ));
+            }
+            for c in &ent.bounding {
+                *count.entry(c.abs()).or_default() += 1;
+            }
+        }
+        // A curve bounding two surfaces of the same body is internal to it.
+        body_curves.push(
+            count
+                .into_iter()
+                .filter(|(_, n)| n % 2 == 1)
+                .map(|(c, _)| c)
+                .collect(),
+        );
+    }
+    let mut curve_bodies: BTreeMap<i32, Vec<usize>> = BTreeMap::new();
+    for (bi, curves) in body_curves.iter().enumerate() {
+        for &c in curves {
+            curve_bodies.entry(c).or_default().push(bi);
+        }
+    }
+
+    // --- What each physical curve is -----------------------------------------------------
+    for b in &scene.boundaries {
+        if group_tag(1, &b.name).is_none() {
+            return Err(wrong_kind("boundary", &b.name, 1));
+        }
+    }
+    for i in &scene.interfaces {
+        if group_tag(1, &i.name).is_none() {
+            return Err(wrong_kind("interface", &i.name, 1));
+        }
+    }
+    let mut parts: Vec<Part> = Vec::new();
+    let mut interfaces_found: Vec<(usize, i32)> = Vec::new(); // (scene interface index, group tag)
+    let mut uses: HashMap<i32, CurveUse> = HashMap::new(); // group tag → use
+    let mut unused_curves = Vec::new();
+    for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
+        let curves: Vec<i32> = mesh
+            .curves
+            .values()
+            .filter(|c| c.physical_tags.contains(&p.tag))
+            .map(|c| c.tag)
+            .collect();
+        let on_bodies: BTreeSet<usize> = curves
+            .iter()
+            .filter_map(|c| curve_bodies.get(c))
+            .flatten()
+            .copied()
+            .collect();
+        if on_bodies.is_empty() {
+            if scene.boundary(&p.name).is_some() || scene.interface(&p.name).is_some() {
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "Physical Curve \"{}\" lies on no body boundary in {}: check the curves \
+                         it holds",
+                        p.name,
+                        mfile.display()
+                    ),
+                ));
+            }
+            unused_curves.push(p.name.clone());
+            continue;
+        }
+        let shared: Vec<i32> = curves
+            .iter()
+            .copied()
+            .filter(|c| curve_bodies.get(c).is_some_and(|b| b.len() >= 2))
+            .collect();
+        if let Some(ii) = scene.interfaces.iter().position(|i| i.name == p.name) {
+            uses.insert(p.tag, CurveUse::Interface(interfaces_found.len()));
+            interfaces_found.push((ii, p.tag));
+        } else {
+            if let Some(&c) = shared.first() {
+                let names: Vec<&str> = curve_bodies[&c]
+                    .iter()
+                    .map(|&b| scene.bodies[b].name.as_str())
+                    .collect();
+                let how = if scene.boundary(&p.name).is_some() {
+                    format!("[boundary.{}] cannot apply to it", p.name)
+                } else {
+                    "the scene does not list it".to_string()
+                };
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "Physical Curve \"{}\" is shared by bodies {} (curve {c}) and {how}: \
+                         declare [interface.{}] with model = \"bonded\" or \"unilateral\"",
+                        p.name,
+                        names.join(" and "),
+                        p.name
+                    ),
+                ));
+            }
+            let (spec, listed) = match scene.boundary(&p.name) {
+                Some(s) => (s.clone(), true),
+                None => (BoundarySpec::traction_free(&p.name), false),
+            };
+            uses.insert(p.tag, CurveUse::Boundary(parts.len()));
+            parts.push(Part {
+                spec,
+                listed,
+                elements: BTreeMap::new(),
+                length: 0.0,
+            });
+        }
+    }
+
+    // The role of each boundary curve (through its physical group).
+    let mut curve_role: HashMap<i32, Role> = HashMap::new();
+    for (bi, curves) in body_curves.iter().enumerate() {
+        for &c in curves {
+            let ent = match mesh.curves.get(&c) {
+                Some(e) => e,
+                None => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "surface of body \"{}\" is bounded by curve {c}, which $Entities does \
+                             not define",
+                            scene.bodies[bi].name
+                        ),
+                    ))
+                }
+            };
+            let roles: Vec<(Role, String)> = ent
+                .physical_tags
+                .iter()
+                .filter_map(|t| {
+                    let name = mesh.physical_name(1, *t)?.to_string();
+                    match uses.get(t)? {
+                        CurveUse::Boundary(pi) => Some((Role::Boundary(*pi), name)),
+                        CurveUse::Interface(k) => Some((Role::Interface(*k), name)),
+                    }
+                })
+                .collect();
+            // Groups the scene uses win over unlisted (traction-free) ones.
+            let used: Vec<&(Role, String)> = roles
+                .iter()
+                .filter(|(r, _)| match r {
+                    Role::Boundary(pi) => parts[*pi].listed,
+                    Role::Interface(_) => true,
+                })
+                .collect();
+            let listed: Vec<&(Role, String)> = if used.is_empty() {
+                roles.iter().take(1).collect()
+            } else {
+                used
+            };
+            match listed.as_slice() {
+                [] => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "curve {c} bounds body \"{}\" but belongs to no named Physical \
+                             Curve: {OPEN_LOOP_HINT}",
+                            scene.bodies[bi].name
+                        ),
+                    ))
+                }
+                [(role, _)] => {
+                    curve_role.insert(c, *role);
+                }
+                many => {
+                    let names: Vec<&str> = many.iter().map(|(_, n)| n.as_str()).collect();
+                    return Err(Error::input(
+                        sfile,
+                        format!(
+                            "curve {c} belongs to Physical Curves {} which the scene all uses: \
+                             a curve may carry one condition; split the groups",
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+
+    // --- Line elements per curve ----------------------------------------------------------
+    let mut curve_lines: HashMap<i32, Vec<usize>> = HashMap::new();
+    for (li, l) in mesh.lines.iter().enumerate() {
+        curve_lines.entry(l.curve).or_default().push(li);
+    }
+
+    let mut all_nodes: Vec<[f64; 2]> = Vec::new();
+    for curves in &body_curves {
+        for c in curves {
+            for &li in curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]) {
+                for &n in &mesh.lines[li].nodes {
+                    all_nodes.push(mesh.nodes[n]);
+                }
+            }
+        }
+    }
+    let scale = bbox_diagonal(&all_nodes);
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(Error::input(
+            mfile,
+            "the bodies have no boundary elements of positive size: mesh with `gmsh -2` (or -1)",
+        ));
+    }
+
+    // --- Bodies: nodes, loops, orientation -------------------------------------------------
+    let mut bodies: Vec<Body> = Vec::new();
+    for (bi, spec) in scene.bodies.iter().enumerate() {
+        let mut body = build_body(
+            spec.name.as_str(),
+            &body_curves[bi],
+            &curve_lines,
+            &curve_role,
+            mesh,
+            mfile,
+            scale,
+        )?;
+        body.young = spec.young;
+        body.poisson = spec.poisson;
+        body.body_force = spec.body_force;
+        body.surfaces = body_surfaces[bi].clone();
+        body.triangles = mesh
+            .triangles
+            .iter()
+            .filter(|t| body.surfaces.contains(&t.surface))
+            .map(|t| t.nodes)
+            .collect();
+        bodies.push(body);
+    }
+
+    // Part statistics.
+    for (bi, body) in bodies.iter().enumerate() {
+        for e in &body.elements {
+            if let Role::Boundary(pi) = e.role {
+                *parts[pi].elements.entry(bi).or_default() += 1;
+                parts[pi].length += e.length;
+            }
+        }
+    }
+
+    // --- Interfaces ---------------------------------------------------------------------------
+    let mut interfaces = Vec::new();
+    for (k, &(ii, gtag)) in interfaces_found.iter().enumerate() {
+        interfaces.push(build_interface(
+            k,
+            &scene.interfaces[ii],
+            gtag,
+            &bodies,
+            mesh,
+            &curve_bodies,
+            scene,
+            mfile,
+        )?);
+    }
+
+    check_overlaps(&bodies, mfile, scale)?;
+    mark_traction_breaks(&mut bodies);
+    for body in bodies.iter_mut() {
+        body.dofs = node_dofs(body, &parts);
+    }
+    check_values(&bodies, &parts, sfile)?;
+    check_held(&bodies, &interfaces, sfile, scale)?;
+    let sizes = size_stats(&bodies);
+
+    Ok(Model {
+        mesh_path: mesh_path.to_path_buf(),
+        bodies,
+        parts,
+        interfaces,
+        scale,
+        sizes,
+        unused_curves,
+    })
+}
+
+fn list_or_none(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+fn bbox_diagonal(points: &[[f64; 2]]) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    if points.is_empty() {
+        0.0
+    } else {
+        norm(sub(hi, lo))
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_body(
+    name: &str,
+    curves: &BTreeSet<i32>,
+    curve_lines: &HashMap<i32, Vec<usize>>,
+    curve_role: &HashMap<i32, Role>,
+    mesh: &Mesh,
+    mfile: &Path,
+    scale: f64,
+) -> Result<Body> {
+    let mut node_of_mesh: HashMap<usize, usize> = HashMap::new();
+    let mut nodes: Vec<[f64; 2]> = Vec::new();
+    let mut mesh_nodes: Vec<usize> = Vec::new();
+    let mut elements: Vec<Element> = Vec::new();
+    for &c in curves {
+        let lines = curve_lines.get(&c).map(Vec::as_slice).unwrap_or(&[]);
+        if lines.is_empty() {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "curve {c} bounds body \"{name}\" but has no line elements: {OPEN_LOOP_HINT}"
+                ),
+            ));
+        }
+        let role = match curve_role.get(&c) {
+            Some(r) => *r,
+            None => {
+                return Err(Error::input(
+                    mfile,
+                    format!("curve {c} of body \"{name}\" has no role: {OPEN_LOOP_HINT}"),
+                ))
+            }
+        };
+        for &li in lines {
+            let line = &mesh.lines[li];
+            let mut local = [0usize; 2];
+            for (k, &mn) in line.nodes.iter().enumerate() {
+                local[k] = *node_of_mesh.entry(mn).or_insert_with(|| {
+                    nodes.push(mesh.nodes[mn]);
+                    mesh_nodes.push(mn);
+                    nodes.len() - 1
+                });
+            }
+            let d = sub(nodes[local[1]], nodes[local[0]]);
+            let length = norm(d);
+            if length.is_nan() || length <= 1e-12 * scale {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "line element {} (curve {c}, body \"{name}\") has zero length: its nodes \
+                         {} and {} coincide; remove duplicate points in the .geo",
+                        line.tag, mesh.node_tags[line.nodes[0]], mesh.node_tags[line.nodes[1]]
+                    ),
+                ));
+            }
+            let tangent = [d[0] / length, d[1] / length];
+            elements.push(Element {
+                nodes: local,
+                tag: line.tag,
+                curve: c,
+                role,
+                length,
+                tangent,
+                normal: [tangent[1], -tangent[0]],
+                loop_index: 0,
+                traction_break: false,
+                reversed: false,
+            });
+        }
+    }
+
+    // Node → incident elements; each boundary node must join exactly two elements.
+    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+    for (ei, e) in elements.iter().enumerate() {
+        incident[e.nodes[0]].push(ei);
+        incident[e.nodes[1]].push(ei);
+    }
+    for (n, inc) in incident.iter().enumerate() {
+        let tag = mesh.node_tags[mesh_nodes[n]];
+        match inc.len() {
+            2 => {}
+            1 => {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                    "the boundary of body \"{name}\" is open at node {tag} {} (end of curve {}): \
+                         {OPEN_LOOP_HINT}",
+                    fmt_point(nodes[n]),
+                    elements[inc[0]].curve
+                ),
+                ))
+            }
+            k => {
+                let curves: BTreeSet<i32> = inc.iter().map(|&e| elements[e].curve).collect();
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "node {tag} {} joins {k} boundary elements of body \"{name}\" (curves \
+                         {curves:?}): the boundary touches itself or a curve is meshed twice; \
+                         each boundary node must join exactly two elements",
+                        fmt_point(nodes[n])
+                    ),
+                ));
+            }
+        }
+    }
+
+    // Chain elements into loops, flipping elements to follow the chain.
+    let mut loops: Vec<Loop> = Vec::new();
+    let mut visited = vec![false; elements.len()];
+    for start in 0..elements.len() {
+        if visited[start] {
+            continue;
+        }
+        let mut chain = vec![start];
+        visited[start] = true;
+        let mut current = start;
+        loop {
+            let end = elements[current].nodes[1];
+            let next = incident[end]
+                .iter()
+                .copied()
+                .find(|&e| e != current)
+                .unwrap_or(current);
+            if next == start || visited[next] {
+                break;
+            }
+            if elements[next].nodes[0] != end {
+                flip(&mut elements[next]);
+            }
+            visited[next] = true;
+            chain.push(next);
+            current = next;
+        }
+        let area = loop_area(&chain, &elements, &nodes);
+        loops.push(Loop {
+            elements: chain,
+            area,
+            is_hole: false,
+        });
+    }
+
+    // Orientation by nesting: a loop inside an odd number of others is a hole (clockwise).
+    let mut outer = 0;
+    for li in 0..loops.len() {
+        let probe = nodes[elements[loops[li].elements[0]].nodes[0]];
+        let depth = (0..loops.len())
+            .filter(|&o| o != li && point_in_loop(probe, &loops[o], &elements, &nodes))
+            .count();
+        let hole = depth % 2 == 1;
+        let want_positive = !hole;
+        if (loops[li].area > 0.0) != want_positive {
+            let chain = std::mem::take(&mut loops[li].elements);
+            for &e in &chain {
+                flip(&mut elements[e]);
+            }
+            loops[li].elements = chain.into_iter().rev().collect();
+            loops[li].area = -loops[li].area;
+        }
+        loops[li].is_hole = hole;
+        if !hole {
+            outer += 1;
+        }
+    }
+    if outer != 1 {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "body \"{name}\" consists of {outer} separate regions: make each region a Physical \
+                 Surface (a body) of its own"
+            ),
+        ));
+    }
+    for (li, l) in loops.iter().enumerate() {
+        for &e in &l.elements {
+            elements[e].loop_index = li;
+        }
+    }
+    let area = loops.iter().map(|l| l.area).sum();
+    Ok(Body {
+        name: name.to_string(),
+        young: 0.0,
+        poisson: 0.0,
+        body_force: None,
+        surfaces: Vec::new(),
+        nodes,
+        mesh_nodes,
+        elements,
+        loops,
+        dofs: Vec::new(),
+        triangles: Vec::new(),
+        area,
+    })
+}
+
+fn flip(e: &mut Element) {
+    e.nodes.swap(0, 1);
+    e.reversed = !e.reversed;
+    e.tangent = [-e.tangent[0], -e.tangent[1]];
+    e.normal = [-e.normal[0], -e.normal[1]];
+}
+
+fn loop_area(chain: &[usize], elements: &[Element], nodes: &[[f64; 2]]) -> f64 {
+    chain
+        .iter()
+        .map(|&e| {
+            let [a, b] = elements[e].nodes;
+            cross(nodes[a], nodes[b])
+        })
+        .sum::<f64>()
+        * 0.5
+}
+
+/// Winding-number test of a point against one loop (orientation ignored).
+fn point_in_loop(p: [f64; 2], l: &Loop, elements: &[Element], nodes: &[[f64; 2]]) -> bool {
+    winding(
+        p,
+        l.elements.iter().map(|&e| {
+            let [a, b] = elements[e].nodes;
+            (nodes[a], nodes[b])
+        }),
+    ) != 0
+}
+
+fn winding(p: [f64; 2], segments: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> i32 {
+    let mut w = 0;
+    for (a, b) in segments {
+        let side = cross(sub(b, a), sub(p, a));
+        if a[1] <= p[1] {
+            if b[1] > p[1] && side > 0.0 {
+                w += 1;
+            }
+        } else if b[1] <= p[1] && side < 0.0 {
+            w -= 1;
+        }
+    }
+    w
+}
+
+#[allow(clippy::too_many_arguments)]
+fn build_interface(
+    k: usize,
+    spec: &InterfaceSpec,
+    gtag: i32,
+    bodies: &[Body],
+    mesh: &Mesh,
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    scene: &Scene,
+    mfile: &Path,
+) -> Result<Interface> {
+    let sfile = scene.path.as_path();
+    let name = spec.name.as_str();
+    let curves: BTreeSet<i32> = mesh
+        .curves
+        .values()
+        .filter(|c| c.physical_tags.contains(&gtag))
+        .map(|c| c.tag)
+        .collect();
+    let mut involved: BTreeSet<usize> = BTreeSet::new();
+    let mut shared_pair: Option<(usize, usize)> = None;
+    for c in &curves {
+        let on = curve_bodies.get(c).cloned().unwrap_or_default();
+        if on.len() > 2 {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": curve {c} bounds {} bodies; an interface joins exactly two",
+                    on.len()
+                ),
+            ));
+        }
+        if on.len() == 2 {
+            let p = (on[0].min(on[1]), on[0].max(on[1]));
+            if shared_pair.is_some_and(|q| q != p) {
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{name}\" joins different pairs of bodies on different curves: \
+                         use one Physical Curve per pair of bodies"
+                    ),
+                ));
+            }
+            shared_pair = Some(p);
+        }
+        involved.extend(on);
+    }
+    let names = |set: &BTreeSet<usize>| -> String {
+        set.iter()
+            .map(|&b| format!("\"{}\"", bodies[b].name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if involved.len() != 2 {
+        return Err(Error::input(
+            sfile,
+            format!(
+                "[interface.{name}]: its curves bound {} bod{} ({}); an interface must be a curve \
+                 shared by exactly two bodies (draw the joint once and use it in both surfaces' \
+                 curve loops)",
+                involved.len(),
+                if involved.len() == 1 { "y" } else { "ies" },
+                names(&involved)
+            ),
+        ));
+    }
+    let mut it = involved.iter();
+    let (ba, bb) = match (it.next(), it.next()) {
+        (Some(&a), Some(&b)) => (a.min(b), a.max(b)),
+        _ => {
+            return Err(Error::input(
+                sfile,
+                format!("[interface.{name}]: needs two bodies"),
+            ))
+        }
+    };
+    let (a, b) = (&bodies[ba], &bodies[bb]);
+    let on_interface = |body: &Body| -> Vec<usize> {
+        (0..body.elements.len())
+            .filter(|&e| body.elements[e].role == Role::Interface(k))
+            .collect()
+    };
+    let elems_a = on_interface(a);
+    let elems_b = on_interface(b);
+
+    // Match B's interface nodes to A's: same mesh node, else same position.
+    let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
+    for &e in &elems_b {
+        for n in b.elements[e].nodes {
+            b_by_mesh.insert(b.mesh_nodes[n], n);
+        }
+    }
+    let min_len = elems_a
+        .iter()
+        .map(|&e| a.elements[e].length)
+        .chain(elems_b.iter().map(|&e| b.elements[e].length))
+        .fold(f64::INFINITY, f64::min);
+    let tol = 1e-6 * min_len;
+    let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
+    let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut by_position = false;
+    for &e in &elems_a {
+        for n in a.elements[e].nodes {
+            if a_to_b.contains_key(&n) {
+                continue;
+            }
+            let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
+                Some(&m) => m,
+                None => {
+                    by_position = true;
+                    let x = a.nodes[n];
+                    match b_nodes
+                        .iter()
+                        .copied()
+                        .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
+                    {
+                        Some(m) => m,
+                        None => {
+                            return Err(Error::input(
+                                mfile,
+                                format!(
+                                    "interface \"{name}\": node {} {} of body \"{}\" has no \
+                                     matching node on body \"{}\": the two sides must be meshed \
+                                     with the same nodes; use one curve shared by both surfaces \
+                                     (or the same Transfinite count on both)",
+                                    mesh.node_tags[a.mesh_nodes[n]],
+                                    fmt_point(x),
+                                    a.name,
+                                    b.name
+                                ),
+                            ))
+                        }
+                    }
+                }
+            };
+            a_to_b.insert(n, partner);
+        }
+    }
+    if a_to_b.len() != b_nodes.len() {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "interface \"{name}\": body \"{}\" has {} interface nodes but body \"{}\" has {}: \
+                 mesh the joint as one curve shared by both surfaces",
+                a.name,
+                a_to_b.len(),
+                b.name,
+                b_nodes.len()
+            ),
+        ));
+    }
+
+    // Order A's interface elements along the curve direction as drawn (mesh order).
+    let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
+    let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
+    for &e in &elems_a {
+        let el = &a.elements[e];
+        let (s, t) = if !el.reversed {
+            (el.nodes[0], el.nodes[1])
+        } else {
+            (el.nodes[1], el.nodes[0])
+        };
+        next_of.insert(s, (e, t));
+        has_incoming.insert(t);
+    }
+    let mut starts: Vec<usize> = next_of
+        .keys()
+        .copied()
+        .filter(|n| !has_incoming.contains(n))
+        .collect();
+    starts.sort_by_key(|&n| a.mesh_nodes[n]);
+    if starts.is_empty() {
+        // A closed interface (a whole inclusion): start anywhere.
+        if let Some(&n) = next_of.keys().min() {
+            starts.push(n);
+        }
+    }
+    let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
+    let mut s_of: Vec<f64> = Vec::new();
+    let mut seen: BTreeSet<usize> = BTreeSet::new();
+    let mut s_acc = 0.0;
+    for &s0 in &starts {
+        let mut n = s0;
+        if seen.insert(n) {
+            order.push(n);
+            s_of.push(s_acc);
+        }
+        while let Some(&(e, t)) = next_of.get(&n) {
+            s_acc += a.elements[e].length;
+            if !seen.insert(t) {
+                break;
+            }
+            order.push(t);
+            s_of.push(s_acc);
+            n = t;
+        }
+    }
+    if order.len() != a_to_b.len() {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
+                 (a node joins more than two interface elements)",
+                a.name
+            ),
+        ));
+    }
+    let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
+
+    // Pairs with averaged normals of A.
+    let mut normals = vec![[0.0f64; 2]; order.len()];
+    for &e in &elems_a {
+        let el = &a.elements[e];
+        for n in el.nodes {
+            let j = pair_of[&n];
+            normals[j][0] += el.normal[0];
+            normals[j][1] += el.normal[1];
+        }
+    }
+    let mut pairs = Vec::with_capacity(order.len());
+    for (j, &na) in order.iter().enumerate() {
+        let normal = unit(normals[j]);
+        let x = a.nodes[na];
+        let gap = spec.gap.eval(x);
+        let cohesion = spec.cohesion.eval(x);
+        for (what, v) in [("gap", gap), ("cohesion", cohesion)] {
+            if !(v.is_finite() && v >= 0.0) {
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "`interface.{name}.{what}` is {} at node {} {}: it must be a finite number \
+                         >= 0 at every interface node",
+                        fmt_num(v),
+                        mesh.node_tags[a.mesh_nodes[na]],
+                        fmt_point(x)
+                    ),
+                ));
+            }
+        }
+        pairs.push(Pair {
+            node_a: na,
+            node_b: a_to_b[&na],
+            x,
+            normal,
+            tangent: [-normal[1], normal[0]],
+            s: s_of[j],
+            gap: if spec.initial == InitialState::Open {
+                gap
+            } else {
+                0.0
+            },
+            cohesion: if spec.initial == InitialState::Closed {
+                cohesion
+            } else {
+                0.0
+            },
+        });
+    }
+
+    // Interface elements: A's element and B's element on the same node pair.
+    let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
+    for &e in &elems_b {
+        let [s, t] = b.elements[e].nodes;
+        b_elem_of.insert((s.min(t), s.max(t)), e);
+    }
+    let mut elements = Vec::with_capacity(elems_a.len());
+    for &e in &elems_a {
+        let [s, t] = a.elements[e].nodes;
+        let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
+        let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
+            Some(&eb) => eb,
+            None => {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "interface \"{name}\": element {} of body \"{}\" has no counterpart on \
+                         body \"{}\" joining the same nodes",
+                        a.elements[e].tag, a.name, b.name
+                    ),
+                ))
+            }
+        };
+        let ea = &a.elements[e];
+        let eb = &b.elements[elem_b];
+        if dot(ea.normal, eb.normal) > -0.999 {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of element \
+                     {}: the bodies overlap there",
+                    a.name, b.name, ea.tag
+                ),
+            ));
+        }
+        elements.push(InterfaceElement {
+            elem_a: e,
+            elem_b,
+            pairs: [pair_of[&s], pair_of[&t]],
+        });
+    }
+    let length = elems_a.iter().map(|&e| a.elements[e].length).sum();
+    Ok(Interface {
+        spec: spec.clone(),
+        body_a: ba,
+        body_b: bb,
+        pairs,
+        elements,
+        length,
+        matched_by_position: by_position,
+    })
+}
+
+/// Elements of different bodies (or non-neighbouring elements of one body) must not cross,
+/// and no body may lie inside another.
+fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
+    struct Seg {
+        body: usize,
+        elem: usize,
+        a: [f64; 2],
+        b: [f64; 2],
+        ma: usize,
+        mb: usize,
+        xmin: f64,
+        xmax: f64,
+    }
+    let mut segs: Vec<Seg> = Vec::new();
+    for (bi, body) in bodies.iter().enumerate() {
+        for (ei, e) in body.elements.iter().enumerate() {
+            let a = body.nodes[e.nodes[0]];
+            let b = body.nodes[e.nodes[1]];
+            segs.push(Seg {
+                body: bi,
+                elem: ei,
+                a,
+                b,
+                ma: body.mesh_nodes[e.nodes[0]],
+                mb: body.mesh_nodes[e.nodes[1]],
+                xmin: a[0].min(b[0]),
+                xmax: a[0].max(b[0]),
+            });
+        }
+    }
+    segs.sort_by(|p, q| p.xmin.total_cmp(&q.xmin));
+    let eps = 1e-10 * scale;
+    for i in 0..segs.len() {
+        let s = &segs[i];
+        for t in segs[i + 1..].iter().take_while(|t| t.xmin <= s.xmax + eps) {
+            if [t.ma, t.mb].contains(&s.ma) || [t.ma, t.mb].contains(&s.mb) {
+                continue;
+            }
+            if segments_cross(s.a, s.b, t.a, t.b) {
+                let (b1, b2) = (&bodies[s.body], &bodies[t.body]);
+                let (e1, e2) = (&b1.elements[s.elem], &b2.elements[t.elem]);
+                let what = if s.body == t.body {
+                    format!("the boundary of body \"{}\" crosses itself", b1.name)
+                } else {
+                    format!("bodies \"{}\" and \"{}\" overlap", b1.name, b2.name)
+                };
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "{what}: element {} (curve {}) crosses element {} (curve {}); fix the \
+                         geometry so that bodies meet only along shared curves",
+                        e1.tag, e1.curve, e2.tag, e2.curve
+                    ),
+                ));
+            }
+        }
+    }
+    // A body entirely inside another: probe a point just inside each body.
+    for (bi, body) in bodies.iter().enumerate() {
+        let outer = match body.loops.iter().find(|l| !l.is_hole) {
+            Some(l) => l,
+            None => continue,
+        };
+        let e = &body.elements[outer.elements[0]];
+        let mid = [
+            0.5 * (body.nodes[e.nodes[0]][0] + body.nodes[e.nodes[1]][0]),
+            0.5 * (body.nodes[e.nodes[0]][1] + body.nodes[e.nodes[1]][1]),
+        ];
+        let probe = [
+            mid[0] - 1e-3 * e.length * e.normal[0],
+            mid[1] - 1e-3 * e.length * e.normal[1],
+        ];
+        for (oi, other) in bodies.iter().enumerate() {
+            if oi == bi {
+                continue;
+            }
+            let w = winding(
+                probe,
+                other
+                    .elements
+                    .iter()
+                    .map(|oe| (other.nodes[oe.nodes[0]], other.nodes[oe.nodes[1]])),
+            );
+            if w != 0 {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "body \"{}\" lies inside body \"{}\": bodies must not overlap; cut a hole \
+                         in \"{}\" bounded by the same curves",
+                        body.name, other.name, other.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Proper crossing of two segments (touching end points and collinear overlap excluded).
+fn segments_cross(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> bool {
+    let scale = norm(sub(b, a)) * norm(sub(d, c));
+    let tol = 1e-10 * scale;
+    let o1 = cross(sub(b, a), sub(c, a));
+    let o2 = cross(sub(b, a), sub(d, a));
+    let o3 = cross(sub(d, c), sub(a, c));
+    let o4 = cross(sub(d, c), sub(b, c));
+    ((o1 > tol && o2 < -tol) || (o1 < -tol && o2 > tol))
+        && ((o3 > tol && o4 < -tol) || (o3 < -tol && o4 > tol))
+}
+
+/// Marks double traction nodes: at a change of part or interface, and at corners.
+fn mark_traction_breaks(bodies: &mut [Body]) {
+    for body in bodies.iter_mut() {
+        for l in 0..body.loops.len() {
+            let chain = body.loops[l].elements.clone();
+            let n = chain.len();
+            for k in 0..n {
+                let prev = &body.elements[chain[(k + n - 1) % n]];
+                let cur = &body.elements[chain[k]];
+                let turn = cross(prev.tangent, cur.tangent)
+                    .atan2(dot(prev.tangent, cur.tangent))
+                    .abs();
+                let limit = if prev.curve == cur.curve {
+                    CORNER_ANGLE_IN_CURVE
+                } else {
+                    CORNER_ANGLE_AT_JOIN
+                };
+                let brk = prev.role != cur.role || turn > limit;
+                body.elements[chain[k]].traction_break = brk;
+            }
+        }
+    }
+}
+
+/// The directions in which a boundary element prescribes displacement.
+fn constrained_directions(e: &Element, parts: &[Part]) -> Vec<([f64; 2], usize, usize)> {
+    let mut out = Vec::new();
+    if let Role::Boundary(pi) = e.role {
+        let spec = &parts[pi].spec;
+        for (c, cond) in spec.components.iter().enumerate() {
+            if cond.is_displacement() {
+                let d = match (spec.frame, c) {
+                    (Frame::Global, 0) => [1.0, 0.0],
+                    (Frame::Global, _) => [0.0, 1.0],
+                    (Frame::Local, 0) => e.tangent,
+                    (Frame::Local, _) => e.normal,
+                };
+                out.push((d, pi, c));
+            }
+        }
+    }
+    out
+}
+
+/// Directions and classes of the displacement components at each node (formulation §2.2):
+/// directions prescribed by the adjacent elements are known (U1), the others unknown, U0 on
+/// an interface and U2 elsewhere. Nearly parallel directions of the same condition on a
+/// curved boundary (un on an arc) are averaged into one.
+fn node_dofs(body: &Body, parts: &[Part]) -> Vec<NodeDofs> {
+    let mut dirs: Vec<Vec<([f64; 2], usize, usize)>> = vec![Vec::new(); body.nodes.len()];
+    let mut on_interface = vec![false; body.nodes.len()];
+    for e in &body.elements {
+        for n in e.nodes {
+            dirs[n].extend(constrained_directions(e, parts));
+            if matches!(e.role, Role::Interface(_)) {
+                on_interface[n] = true;
+            }
+        }
+    }
+    let mut out = Vec::with_capacity(body.nodes.len());
+    for (n, list) in dirs.into_iter().enumerate() {
+        // Merge directions of the same part and component that are nearly parallel.
+        let mut merged: Vec<([f64; 2], usize, usize)> = Vec::new();
+        for (d, pi, c) in list {
+            if let Some(m) = merged.iter_mut().find(|(md, mp, mc)| {
+                *mp == pi && *mc == c && dot(*md, d).abs() > (20f64.to_radians()).cos()
+            }) {
+                let s = dot(m.0, d).signum();
+                m.0 = unit([m.0[0] + s * d[0], m.0[1] + s * d[1]]);
+            } else {
+                merged.push((d, pi, c));
+            }
+        }
+        let unknown = if on_interface[n] {
+            DofClass::Interface
+        } else {
+            DofClass::Free
+        };
+        let first = merged.first().map(|m| m.0);
+        let independent = merged
+            .iter()
+            .any(|(d, _, _)| first.is_some_and(|f| cross(f, *d).abs() > 1e-6));
+        let dofs = match (first, independent) {
+            (None, _) => NodeDofs {
+                frame: [[1.0, 0.0], [0.0, 1.0]],
+                class: [unknown, unknown],
+            },
+            (Some(_), true) => NodeDofs {
+                frame: [[1.0, 0.0], [0.0, 1.0]],
+                class: [DofClass::Known, DofClass::Known],
+            },
+            (Some(d), false) => NodeDofs {
+                // Component 0 unknown along the perpendicular, component 1 known along d.
+                frame: [[d[1], -d[0]], d],
+                class: [unknown, DofClass::Known],
+            },
+        };
+        out.push(dofs);
+    }
+    out
+}
+
+/// Prescribed values must be finite at every node of their part.
+fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path) -> Result<()> {
+    for body in bodies {
+        for e in &body.elements {
+            let Role::Boundary(pi) = e.role else { continue };
+            let spec = &parts[pi].spec;
+            for (c, cond) in spec.components.iter().enumerate() {
+                let (Condition::Displacement(v) | Condition::Traction(v)) = cond;
+                if v.as_const().is_some() {
+                    continue;
+                }
+                for n in e.nodes {
+                    let x = body.nodes[n];
+                    let val = v.eval(x);
+                    if !val.is_finite() {
+                        let comp = match (spec.frame, c, cond.is_displacement()) {
+                            (Frame::Global, 0, true) => "ux",
+                            (Frame::Global, _, true) => "uy",
+                            (Frame::Local, 0, true) => "ut",
+                            (Frame::Local, _, true) => "un",
+                            (Frame::Global, 0, false) => "tx",
+                            (Frame::Global, _, false) => "ty",
+                            (Frame::Local, 0, false) => "tt",
+                            (Frame::Local, _, false) => "tn",
+                        };
+                        return Err(Error::input(
+                            sfile,
+                            format!(
+                                "`boundary.{}.{comp}` = {v} is {val} at {} (body \"{}\", element \
+                                 {}): the expression must be defined on the whole curve",
+                                spec.name,
+                                fmt_point(x),
+                                body.name,
+                                e.tag
+                            ),
+                        ));
+                    }
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Every group of bodies linked by interfaces must be held against all rigid motions by its
+/// displacement conditions.
+fn check_held(bodies: &[Body], interfaces: &[Interface], sfile: &Path, scale: f64) -> Result<()> {
+    // Connected components through interfaces (union–find).
+    let mut parent: Vec<usize> = (0..bodies.len()).collect();
+    fn find(p: &mut [usize], i: usize) -> usize {
+        let mut r = i;
+        while p[r] != r {
+            r = p[r];
+        }
+        p[i] = r;
+        r
+    }
+    for it in interfaces {
+        let (ra, rb) = (find(&mut parent, it.body_a), find(&mut parent, it.body_b));
+        parent[ra] = rb;
+    }
+    let mut groups: BTreeMap<usize, Vec<usize>> = BTreeMap::new();
+    for b in 0..bodies.len() {
+        let r = find(&mut parent, b);
+        groups.entry(r).or_default().push(b);
+    }
+    for members in groups.values() {
+        // Rows [d_x, d_y, d · (−(y − yc), x − xc) / scale] of every known direction.
+        let centre = {
+            let pts: Vec<[f64; 2]> = members
+                .iter()
+                .flat_map(|&b| bodies[b].nodes.iter().copied())
+                .collect();
+            let n = pts.len().max(1) as f64;
+            [
+                pts.iter().map(|p| p[0]).sum::<f64>() / n,
+                pts.iter().map(|p| p[1]).sum::<f64>() / n,
+            ]
+        };
+        let mut basis: Vec<[f64; 3]> = Vec::new();
+        'outer: for &b in members {
+            let body = &bodies[b];
+            for (n, d) in body.dofs.iter().enumerate() {
+                for k in 0..2 {
+                    if d.class[k] != DofClass::Known {
+                        continue;
+                    }
+                    let dir = d.frame[k];
+                    let r = sub(body.nodes[n], centre);
+                    let mut row = [dir[0], dir[1], (-r[1] * dir[0] + r[0] * dir[1]) / scale];
+                    for q in &basis {
+                        let p = row[0] * q[0] + row[1] * q[1] + row[2] * q[2];
+                        for i in 0..3 {
+                            row[i] -= p * q[i];
+                        }
+                    }
+                    let len = (row[0] * row[0] + row[1] * row[1] + row[2] * row[2]).sqrt();
+                    if len > 1e-6 {
+                        basis.push([row[0] / len, row[1] / len, row[2] / len]);
+                        if basis.len() == 3 {
+                            break 'outer;
+                        }
+                    }
+                }
+            }
+        }
+        if basis.len() == 3 {
+            continue;
+        }
+        let names: Vec<String> = members
+            .iter()
+            .map(|&b| format!("\"{}\"", bodies[b].name))
+            .collect();
+        let who = if members.len() == 1 {
+            format!("body {}", names[0])
+        } else {
+            format!("bodies {} (joined by interfaces)", names.join(", "))
+        };
+        let free = free_mode(&basis);
+        let what = if basis.is_empty() {
+            "it has no displacement condition".to_string()
+        } else {
+            format!("its displacement conditions leave {free} free")
+        };
+        let no_iface = members.len() == 1
+            && !interfaces
+                .iter()
+                .any(|i| i.body_a == members[0] || i.body_b == members[0]);
+        let extra = if no_iface { " and no interface" } else { "" };
+        return Err(Error::input(
+            sfile,
+            format!(
+                "{who} is not held: {what}{extra}; prescribe displacements on a boundary \
+                 (e.g. [boundary.NAME] ux = 0, uy = 0) or join it to a held body with an interface"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// Describes a rigid mode orthogonal to the given rows (fewer than 3 orthonormal rows).
+fn free_mode(basis: &[[f64; 3]]) -> String {
+    let candidates = [
+        ([1.0, 0.0, 0.0], "a translation along x"),
+        ([0.0, 1.0, 0.0], "a translation along y"),
+        ([0.0, 0.0, 1.0], "a rotation"),
+    ];
+    // The candidate with the largest component outside the span of the basis.
+    let mut best = ("a rigid motion", 0.0);
+    for (v, name) in candidates {
+        let mut r = v;
+        for q in basis {
+            let p = r[0] * q[0] + r[1] * q[1] + r[2] * q[2];
+            for i in 0..3 {
+                r[i] -= p * q[i];
+            }
+        }
+        let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+        if len > best.1 + 1e-9 {
+            best = (name, len);
+        }
+    }
+    best.0.to_string()
+}
+
+fn size_stats(bodies: &[Body]) -> SizeStats {
+    let mut s = SizeStats {
+        smallest: (f64::INFINITY, String::new()),
+        largest: (0.0, String::new()),
+        grading: (1.0, String::new()),
+    };
+    for body in bodies {
+        for e in &body.elements {
+            let place = format!("body \"{}\", element {}", body.name, e.tag);
+            if e.length < s.smallest.0 {
+                s.smallest = (e.length, place.clone());
+            }
+            if e.length > s.largest.0 {
+                s.largest = (e.length, place);
+            }
+        }
+        for l in &body.loops {
+            let n = l.elements.len();
+            for k in 0..n {
+                let (p, q) = (
+                    &body.elements[l.elements[k]],
+                    &body.elements[l.elements[(k + 1) % n]],
+                );
+                let r = p.length.max(q.length) / p.length.min(q.length);
+                if r > s.grading.0 {
+                    s.grading = (
+                        r,
+                        format!("body \"{}\", elements {} and {}", body.name, p.tag, q.tag),
+                    );
+                }
+            }
+        }
+    }
+    s
+}

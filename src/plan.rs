@@ -1,1 +1,259 @@
-//! (in progress)
+//! The effects plan: which effects a scene calls for and which stages a run performs.
+//!
+//! Place in the flow: after `model`; read by `sgbem check` (printed) and by the run
+//! pipeline (followed). SPEC.md: effects are simulated only where the scene calls for them:
+//! no body-force terms without `body_force`; no contact solver without a `unilateral`
+//! interface; only the detachment problem when every unilateral zone starts closed, only
+//! the contact problem when every one starts open, both otherwise; the cohesion loop only
+//! where `cohesion > 0`; interior fields only with `field = true`; sections only where
+//! listed.
+
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::scene::{History, InitialState, InterfaceModel, Method, Scene};
+
+/// Which unilateral problem the contact solver faces.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ContactProblem {
+    /// No unilateral interface: a linear solve.
+    None,
+    /// Every unilateral zone starts closed: zones can only open.
+    Detachment,
+    /// Every unilateral zone starts open: zones can only close.
+    Contact,
+    /// Some start closed, some open.
+    Both,
+}
+
+impl ContactProblem {
+    pub fn describe(self) -> &'static str {
+        match self {
+            ContactProblem::None => "none (no unilateral interface): one linear solve",
+            ContactProblem::Detachment => {
+                "detachment only (every unilateral zone starts closed): closed zones may open"
+            }
+            ContactProblem::Contact => {
+                "contact only (every unilateral zone starts open): open zones may close"
+            }
+            ContactProblem::Both => {
+                "contact and detachment (zones start both closed and open): the coupled problem"
+            }
+        }
+    }
+}
+
+/// What a run will simulate and do.
+#[derive(Debug, Clone)]
+pub struct Plan {
+    /// Physical effects simulated, in a fixed order: elastic, body_force, detachment,
+    /// contact, cohesion. (Load steps, interior fields and sections are stages, below.)
+    pub effects: Vec<&'static str>,
+    pub problem: ContactProblem,
+    /// Effects left out and why.
+    pub omitted: Vec<String>,
+    /// Stages in order, with what each does.
+    pub stages: Vec<(&'static str, String)>,
+}
+
+impl Plan {
+    pub fn has(&self, effect: &str) -> bool {
+        self.effects.contains(&effect)
+    }
+
+    /// "elastic + detachment".
+    pub fn effects_line(&self) -> String {
+        self.effects.join(" + ")
+    }
+}
+
+/// Decides the plan of a scene on its model.
+pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
+    let mut effects = vec!["elastic"];
+    let mut omitted = Vec::new();
+
+    let loaded: Vec<&str> = model
+        .bodies
+        .iter()
+        .filter(|b| b.body_force.is_some_and(|f| f != [0.0, 0.0]))
+        .map(|b| b.name.as_str())
+        .collect();
+    if loaded.is_empty() {
+        omitted.push("body forces: no body has a non-zero body_force".to_string());
+    } else {
+        effects.push("body_force");
+    }
+
+    let unilateral: Vec<_> = model
+        .interfaces
+        .iter()
+        .filter(|i| i.spec.model == InterfaceModel::Unilateral)
+        .collect();
+    let closed = unilateral
+        .iter()
+        .any(|i| i.spec.initial == InitialState::Closed);
+    let open = unilateral
+        .iter()
+        .any(|i| i.spec.initial == InitialState::Open);
+    let problem = match (closed, open) {
+        (false, false) => ContactProblem::None,
+        (true, false) => ContactProblem::Detachment,
+        (false, true) => ContactProblem::Contact,
+        (true, true) => ContactProblem::Both,
+    };
+    if closed {
+        effects.push("detachment");
+    }
+    if open {
+        effects.push("contact");
+    }
+    match problem {
+        ContactProblem::None => {
+            omitted.push("contact and detachment: no unilateral interface".to_string())
+        }
+        ContactProblem::Detachment => {
+            omitted.push("contact closing: no unilateral zone starts open".to_string())
+        }
+        ContactProblem::Contact => {
+            omitted.push("detachment: no unilateral zone starts closed".to_string())
+        }
+        ContactProblem::Both => {}
+    }
+    let cohesive = unilateral
+        .iter()
+        .any(|i| i.pairs.iter().any(|p| p.cohesion > 0.0));
+    if cohesive {
+        effects.push("cohesion");
+    } else if closed {
+        omitted.push("cohesion loop: cohesion = 0 on every closed zone".to_string());
+    }
+    let steps = scene.solve.load_factors.len();
+    if scene.output.field {
+        if let Some(b) = model.bodies.iter().find(|b| b.triangles.is_empty()) {
+            return Err(Error::input(
+                &scene.path,
+                format!(
+                    "`output.field` = true needs the triangles of every body, but body \"{}\" has \
+                     none in {}: mesh with `gmsh -2`, or set field = false",
+                    b.name,
+                    model.mesh_path.display()
+                ),
+            ));
+        }
+    } else {
+        omitted.push("interior field: output.field = false".to_string());
+    }
+
+    // Stages.
+    let mut stages: Vec<(&'static str, String)> = Vec::new();
+    stages.push((
+        "read",
+        format!(
+            "scene and mesh ({} bodies, {} boundary elements)",
+            model.bodies.len(),
+            model.element_count()
+        ),
+    ));
+    let mut assemble = format!(
+        "Galerkin blocks per body ({} quadrature), parallel over element pairs",
+        scene.solve.quadrature.name()
+    );
+    if !loaded.is_empty() {
+        assemble.push_str(&format!("; body-force loads for {}", loaded.join(", ")));
+    }
+    stages.push(("assemble", assemble));
+    let pairs = model.pair_count();
+    if model.interfaces.is_empty() {
+        stages.push(("condense", "none (no interface): one solve per body".into()));
+    } else {
+        stages.push((
+            "condense",
+            format!("each body onto its interface nodes ({pairs} pairs): D00, Z0"),
+        ));
+    }
+    let steps_note = if steps > 1 {
+        format!(", {steps} load steps")
+    } else {
+        String::new()
+    };
+    if problem == ContactProblem::None {
+        stages.push((
+            "solve",
+            format!("bonded interface system, linear (no contact solver){steps_note}"),
+        ));
+    } else {
+        let cohesion_note = if cohesive {
+            "; brittle-cohesion outer loop (a node that detaches loses c)"
+        } else {
+            ""
+        };
+        let what = match problem {
+            ContactProblem::Detachment => "detachment",
+            ContactProblem::Contact => "contact",
+            _ => "contact-detachment",
+        };
+        if matches!(scene.solve.method, Method::Lcp | Method::Both) {
+            stages.push((
+                "contact_lcp",
+                format!(
+                    "evolutive LCP ({what}): real/virtual status switching, every iteration \
+                     recorded{cohesion_note}{steps_note}"
+                ),
+            ));
+        }
+        if matches!(scene.solve.method, Method::Qp | Method::Both) {
+            let form = match problem {
+                ContactProblem::Detachment => "QP (32b) on interface forces",
+                ContactProblem::Contact => "QP (32a) on interface displacements",
+                _ => "min-max QP (30) as a convex QP",
+            };
+            stages.push((
+                "contact_qp",
+                format!("{form} with Clarabel{cohesion_note}{steps_note}"),
+            ));
+        }
+    }
+    let mut post = vec!["boundary stresses and interface tractions".to_string()];
+    if scene.output.field {
+        let nodes: usize = model
+            .bodies
+            .iter()
+            .map(|b| {
+                let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
+                v.sort_unstable();
+                v.dedup();
+                v.len()
+            })
+            .sum();
+        post.push(format!("interior field at {nodes} triangle nodes"));
+    }
+    for s in &scene.output.sections {
+        post.push(format!("section {} ({} points)", s.name, s.points));
+    }
+    stages.push(("postprocess", post.join("; ")));
+    let mut write = vec!["summary.json".to_string()];
+    write.push(if scene.output.operators {
+        "archive.h5 (with operators)".into()
+    } else {
+        "archive.h5".into()
+    });
+    if scene.output.vtk {
+        write.push(match scene.output.history {
+            History::Full => "vtk (every iteration)".into(),
+            History::Final => "vtk (final state)".into(),
+        });
+    }
+    if !model.interfaces.is_empty() {
+        write.push("interfaces/*.csv".into());
+    }
+    if !scene.output.sections.is_empty() {
+        write.push("sections/*.csv".into());
+    }
+    stages.push(("write", write.join(", ")));
+
+    Ok(Plan {
+        effects,
+        problem,
+        omitted,
+        stages,
+    })
+}

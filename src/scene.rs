@@ -1,1 +1,1072 @@
-//! (in progress)
+//! The scene file (TOML): materials, conditions, interfaces, solver and output settings.
+//!
+//! Place in the flow: the first stage. `read_scene` turns the file into a validated
+//! [`Scene`]; nothing after it sees TOML. Validation here covers everything that can be
+//! judged without the mesh: unknown keys (with the nearest valid key suggested), types,
+//! ranges (`young > 0`, `-1 < poisson < 0.5`, non-negative gap and cohesion), conflicting
+//! conditions (`ux` with `tx`), expressions that do not parse. Checks that need the mesh
+//! (group names and kinds, loops, interfaces) are made by `model`.
+//!
+//! Every message names the scene file and the key path, e.g. `body.A.poisson`.
+
+use std::path::{Path, PathBuf};
+
+use serde::Deserialize;
+
+use crate::error::{did_you_mean, Error, Result};
+use crate::expr::{Expr, Scalar};
+
+/// Plane strain or plane stress (SPEC.md `plane`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Plane {
+    Strain,
+    Stress,
+}
+
+/// A body: the material of a Physical Surface.
+#[derive(Debug, Clone)]
+pub struct BodySpec {
+    pub name: String,
+    pub young: f64,
+    pub poisson: f64,
+    /// Force per unit volume; `None` when the scene gives none.
+    pub body_force: Option<[f64; 2]>,
+}
+
+/// The frame in which a boundary gives its components.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame {
+    /// Components x, y.
+    Global,
+    /// Components t (tangential, along the loop with the body on the left), n (outward normal).
+    Local,
+}
+
+/// The condition on one component of a boundary part.
+#[derive(Debug, Clone)]
+pub enum Condition {
+    /// Prescribed displacement component (Γ1 in this direction).
+    Displacement(Scalar),
+    /// Prescribed traction component (Γ2 in this direction); absent components are 0.
+    Traction(Scalar),
+}
+
+impl Condition {
+    pub fn is_displacement(&self) -> bool {
+        matches!(self, Condition::Displacement(_))
+    }
+}
+
+/// Conditions on a Physical Curve that is not an interface.
+#[derive(Debug, Clone)]
+pub struct BoundarySpec {
+    pub name: String,
+    pub frame: Frame,
+    /// Component 0 is x (or t), component 1 is y (or n).
+    pub components: [Condition; 2],
+}
+
+impl BoundarySpec {
+    /// The traction-free condition of a Physical Curve the scene does not list.
+    pub fn traction_free(name: &str) -> BoundarySpec {
+        BoundarySpec {
+            name: name.to_string(),
+            frame: Frame::Global,
+            components: [
+                Condition::Traction(Scalar::Const(0.0)),
+                Condition::Traction(Scalar::Const(0.0)),
+            ],
+        }
+    }
+
+    /// Short description for reports: `ux=0 uy=0`, `ty=-10`, `traction-free`.
+    pub fn describe(&self) -> String {
+        let names = match self.frame {
+            Frame::Global => ["x", "y"],
+            Frame::Local => ["t", "n"],
+        };
+        let mut parts = Vec::new();
+        for (c, n) in self.components.iter().zip(names) {
+            match c {
+                Condition::Displacement(v) => parts.push(format!("u{n}={v}")),
+                Condition::Traction(v) if !v.is_zero() => parts.push(format!("t{n}={v}")),
+                Condition::Traction(_) => {}
+            }
+        }
+        if parts.is_empty() {
+            "traction-free".into()
+        } else {
+            parts.join(" ")
+        }
+    }
+
+    /// Constrained (all components displacement), free (all traction) or mixed.
+    pub fn role(&self) -> &'static str {
+        match (
+            self.components[0].is_displacement(),
+            self.components[1].is_displacement(),
+        ) {
+            (true, true) => "constrained",
+            (false, false) => "free",
+            _ => "mixed",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InterfaceModel {
+    Bonded,
+    Unilateral,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum InitialState {
+    /// In contact (real).
+    Closed,
+    /// Detached (virtual).
+    Open,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Tangential {
+    /// Closed nodes bonded in both directions (the paper's "no friction and no sliding").
+    Stick,
+    /// Frictionless: the tangential component is always free.
+    Slide,
+}
+
+/// An interface: a Physical Curve shared by two bodies.
+#[derive(Debug, Clone)]
+pub struct InterfaceSpec {
+    pub name: String,
+    pub model: InterfaceModel,
+    pub initial: InitialState,
+    pub cohesion: Scalar,
+    pub gap: Scalar,
+    pub tangential: Tangential,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Method {
+    Lcp,
+    Qp,
+    Both,
+}
+
+impl Method {
+    pub fn name(self) -> &'static str {
+        match self {
+            Method::Lcp => "lcp",
+            Method::Qp => "qp",
+            Method::Both => "both",
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Quadrature {
+    Fast,
+    Standard,
+    Accurate,
+}
+
+impl Quadrature {
+    pub fn name(self) -> &'static str {
+        match self {
+            Quadrature::Fast => "fast",
+            Quadrature::Standard => "standard",
+            Quadrature::Accurate => "accurate",
+        }
+    }
+}
+
+#[derive(Debug, Clone)]
+pub struct SolveSpec {
+    pub method: Method,
+    pub tolerance: f64,
+    pub max_iterations: usize,
+    pub load_factors: Vec<f64>,
+    pub quadrature: Quadrature,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum History {
+    Full,
+    Final,
+}
+
+/// A segment along which displacements and stresses are sampled.
+#[derive(Debug, Clone)]
+pub struct SectionSpec {
+    pub name: String,
+    pub from: [f64; 2],
+    pub to: [f64; 2],
+    pub points: usize,
+}
+
+#[derive(Debug, Clone)]
+pub struct OutputSpec {
+    pub directory: PathBuf,
+    pub history: History,
+    pub operators: bool,
+    pub vtk: bool,
+    pub field: bool,
+    pub sections: Vec<SectionSpec>,
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct Units {
+    pub length: String,
+    pub force: String,
+}
+
+/// A validated scene. Paths are resolved against the scene file's folder.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// The scene file, as given.
+    pub path: PathBuf,
+    /// Its text, kept for the archive.
+    pub text: String,
+    pub title: String,
+    /// The mesh file, if the scene names one (`--mesh` overrides it).
+    pub mesh: Option<PathBuf>,
+    pub plane: Plane,
+    pub thickness: f64,
+    pub units: Units,
+    /// Bodies in scene order.
+    pub bodies: Vec<BodySpec>,
+    pub boundaries: Vec<BoundarySpec>,
+    pub interfaces: Vec<InterfaceSpec>,
+    pub solve: SolveSpec,
+    pub output: OutputSpec,
+}
+
+impl Scene {
+    pub fn body(&self, name: &str) -> Option<&BodySpec> {
+        self.bodies.iter().find(|b| b.name == name)
+    }
+    pub fn boundary(&self, name: &str) -> Option<&BoundarySpec> {
+        self.boundaries.iter().find(|b| b.name == name)
+    }
+    pub fn interface(&self, name: &str) -> Option<&InterfaceSpec> {
+        self.interfaces.iter().find(|b| b.name == name)
+    }
+}
+
+/// Reads and validates a scene file.
+pub fn read_scene(path: &Path) -> Result<Scene> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| Error::io(path, format!("cannot read the scene file: {e}")))?;
+    parse_scene(&text, path)
+}
+
+// ---------------------------------------------------------------------------------------
+// Raw TOML shapes (serde). Unknown keys are caught first by `check_keys` for a friendly
+// message; `deny_unknown_fields` stays as a second guard.
+
+#[derive(Deserialize)]
+#[serde(untagged)]
+enum RawScalar {
+    Number(f64),
+    Text(String),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBody {
+    young: f64,
+    poisson: f64,
+    body_force: Option<[f64; 2]>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawBoundary {
+    ux: Option<RawScalar>,
+    uy: Option<RawScalar>,
+    un: Option<RawScalar>,
+    ut: Option<RawScalar>,
+    tx: Option<RawScalar>,
+    ty: Option<RawScalar>,
+    tn: Option<RawScalar>,
+    tt: Option<RawScalar>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawInterface {
+    model: String,
+    initial: Option<String>,
+    cohesion: Option<RawScalar>,
+    gap: Option<RawScalar>,
+    tangential: Option<String>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawSolve {
+    method: Option<String>,
+    tolerance: Option<f64>,
+    max_iterations: Option<i64>,
+    load_factors: Option<Vec<f64>>,
+    quadrature: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawSection {
+    name: String,
+    from: [f64; 2],
+    to: [f64; 2],
+    points: i64,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawOutput {
+    directory: Option<String>,
+    history: Option<String>,
+    operators: Option<bool>,
+    vtk: Option<bool>,
+    field: Option<bool>,
+    #[serde(default)]
+    section: Vec<RawSection>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct RawUnits {
+    length: Option<String>,
+    force: Option<String>,
+}
+
+const TOP_KEYS: [&str; 10] = [
+    "title",
+    "mesh",
+    "plane",
+    "thickness",
+    "units",
+    "body",
+    "boundary",
+    "interface",
+    "solve",
+    "output",
+];
+const UNITS_KEYS: [&str; 2] = ["length", "force"];
+const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
+const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
+const INTERFACE_KEYS: [&str; 5] = ["model", "initial", "cohesion", "gap", "tangential"];
+const SOLVE_KEYS: [&str; 5] = [
+    "method",
+    "tolerance",
+    "max_iterations",
+    "load_factors",
+    "quadrature",
+];
+const OUTPUT_KEYS: [&str; 6] = [
+    "directory",
+    "history",
+    "operators",
+    "vtk",
+    "field",
+    "section",
+];
+const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
+
+/// Parses and validates scene text; `path` locates relative paths and names the file in
+/// messages.
+pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
+    let err = |msg: String| Error::input(path, msg);
+    let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
+        err(format!(
+            "not valid TOML: {}",
+            e.to_string().trim_end().replace('\n', "\n  ")
+        ))
+    })?;
+    check_keys(&doc, path)?;
+    let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "scene".into());
+
+    let title = match doc.get("title") {
+        Some(v) => typed::<String>(v, "title", path)?,
+        None => stem.clone(),
+    };
+    let mesh = match doc.get("mesh") {
+        Some(v) => Some(dir.join(typed::<String>(v, "mesh", path)?)),
+        None => None,
+    };
+    let plane = match doc.get("plane") {
+        None => {
+            return Err(err(
+                "`plane` is missing: add plane = \"strain\" or plane = \"stress\"".into(),
+            ))
+        }
+        Some(v) => match typed::<String>(v, "plane", path)?.as_str() {
+            "strain" => Plane::Strain,
+            "stress" => Plane::Stress,
+            other => return Err(err(choice_error("plane", other, &["strain", "stress"]))),
+        },
+    };
+    let thickness = match doc.get("thickness") {
+        Some(v) => typed::<f64>(v, "thickness", path)?,
+        None => 1.0,
+    };
+    if !(thickness.is_finite() && thickness > 0.0) {
+        return Err(err(format!(
+            "`thickness` = {thickness} must be a positive number"
+        )));
+    }
+    let units = match doc.get("units") {
+        Some(v) => {
+            let raw: RawUnits = typed(v, "units", path)?;
+            Units {
+                length: raw.length.unwrap_or_default(),
+                force: raw.force.unwrap_or_default(),
+            }
+        }
+        None => Units::default(),
+    };
+
+    let mut bodies = Vec::new();
+    for (name, v) in sub_tables(&doc, "body", path)? {
+        let key = format!("body.{name}");
+        let raw: RawBody = typed(v, &key, path)?;
+        if !(raw.young.is_finite() && raw.young > 0.0) {
+            return Err(err(format!(
+                "`{key}.young` = {} must be a positive number (Young's modulus)",
+                raw.young
+            )));
+        }
+        let upper_ok = match plane {
+            Plane::Strain => raw.poisson < 0.5,
+            Plane::Stress => raw.poisson <= 0.5,
+        };
+        if !(raw.poisson.is_finite() && raw.poisson > -1.0 && upper_ok) {
+            let range = match plane {
+                Plane::Strain => {
+                    "-1 < poisson < 0.5 (0.5, incompressible, is invalid in plane strain)"
+                }
+                Plane::Stress => "-1 < poisson <= 0.5",
+            };
+            return Err(err(format!(
+                "`{key}.poisson` = {} is outside {range}",
+                raw.poisson
+            )));
+        }
+        if let Some(b) = raw.body_force {
+            if !b.iter().all(|c| c.is_finite()) {
+                return Err(err(format!(
+                    "`{key}.body_force` must hold two finite numbers"
+                )));
+            }
+        }
+        bodies.push(BodySpec {
+            name: name.clone(),
+            young: raw.young,
+            poisson: raw.poisson,
+            body_force: raw.body_force,
+        });
+    }
+    if bodies.is_empty() {
+        return Err(err(
+            "no bodies: add a [body.NAME] table (young, poisson) for each Physical Surface".into(),
+        ));
+    }
+
+    let mut boundaries = Vec::new();
+    for (name, v) in sub_tables(&doc, "boundary", path)? {
+        let key = format!("boundary.{name}");
+        let raw: RawBoundary = typed(v, &key, path)?;
+        boundaries.push(boundary_spec(name, raw, &key, path)?);
+    }
+
+    let mut interfaces = Vec::new();
+    for (name, v) in sub_tables(&doc, "interface", path)? {
+        let key = format!("interface.{name}");
+        let raw: RawInterface = typed(v, &key, path)?;
+        interfaces.push(interface_spec(name, raw, &key, path)?);
+    }
+    for b in &boundaries {
+        if interfaces.iter().any(|i| i.name == b.name) {
+            return Err(err(format!(
+                "`{}` is both a [boundary] and an [interface]: a Physical Curve is one or the other",
+                b.name
+            )));
+        }
+    }
+
+    let raw_solve: RawSolve = match doc.get("solve") {
+        Some(v) => typed(v, "solve", path)?,
+        None => RawSolve::default(),
+    };
+    let solve = solve_spec(raw_solve, path)?;
+
+    let raw_output: RawOutput = match doc.get("output") {
+        Some(v) => typed(v, "output", path)?,
+        None => RawOutput::default(),
+    };
+    let output = output_spec(raw_output, &dir, &stem, path)?;
+
+    Ok(Scene {
+        path: path.to_path_buf(),
+        text: text.to_string(),
+        title,
+        mesh,
+        plane,
+        thickness,
+        units,
+        bodies,
+        boundaries,
+        interfaces,
+        solve,
+        output,
+    })
+}
+
+/// Rejects unknown keys anywhere in the document, suggesting the nearest valid one.
+fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {
+    let unknown = |key: &str, prefix: &str, valid: &[&str]| -> Error {
+        let full = if prefix.is_empty() {
+            key.to_string()
+        } else {
+            format!("{prefix}.{key}")
+        };
+        let hint = did_you_mean(key, valid.iter().copied());
+        let list = if hint.is_empty() {
+            format!("; valid keys here: {}", valid.join(", "))
+        } else {
+            String::new()
+        };
+        Error::input(path, format!("unknown key `{full}`{hint}{list}"))
+    };
+    let table_keys = |t: &toml::Table, prefix: &str, valid: &[&str]| -> Result<()> {
+        for k in t.keys() {
+            if !valid.contains(&k.as_str()) {
+                return Err(unknown(k, prefix, valid));
+            }
+        }
+        Ok(())
+    };
+    table_keys(doc, "", &TOP_KEYS)?;
+    let named = [
+        ("body", &BODY_KEYS[..]),
+        ("boundary", &BOUNDARY_KEYS[..]),
+        ("interface", &INTERFACE_KEYS[..]),
+    ];
+    for (group, valid) in named {
+        if let Some(toml::Value::Table(t)) = doc.get(group) {
+            for (name, v) in t {
+                if let toml::Value::Table(inner) = v {
+                    table_keys(inner, &format!("{group}.{name}"), valid)?;
+                }
+            }
+        }
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("units") {
+        table_keys(t, "units", &UNITS_KEYS)?;
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("solve") {
+        table_keys(t, "solve", &SOLVE_KEYS)?;
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("output") {
+        table_keys(t, "output", &OUTPUT_KEYS)?;
+        if let Some(toml::Value::Array(a)) = t.get("section") {
+            for (i, s) in a.iter().enumerate() {
+                if let toml::Value::Table(st) = s {
+                    table_keys(st, &format!("output.section[{}]", i + 1), &SECTION_KEYS)?;
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Deserialises one value with serde, naming the key on failure.
+fn typed<'de, T: Deserialize<'de>>(v: &toml::Value, key: &str, path: &Path) -> Result<T> {
+    T::deserialize(v.clone()).map_err(|e| {
+        Error::input(
+            path,
+            format!("`{key}`: {}", e.to_string().trim_end().replace('\n', " ")),
+        )
+    })
+}
+
+/// The named sub-tables of `[group.NAME]`, in file order.
+fn sub_tables<'a>(
+    doc: &'a toml::Table,
+    group: &str,
+    path: &Path,
+) -> Result<Vec<(&'a String, &'a toml::Value)>> {
+    match doc.get(group) {
+        None => Ok(Vec::new()),
+        Some(toml::Value::Table(t)) => {
+            let mut out = Vec::new();
+            for (name, v) in t {
+                if !v.is_table() {
+                    return Err(Error::input(
+                        path,
+                        format!(
+                            "`{group}.{name}` must be a table: write [{group}.{name}] with its keys below"
+                        ),
+                    ));
+                }
+                out.push((name, v));
+            }
+            Ok(out)
+        }
+        Some(_) => Err(Error::input(
+            path,
+            format!("`{group}` must hold tables: write [{group}.NAME] sections"),
+        )),
+    }
+}
+
+fn choice_error(key: &str, got: &str, valid: &[&str]) -> String {
+    let quoted: Vec<String> = valid.iter().map(|v| format!("\"{v}\"")).collect();
+    format!(
+        "`{key}` = \"{got}\" is not one of {}{}",
+        quoted.join(", "),
+        did_you_mean(got, valid.iter().copied())
+    )
+}
+
+fn scalar(raw: RawScalar, key: &str, path: &Path) -> Result<Scalar> {
+    match raw {
+        RawScalar::Number(v) if v.is_finite() => Ok(Scalar::Const(v)),
+        RawScalar::Number(v) => Err(Error::input(path, format!("`{key}` = {v} is not finite"))),
+        RawScalar::Text(t) => match Expr::parse(&t) {
+            Ok(e) => Ok(Scalar::Expr(e)),
+            Err(why) => Err(Error::input(path, format!("`{key}` = \"{t}\": {why}"))),
+        },
+    }
+}
+
+fn boundary_spec(name: &str, raw: RawBoundary, key: &str, path: &Path) -> Result<BoundarySpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let global = [&raw.ux, &raw.uy, &raw.tx, &raw.ty]
+        .iter()
+        .any(|v| v.is_some());
+    let local = [&raw.un, &raw.ut, &raw.tn, &raw.tt]
+        .iter()
+        .any(|v| v.is_some());
+    if global && local {
+        return Err(err(format!(
+            "`{key}` mixes x/y components (ux uy tx ty) with normal/tangential ones (un ut tn tt): \
+             give one frame per boundary, or split the curve into two Physical Curves"
+        )));
+    }
+    let (frame, pairs, names) = if local {
+        (
+            Frame::Local,
+            [(raw.ut, raw.tt), (raw.un, raw.tn)],
+            [("ut", "tt"), ("un", "tn")],
+        )
+    } else {
+        (
+            Frame::Global,
+            [(raw.ux, raw.tx), (raw.uy, raw.ty)],
+            [("ux", "tx"), ("uy", "ty")],
+        )
+    };
+    let mut components: Vec<Condition> = Vec::with_capacity(2);
+    for ((u, t), (un, tn)) in pairs.into_iter().zip(names) {
+        components.push(match (u, t) {
+            (Some(_), Some(_)) => {
+                return Err(err(format!(
+                    "`{key}` gives both `{un}` and `{tn}`: per direction, prescribe either the \
+                     displacement or the traction"
+                )))
+            }
+            (Some(u), None) => Condition::Displacement(scalar(u, &format!("{key}.{un}"), path)?),
+            (None, Some(t)) => Condition::Traction(scalar(t, &format!("{key}.{tn}"), path)?),
+            (None, None) => Condition::Traction(Scalar::Const(0.0)),
+        });
+    }
+    let [c0, c1]: [Condition; 2] = match components.try_into() {
+        Ok(c) => c,
+        Err(_) => return Err(err(format!("`{key}`: internal error building components"))),
+    };
+    Ok(BoundarySpec {
+        name: name.to_string(),
+        frame,
+        components: [c0, c1],
+    })
+}
+
+fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Result<InterfaceSpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let model = match raw.model.as_str() {
+        "bonded" => InterfaceModel::Bonded,
+        "unilateral" => InterfaceModel::Unilateral,
+        other => {
+            return Err(err(choice_error(
+                &format!("{key}.model"),
+                other,
+                &["bonded", "unilateral"],
+            )))
+        }
+    };
+    let initial = match raw.initial.as_deref() {
+        None | Some("closed") => InitialState::Closed,
+        Some("open") => InitialState::Open,
+        Some(other) => {
+            return Err(err(choice_error(
+                &format!("{key}.initial"),
+                other,
+                &["closed", "open"],
+            )))
+        }
+    };
+    let tangential = match raw.tangential.as_deref() {
+        None | Some("stick") => Tangential::Stick,
+        Some("slide") => Tangential::Slide,
+        Some(other) => {
+            return Err(err(choice_error(
+                &format!("{key}.tangential"),
+                other,
+                &["stick", "slide"],
+            )))
+        }
+    };
+    let cohesion = match raw.cohesion {
+        Some(v) => scalar(v, &format!("{key}.cohesion"), path)?,
+        None => Scalar::Const(0.0),
+    };
+    let gap = match raw.gap {
+        Some(v) => scalar(v, &format!("{key}.gap"), path)?,
+        None => Scalar::Const(0.0),
+    };
+    for (what, v) in [("cohesion", &cohesion), ("gap", &gap)] {
+        if let Some(c) = v.as_const() {
+            if c < 0.0 {
+                return Err(err(format!("`{key}.{what}` = {c} must be >= 0")));
+            }
+        }
+    }
+    if model == InterfaceModel::Bonded {
+        let contradiction = if initial == InitialState::Open {
+            Some("initial = \"open\"")
+        } else if !cohesion.is_zero() {
+            Some("cohesion")
+        } else if !gap.is_zero() {
+            Some("gap")
+        } else if tangential == Tangential::Slide {
+            Some("tangential = \"slide\"")
+        } else {
+            None
+        };
+        if let Some(what) = contradiction {
+            return Err(err(format!(
+                "`{key}` is bonded but sets {what}: that applies to unilateral interfaces; \
+                 set model = \"unilateral\" or remove it"
+            )));
+        }
+    }
+    if initial == InitialState::Closed && !gap.is_zero() {
+        return Err(err(format!(
+            "`{key}` starts closed but sets a gap: a gap applies to zones that start open; \
+             set initial = \"open\" or remove `gap`"
+        )));
+    }
+    if initial == InitialState::Open && !cohesion.is_zero() {
+        return Err(err(format!(
+            "`{key}` starts open but sets a cohesion: cohesion applies to zones that start closed; \
+             set initial = \"closed\" or remove `cohesion`"
+        )));
+    }
+    Ok(InterfaceSpec {
+        name: name.to_string(),
+        model,
+        initial,
+        cohesion,
+        gap,
+        tangential,
+    })
+}
+
+fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let method = match raw.method.as_deref() {
+        None | Some("lcp") => Method::Lcp,
+        Some("qp") => Method::Qp,
+        Some("both") => Method::Both,
+        Some(other) => {
+            return Err(err(choice_error(
+                "solve.method",
+                other,
+                &["lcp", "qp", "both"],
+            )))
+        }
+    };
+    let quadrature = match raw.quadrature.as_deref() {
+        None | Some("standard") => Quadrature::Standard,
+        Some("fast") => Quadrature::Fast,
+        Some("accurate") => Quadrature::Accurate,
+        Some(other) => {
+            return Err(err(choice_error(
+                "solve.quadrature",
+                other,
+                &["fast", "standard", "accurate"],
+            )))
+        }
+    };
+    let tolerance = raw.tolerance.unwrap_or(1e-10);
+    if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 1.0) {
+        return Err(err(format!(
+            "`solve.tolerance` = {tolerance} must be a number between 0 and 1 (e.g. 1e-10)"
+        )));
+    }
+    let max_iterations = raw.max_iterations.unwrap_or(1000);
+    if max_iterations < 1 {
+        return Err(err(format!(
+            "`solve.max_iterations` = {max_iterations} must be at least 1"
+        )));
+    }
+    let load_factors = raw.load_factors.unwrap_or_else(|| vec![1.0]);
+    if load_factors.is_empty() {
+        return Err(err(
+            "`solve.load_factors` is empty: give at least one factor, e.g. [1.0]".into(),
+        ));
+    }
+    if let Some(f) = load_factors.iter().find(|f| !f.is_finite()) {
+        return Err(err(format!(
+            "`solve.load_factors` holds {f}, which is not finite"
+        )));
+    }
+    Ok(SolveSpec {
+        method,
+        tolerance,
+        max_iterations: max_iterations as usize,
+        load_factors,
+        quadrature,
+    })
+}
+
+fn output_spec(raw: RawOutput, dir: &Path, stem: &str, path: &Path) -> Result<OutputSpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let history = match raw.history.as_deref() {
+        None | Some("full") => History::Full,
+        Some("final") => History::Final,
+        Some(other) => {
+            return Err(err(choice_error(
+                "output.history",
+                other,
+                &["full", "final"],
+            )))
+        }
+    };
+    let directory = match raw.directory {
+        Some(d) if d.trim().is_empty() => {
+            return Err(err("`output.directory` is empty".into()));
+        }
+        Some(d) => dir.join(d),
+        None => dir.join("out").join(stem),
+    };
+    let mut sections: Vec<SectionSpec> = Vec::new();
+    for (i, s) in raw.section.into_iter().enumerate() {
+        let key = format!("output.section[{}] (\"{}\")", i + 1, s.name);
+        let safe = !s.name.is_empty()
+            && s.name
+                .chars()
+                .all(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | '.'))
+            && !s.name.starts_with('.');
+        if !safe {
+            return Err(err(format!(
+                "{key}: the name becomes a file name; use letters, digits, - _ and . only"
+            )));
+        }
+        if sections.iter().any(|o| o.name == s.name) {
+            return Err(err(format!("{key}: two sections have this name")));
+        }
+        if !s.from.iter().chain(s.to.iter()).all(|c| c.is_finite()) {
+            return Err(err(format!("{key}: `from` and `to` must be finite points")));
+        }
+        if s.from == s.to {
+            return Err(err(format!("{key}: `from` and `to` are the same point")));
+        }
+        if s.points < 2 || s.points > 1_000_000 {
+            return Err(err(format!(
+                "{key}: `points` = {} must be between 2 and 1000000",
+                s.points
+            )));
+        }
+        sections.push(SectionSpec {
+            name: s.name,
+            from: s.from,
+            to: s.to,
+            points: s.points as usize,
+        });
+    }
+    Ok(OutputSpec {
+        directory,
+        history,
+        operators: raw.operators.unwrap_or(true),
+        vtk: raw.vtk.unwrap_or(true),
+        field: raw.field.unwrap_or(false),
+        sections,
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const GOOD: &str = r#"
+title = "Clamped beam"
+mesh = "beam.msh"
+plane = "stress"
+thickness = 1
+units = { length = "cm", force = "daN" }
+[body.A]
+young = 5000
+poisson = 0.2
+body_force = [0.0, -0.0018]
+[body.B]
+young = 5000.0
+poisson = 0.2
+[boundary.clamp]
+ux = 0
+uy = 0.0
+[boundary.top]
+ty = "-10*x/400"
+[boundary.symmetry]
+un = 0.0
+tt = 0.0
+[interface.joint]
+model = "unilateral"
+initial = "closed"
+cohesion = 0.0
+tangential = "stick"
+[solve]
+method = "both"
+load_factors = [0.5, 1.0]
+[output]
+directory = "../out/beam"
+field = true
+[[output.section]]
+name = "a-a"
+from = [100.0, 0.0]
+to = [100.0, 40.0]
+points = 41
+"#;
+
+    fn parse(text: &str) -> Result<Scene> {
+        parse_scene(text, Path::new("pipelines/beam.toml"))
+    }
+
+    fn fails(text: &str) -> String {
+        match parse(text) {
+            Ok(_) => panic!("expected an error for:\n{text}"),
+            Err(e) => {
+                assert_eq!(e.exit_code(), 2);
+                e.to_string()
+            }
+        }
+    }
+
+    #[test]
+    fn full_scene_is_read() {
+        let s = parse(GOOD).expect("valid scene");
+        assert_eq!(s.title, "Clamped beam");
+        assert_eq!(s.mesh.as_deref(), Some(Path::new("pipelines/beam.msh")));
+        assert_eq!(s.plane, Plane::Stress);
+        assert_eq!(s.bodies.len(), 2);
+        assert_eq!(s.bodies[0].name, "A");
+        assert_eq!(s.bodies[0].body_force, Some([0.0, -0.0018]));
+        assert_eq!(s.bodies[1].body_force, None);
+        let top = s.boundary("top").unwrap();
+        assert_eq!(top.frame, Frame::Global);
+        match &top.components[1] {
+            Condition::Traction(v) => assert_eq!(v.eval([200.0, 40.0]), -5.0),
+            _ => panic!("ty is a traction"),
+        }
+        assert!(matches!(top.components[0], Condition::Traction(Scalar::Const(z)) if z == 0.0));
+        let sym = s.boundary("symmetry").unwrap();
+        assert_eq!(sym.frame, Frame::Local);
+        assert!(sym.components[1].is_displacement() && !sym.components[0].is_displacement());
+        assert_eq!(s.boundary("clamp").unwrap().role(), "constrained");
+        assert_eq!(s.solve.method, Method::Both);
+        assert_eq!(s.solve.load_factors, vec![0.5, 1.0]);
+        assert_eq!(s.output.directory, Path::new("pipelines/../out/beam"));
+        assert!(s.output.field && s.output.vtk && s.output.operators);
+        assert_eq!(s.output.sections[0].points, 41);
+        assert_eq!(
+            s.interface("joint").unwrap().model,
+            InterfaceModel::Unilateral
+        );
+    }
+
+    #[test]
+    fn defaults_apply() {
+        let s = parse("plane = \"strain\"\n[body.A]\nyoung = 1.0\npoisson = 0.3\n").unwrap();
+        assert_eq!(s.title, "beam");
+        assert_eq!(s.thickness, 1.0);
+        assert_eq!(s.solve.tolerance, 1e-10);
+        assert_eq!(s.solve.max_iterations, 1000);
+        assert_eq!(s.solve.quadrature, Quadrature::Standard);
+        assert_eq!(s.output.directory, Path::new("pipelines/out/beam"));
+        assert!(!s.output.field);
+    }
+
+    #[test]
+    fn unknown_keys_suggest_the_nearest() {
+        let m = fails(&GOOD.replace("poisson = 0.2\nbody_force", "poison = 0.2\nbody_force"));
+        assert!(
+            m.contains("`body.A.poison`") && m.contains("did you mean `poisson`"),
+            "{m}"
+        );
+        let m = fails(&GOOD.replace("[solve]\n", "[solve]\ntolerence = 1e-9\n"));
+        assert!(
+            m.contains("solve.tolerence") && m.contains("`tolerance`"),
+            "{m}"
+        );
+        let m = fails(&GOOD.replace("points = 41", "points = 41\ncount = 3"));
+        assert!(m.contains("output.section[1].count"), "{m}");
+        let m = fails(&format!("colour = 1\n{GOOD}"));
+        assert!(m.contains("`colour`") && m.contains("valid keys"), "{m}");
+    }
+
+    #[test]
+    fn invalid_values_are_named() {
+        let m = fails(&GOOD.replace("young = 5000\n", "young = -1\n"));
+        assert!(m.contains("body.A.young"), "{m}");
+        let m = fails(&GOOD.replace("poisson = 0.2\nbody_force", "poisson = 0.7\nbody_force"));
+        assert!(m.contains("body.A.poisson"), "{m}");
+        let strain = GOOD.replace("plane = \"stress\"", "plane = \"strain\"");
+        let m = fails(&strain.replace("poisson = 0.2\nbody_force", "poisson = 0.5\nbody_force"));
+        assert!(m.contains("invalid in plane strain"), "{m}");
+        let m = fails(&GOOD.replace("ux = 0\n", "ux = 0\ntx = 1\n"));
+        assert!(
+            m.contains("boundary.clamp") && m.contains("`ux`") && m.contains("`tx`"),
+            "{m}"
+        );
+        let m = fails(&GOOD.replace("cohesion = 0.0", "cohesion = -1.0"));
+        assert!(m.contains("interface.joint.cohesion"), "{m}");
+        let m = fails(&GOOD.replace("ty = \"-10*x/400\"", "ty = \"-10*z\""));
+        assert!(m.contains("boundary.top.ty") && m.contains("`z`"), "{m}");
+        let m = fails(&GOOD.replace("ty = \"-10*x/400\"", "ty = \"-10*(x\""));
+        assert!(
+            m.contains("boundary.top.ty") && m.contains("does not parse"),
+            "{m}"
+        );
+        let m = fails(&GOOD.replace("model = \"unilateral\"", "model = \"unilatreal\""));
+        assert!(m.contains("did you mean `unilateral`"), "{m}");
+        let m = fails(&GOOD.replace("young = 5000\n", "young = \"hard\"\n"));
+        assert!(m.contains("body.A"), "{m}");
+        let m = fails(&GOOD.replace("un = 0.0", "un = 0.0\nux = 0.0"));
+        assert!(m.contains("mixes"), "{m}");
+        let m = fails(&GOOD.replace("plane = \"stress\"\n", ""));
+        assert!(m.contains("`plane` is missing"), "{m}");
+        let m = fails(&GOOD.replace("cohesion = 0.0", "gap = 0.1"));
+        assert!(m.contains("gap"), "{m}");
+        let m = fails("plane = \"strain\"\n[body.A]\nyoung = 1.0\n");
+        assert!(m.contains("poisson"), "{m}");
+        let m = fails("plane = \"strain\"\n");
+        assert!(m.contains("no bodies"), "{m}");
+        let m = fails("plane = strain\n");
+        assert!(m.contains("not valid TOML"), "{m}");
+    }
+}

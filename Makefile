@@ -1,0 +1,72 @@
+# sgbem — pipelines from gmsh geometry to results.  `make` shows the menu.
+
+SHELL := /bin/bash
+.DELETE_ON_ERROR:
+.DEFAULT_GOAL := help
+.PHONY: help setup build mesh test demo examples accuracy bench report clean
+
+CARGO   ?= cargo
+GMSH    ?= gmsh
+VENV    := .venv
+PY      := $(VENV)/bin/python
+SGBEM   := target/release/sgbem
+# Extra gmsh options for every mesh, e.g. make mesh MESH_OPTS="-setnumber h 2"
+MESH_OPTS ?=
+SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
+APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
+PY_PACKAGES  := meshio pyvista h5py matplotlib
+
+GEO    := $(wildcard geo/*.geo)
+MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
+
+help:
+	@echo "sgbem — make targets"
+	@echo "  make demo      set up, build, mesh and check the paper's clamped-beam example"
+	@echo "  make test      set up, then run every test (what CI runs)"
+	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)) and $(VENV) ($(PY_PACKAGES))"
+	@echo "  make build     cargo build --release"
+	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
+	@echo "  make examples  run every pipeline"
+	@echo "  make accuracy  refinement studies: error and time"
+	@echo "  make bench     per-stage benchmarks"
+	@echo "  make report    pictures and results tables"
+	@echo "  make clean     remove out/ and build products"
+
+setup:
+	@missing=""; for p in $(APT_PACKAGES); do \
+	  dpkg -s $$p >/dev/null 2>&1 || missing="$$missing $$p"; done; \
+	if [ -n "$$missing" ]; then \
+	  echo "setup: installing$$missing"; \
+	  $(SUDO) apt-get update -qq && \
+	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
+	fi
+	@test -x $(PY) || python3 -m venv $(VENV)
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib" 2>/dev/null || \
+	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
+	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
+
+build:
+	$(CARGO) build --release
+
+mesh: $(MESHES)
+
+out/mesh/%.msh: geo/%.geo
+	@mkdir -p $(@D)
+	$(GMSH) -2 -format msh41 $(MESH_OPTS) $< -o $@.tmp.msh > $@.log
+	@mv $@.tmp.msh $@
+
+demo: setup build mesh
+	$(SGBEM) check pipelines/clamped_beam_joint.toml
+	@echo
+	@echo "demo: the model and plan above come from pipelines/clamped_beam_joint.toml on out/mesh/clamped_beam_joint.msh"
+
+test: setup mesh
+	$(CARGO) test --release
+	$(CARGO) build --release
+	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
+
+examples accuracy bench report:
+	@echo "make $@: not available yet (the solver stages are still to come)"; exit 1
+
+clean:
+	rm -rf out target/release/sgbem

@@ -1,0 +1,352 @@
+//! The command line on bad input: every class of input error exits with status 2 and one
+//! message naming the culprit; nothing panics. Plus `check` on a good scene.
+
+mod common;
+
+use common::*;
+
+/// Runs `sgbem check` on a scene text and a mesh; returns (code, stdout, stderr).
+fn check(dir: &std::path::Path, scene: &str, mesh: &std::path::Path) -> (i32, String, String) {
+    let s = write(dir, "scene.toml", scene);
+    sgbem(&[
+        "check",
+        s.to_str().unwrap(),
+        "--mesh",
+        mesh.to_str().unwrap(),
+    ])
+}
+
+/// Asserts exit status 2, a one-line message naming every `culprit`, and no panic.
+fn bad(out: (i32, String, String), culprits: &[&str]) {
+    let (code, _, err) = out;
+    assert_eq!(code, 2, "exit status for: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.starts_with("sgbem: "), "{err}");
+    for c in culprits {
+        assert!(err.contains(c), "message should name {c:?}: {err}");
+    }
+}
+
+#[test]
+fn good_scene_checks() {
+    let dir = tmpdir("cli-good");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let (code, out, err) = check(&dir, STACKED_SCENE, &msh);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("bodies (2)"), "{out}");
+    assert!(out.contains("effects: elastic + detachment"), "{out}");
+    assert!(
+        out.contains("sides") && out.contains("traction-free"),
+        "{out}"
+    );
+    assert!(out.contains("5 pairs"), "{out}");
+}
+
+#[test]
+fn version_and_help() {
+    let (code, out, _) = sgbem(&["--version"]);
+    assert_eq!(code, 0);
+    assert!(out.contains(env!("CARGO_PKG_VERSION")));
+    for cmd in ["run", "check", "inspect", "export"] {
+        let (code, out, _) = sgbem(&[cmd, "--help"]);
+        assert_eq!(code, 0, "{cmd} --help");
+        assert!(out.contains("Usage"), "{out}");
+    }
+}
+
+#[test]
+fn scene_errors() {
+    let dir = tmpdir("cli-scene");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let cases: Vec<(String, Vec<&str>)> = vec![
+        (
+            STACKED_SCENE.replace(
+                "young = 1.0\npoisson = 0.3\n[body.upper]",
+                "yuong = 1.0\npoisson = 0.3\n[body.upper]",
+            ),
+            vec!["body.lower.yuong", "did you mean `young`"],
+        ),
+        (
+            STACKED_SCENE.replace("ux = 0.0", "ux = 0.0\ntx = 1.0"),
+            vec!["boundary.base", "`ux`", "`tx`"],
+        ),
+        (
+            STACKED_SCENE.replacen("young = 1.0", "young = 0.0", 1),
+            vec!["body.lower.young"],
+        ),
+        (
+            STACKED_SCENE.replacen("poisson = 0.3", "poisson = 0.5", 1),
+            vec!["body.lower.poisson", "plane strain"],
+        ),
+        (
+            STACKED_SCENE.replacen("poisson = 0.3", "poisson = -1.0", 1),
+            vec!["body.lower.poisson"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ncohesion = -0.1",
+            ),
+            vec!["interface.joint.cohesion"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ninitial = \"open\"\ngap = -1",
+            ),
+            vec!["interface.joint.gap"],
+        ),
+        (
+            STACKED_SCENE.replace("ty = -1.0", "ty = \"-1*(x\""),
+            vec!["boundary.top.ty", "does not parse"],
+        ),
+        (
+            STACKED_SCENE.replace("ty = -1.0", "ty = \"-1*depth\""),
+            vec!["boundary.top.ty", "`depth`"],
+        ),
+        (
+            STACKED_SCENE.replace("ty = -1.0", "ty = \"sqrt(x - 2)\""),
+            vec!["boundary.top.ty", "NaN"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ninitial = \"open\"\ngap = \"0.1 - x\"",
+            ),
+            vec!["interface.joint.gap", "node"],
+        ),
+        (
+            STACKED_SCENE.replace("plane = \"strain\"", "plane = \"strian\""),
+            vec!["plane", "did you mean `strain`"],
+        ),
+        (
+            "plane = \"strain\"\n[body.lower\n".to_string(),
+            vec!["not valid TOML"],
+        ),
+    ];
+    for (scene, culprits) in cases {
+        bad(check(&dir, &scene, &msh), &culprits);
+    }
+}
+
+#[test]
+fn scene_and_mesh_mismatch_errors() {
+    let dir = tmpdir("cli-mismatch");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let cases: Vec<(String, Vec<&str>)> = vec![
+        // a physical name the scene uses and the mesh lacks
+        (
+            STACKED_SCENE.replace("[body.upper]", "[body.uper]"),
+            vec!["body.uper", "did you mean `upper`"],
+        ),
+        (
+            STACKED_SCENE.replace("[boundary.top]", "[boundary.roof]"),
+            vec!["boundary.roof", "Physical Curve"],
+        ),
+        // a group of the wrong kind
+        (
+            STACKED_SCENE.replace("[boundary.top]", "[boundary.upper]"),
+            vec!["boundary.upper", "Physical Surface", "Physical Curve"],
+        ),
+        (
+            STACKED_SCENE.replace("[body.upper]", "[body.top]"),
+            vec!["body.top", "Physical Curve"],
+        ),
+        // an interface whose curve is not shared by exactly two bodies
+        (
+            STACKED_SCENE.replace(
+                "[boundary.top]\nty = -1.0",
+                "[interface.top]\nmodel = \"bonded\"",
+            ),
+            vec!["interface.top", "exactly two bodies"],
+        ),
+        // a shared curve the scene does not declare as an interface
+        (
+            STACKED_SCENE.replace("[interface.joint]\nmodel = \"unilateral\"", ""),
+            vec!["joint", "[interface.joint]"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "[interface.joint]\nmodel = \"unilateral\"",
+                "[boundary.joint]\nty = 0.0",
+            ),
+            vec!["joint", "interface"],
+        ),
+        // a body that nothing holds
+        (
+            STACKED_SCENE.replace("[boundary.base]\nux = 0.0\nuy = 0.0", ""),
+            vec!["not held", "lower", "upper"],
+        ),
+        (
+            STACKED_SCENE.replace("uy = 0.0", ""),
+            vec!["not held", "translation along y"],
+        ),
+        // a Physical Surface without a body
+        (
+            STACKED_SCENE.replace("[body.upper]\nyoung = 1.0\npoisson = 0.3\n", ""),
+            vec!["\"upper\"", "[body.upper]"],
+        ),
+        // field output without triangles
+        (
+            format!("{STACKED_SCENE}\n[output]\nfield = true\n"),
+            vec!["output.field", "gmsh -2"],
+        ),
+    ];
+    for (scene, culprits) in cases {
+        bad(check(&dir, &scene, &msh), &culprits);
+    }
+}
+
+#[test]
+fn isolated_body_is_not_held() {
+    let dir = tmpdir("cli-isolated");
+    let mut m = stacked_blocks(2);
+    // A third block far away, touching nothing, with no condition.
+    m.line(11, [3.0, 0.0], [4.0, 0.0], 2, &[2]);
+    m.line(12, [4.0, 0.0], [4.0, 1.0], 2, &[2]);
+    m.line(13, [4.0, 1.0], [3.0, 1.0], 2, &[2]);
+    m.line(14, [3.0, 1.0], [3.0, 0.0], 2, &[2]);
+    m.surface(3, &[11, 12, 13, 14], &[3]);
+    m.name(2, 3, "loose");
+    let msh = m.save(&dir, "m.msh");
+    let scene = format!("{STACKED_SCENE}\n[body.loose]\nyoung = 1.0\npoisson = 0.3\n");
+    bad(
+        check(&dir, &scene, &msh),
+        &[
+            "body \"loose\" is not held",
+            "no displacement condition and no interface",
+        ],
+    );
+}
+
+#[test]
+fn mesh_errors() {
+    let dir = tmpdir("cli-mesh");
+    let good = stacked_blocks(4).to_text();
+
+    // unreadable: missing, truncated, garbage
+    let (code, _, err) = sgbem(&[
+        "check",
+        write(&dir, "s.toml", STACKED_SCENE).to_str().unwrap(),
+        "--mesh",
+        dir.join("nope.msh").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("nope.msh") && err.contains("no such mesh file"),
+        "{err}"
+    );
+    let cut = &good[..good.len() * 2 / 3];
+    bad(
+        check(&dir, STACKED_SCENE, &write(&dir, "cut.msh", cut)),
+        &["cut.msh"],
+    );
+    bad(
+        check(
+            &dir,
+            STACKED_SCENE,
+            &write(&dir, "junk.msh", "hello\nworld\n"),
+        ),
+        &["junk.msh"],
+    );
+
+    // open loop: a curve whose elements are missing (untagged curve dropped by gmsh)
+    let mut m = stacked_blocks(4);
+    m.curves[6].1.clear();
+    bad(
+        check(&dir, STACKED_SCENE, &m.save(&dir, "open.msh")),
+        &["open.msh", "curve 7", "Physical Curve"],
+    );
+
+    // a boundary curve in no physical group
+    let mut m = stacked_blocks(4);
+    m.curves[6].2.clear();
+    bad(
+        check(&dir, STACKED_SCENE, &m.save(&dir, "untagged.msh")),
+        &["curve 7", "Physical Curve"],
+    );
+
+    // zero-length element: a curve whose two nodes coincide
+    let mut m = stacked_blocks(4);
+    let a = m.nodes[m.curves[5].1[1]];
+    let extra = m.new_node(a);
+    m.curves[5].1.insert(2, extra);
+    bad(
+        check(&dir, STACKED_SCENE, &m.save(&dir, "zero.msh")),
+        &["zero length", "element"],
+    );
+
+    // interface nodes that do not match: the joint drawn twice, with 4 and 3 elements
+    let mut m = stacked_blocks(4);
+    m.line(8, [0.0, 1.0], [1.0, 1.0], 3, &[3]);
+    m.surfaces[1].1 = vec![8, 5, 6, 7];
+    bad(
+        check(&dir, STACKED_SCENE, &m.save(&dir, "mismatch.msh")),
+        &["joint", "matching node"],
+    );
+
+    // overlapping bodies: two squares that overlap by a quarter
+    let mut m = Msh::default();
+    m.line(1, [0.0, 0.0], [1.0, 0.0], 2, &[1]);
+    m.line(2, [1.0, 0.0], [1.0, 1.0], 2, &[2]);
+    m.line(3, [1.0, 1.0], [0.0, 1.0], 2, &[2]);
+    m.line(4, [0.0, 1.0], [0.0, 0.0], 2, &[2]);
+    m.line(5, [0.5, 0.5], [1.5, 0.5], 2, &[2]);
+    m.line(6, [1.5, 0.5], [1.5, 1.5], 2, &[2]);
+    m.line(7, [1.5, 1.5], [0.5, 1.5], 2, &[4]);
+    m.line(8, [0.5, 1.5], [0.5, 0.5], 2, &[2]);
+    m.surface(1, &[1, 2, 3, 4], &[1]);
+    m.surface(2, &[5, 6, 7, 8], &[2]);
+    for (d, t, n) in [
+        (1, 1, "base"),
+        (1, 2, "sides"),
+        (1, 4, "top"),
+        (2, 1, "lower"),
+        (2, 2, "upper"),
+    ] {
+        m.name(d, t, n);
+    }
+    let scene = STACKED_SCENE
+        .replace("[interface.joint]\nmodel = \"unilateral\"", "")
+        .replace("ty = -1.0", "ux = 0.0\nuy = 0.0");
+    bad(
+        check(&dir, &scene, &m.save(&dir, "overlap.msh")),
+        &["\"lower\"", "\"upper\"", "overlap"],
+    );
+
+    // second-order elements are refused
+    let text = good.replace(
+        "$Elements\n7 28 1 28\n1 1 1 4",
+        "$Elements\n7 28 1 28\n1 1 8 4",
+    );
+    bad(
+        check(&dir, STACKED_SCENE, &write(&dir, "order2.msh", &text)),
+        &["order2.msh"],
+    );
+}
+
+#[test]
+fn missing_scene_file_is_an_input_error() {
+    let (code, _, err) = sgbem(&["check", "/nonexistent/scene.toml"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("/nonexistent/scene.toml"), "{err}");
+}
+
+#[test]
+fn gmsh_untagged_curve_gives_the_hint() {
+    // Remove a curve's Physical Curve from the .geo: gmsh then drops its elements.
+    let dir = tmpdir("cli-untagged");
+    let geo = std::fs::read_to_string(root().join("geo/two_blocks.geo")).unwrap();
+    let geo: String = geo
+        .lines()
+        .filter(|l| !l.starts_with("Physical Curve(\"upper_sides\")"))
+        .map(|l| format!("{l}\n"))
+        .collect();
+    let geo = write(&dir, "untagged.geo", &geo);
+    let msh = gmsh(&geo, &dir, "untagged.msh", false, &[]);
+    let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml")).unwrap();
+    bad(
+        check(&dir, &scene, &msh),
+        &["untagged.msh", "curve 5", "\"upper\"", "Physical Curve"],
+    );
+}
