@@ -9,7 +9,12 @@
 //!   (0,0) of the parameter square. Split the square along its diagonal, map each triangle by
 //!   Duffy's transformation `(s,t) = (ρ, ρw)` / `(ρw, ρ)` (Jacobian ρ) and grade `ρ = u³`.
 //!   A `1/r` integrand becomes smooth and `ln r` becomes `u⁵ ln u`, so n×n Gauss points in
-//!   (u, w) converge fast: about 1e-8 / 3e-11 / 1e-13 absolute at n = 6 / 10 / 16 — [`duffy`].
+//!   (u, w) converge fast: about 1e-8 / 3e-11 / 1e-13 absolute at n = 6 / 10 / 16 (better
+//!   still with quartic grading from n = 8 on, `galerkin::duffy_grading`) —
+//!   [`duffy_graded`]. After the map the integrand separates into a function of ρ (handled by
+//!   the grading) and one of w whose only near-singularity is a complex pole; acute corners
+//!   and unequal lengths bring that pole close to [0,1], so the w-interval is bisected
+//!   towards it ([`split_towards_pole`]).
 //! * A rule graded at both ends of [0,1] for integrands with `d ln d` end-point behaviour (the
 //!   body-force traction near corners) — [`graded_both_ends`].
 //! * [`QuadratureSettings`] groups the orders and the near-pair factor η of §2.4c–d.
@@ -120,7 +125,8 @@ pub struct SquareRule {
 }
 
 /// Duffy rule with cubic grading for a singularity at the corner (0,0) of the unit square,
-/// n Gauss points in each of u and w and both triangles: 2n² points.
+/// n Gauss points in each of u and w and both triangles: 2n² points. (The pair integrator
+/// applies the same map with the w-interval split by [`split_towards_pole`].)
 ///
 /// Triangle t ≤ s: `(s,t) = (ρ, ρw)`; triangle s ≤ t: `(s,t) = (ρw, ρ)`; Jacobian ρ;
 /// `ρ = u³`, `dρ = 3u² du`, so each weight is `w_u w_w · 3u⁵`. The point set is symmetric
@@ -140,17 +146,67 @@ pub fn duffy_graded(n: usize) -> SquareRule {
     SquareRule { points }
 }
 
-/// Largest Duffy order kept in the cache.
-pub const MAX_CACHED_DUFFY: usize = 32;
+/// Bernstein-ellipse parameter of the complex point `z` with respect to the interval
+/// `[a, b]`: Gauss–Legendre with n points on `[a, b]` has error `O(ρ^(−2n))` for an integrand
+/// analytic inside the ellipse with foci a, b through z.
+#[inline]
+pub fn bernstein_rho(z: [f64; 2], a: f64, b: f64) -> f64 {
+    let h = 0.5 * (b - a);
+    let x = (z[0] - 0.5 * (a + b)) / h;
+    let y = z[1] / h;
+    // Semi-major axis of the ellipse through (x, y) with foci ±1.
+    let semi = 0.5 * ((x - 1.0).hypot(y) + (x + 1.0).hypot(y));
+    semi + (semi * semi - 1.0).max(0.0).sqrt()
+}
 
-/// Cached [`duffy_graded`] rule (n ≤ [`MAX_CACHED_DUFFY`]).
-pub fn duffy(n: usize) -> &'static SquareRule {
-    static CACHE: OnceLock<Vec<SquareRule>> = OnceLock::new();
-    assert!(
-        (1..=MAX_CACHED_DUFFY).contains(&n),
-        "Duffy order {n} outside the cached range 1..={MAX_CACHED_DUFFY}"
-    );
-    &CACHE.get_or_init(|| (1..=MAX_CACHED_DUFFY).map(duffy_graded).collect())[n - 1]
+/// Most sub-intervals [`split_towards_pole`] produces.
+pub const MAX_POLE_INTERVALS: usize = 40;
+
+/// Sub-intervals of [0,1] produced by [`split_towards_pole`].
+#[derive(Debug, Clone, Copy)]
+pub struct PoleSplit {
+    buf: [(f64, f64); MAX_POLE_INTERVALS],
+    len: usize,
+}
+
+impl PoleSplit {
+    pub fn intervals(&self) -> &[(f64, f64)] {
+        &self.buf[..self.len]
+    }
+}
+
+/// Bisects [0,1] until every piece sees the complex point `pole` (a near-singularity of the
+/// integrand) outside its Bernstein ellipse of parameter `rho_min`, so that Gauss rules on
+/// the pieces converge at least like `rho_min^(−2n)`. Pieces shorter than 1e-9 are kept as
+/// they are; no allocation.
+///
+/// Used for the angular Duffy variable of vertex-adjacent pairs: there `r = ρ|E_e − w E_f|`
+/// (edge vectors as complex numbers) vanishes at `w₀ = E_e/E_f`, which approaches [0,1] for
+/// acute corners (w₀ near e^{iθ}) and for very unequal lengths (|w₀| ≪ 1).
+pub fn split_towards_pole(pole: [f64; 2], rho_min: f64) -> PoleSplit {
+    let mut out = PoleSplit {
+        buf: [(0.0, 0.0); MAX_POLE_INTERVALS],
+        len: 0,
+    };
+    let mut stack = [(0.0, 0.0); MAX_POLE_INTERVALS];
+    stack[0] = (0.0, 1.0);
+    let mut top = 1;
+    while top > 0 {
+        top -= 1;
+        let (a, b) = stack[top];
+        // Room for this piece's two halves plus everything already pending or produced.
+        let room = out.len + top + 2 <= MAX_POLE_INTERVALS;
+        if bernstein_rho(pole, a, b) < rho_min && b - a > 1e-9 && room {
+            let mid = 0.5 * (a + b);
+            stack[top] = (a, mid);
+            stack[top + 1] = (mid, b);
+            top += 2;
+        } else {
+            out.buf[out.len] = (a, b);
+            out.len += 1;
+        }
+    }
+    out
 }
 
 /// n-point rule on [0,1] graded towards both ends by the quintic smoothstep
@@ -290,7 +346,7 @@ mod tests {
     #[test]
     fn duffy_integrates_corner_singularities() {
         // ∫∫ 1 = 1, ∫∫ 1/√(s²+t²) = 2 asinh(1), ∫∫ ln(s²+t²) = ln 2 − 3 + π/2.
-        let r = duffy(10);
+        let r = duffy_graded(10);
         let area: f64 = r.points.iter().map(|p| p[2]).sum();
         assert!((area - 1.0).abs() < 1e-14);
         let inv: f64 = r.points.iter().map(|p| p[2] / p[0].hypot(p[1])).sum();
@@ -298,13 +354,40 @@ mod tests {
         // ln r becomes 18 u⁵ ln u after the map: algebraic convergence, 7e-10 at n = 10.
         let exact = 2f64.ln() - 3.0 + std::f64::consts::FRAC_PI_2;
         for (n, tol) in [(10, 1e-9), (16, 5e-12), (24, 5e-14)] {
-            let lg: f64 = duffy(n)
+            let lg: f64 = duffy_graded(n)
                 .points
                 .iter()
                 .map(|p| p[2] * (p[0] * p[0] + p[1] * p[1]).ln())
                 .sum();
             assert!((lg - exact).abs() < tol, "n = {n}: {lg} vs {exact}");
         }
+    }
+
+    #[test]
+    fn pole_splitting() {
+        // A pole far from [0,1] needs no split; one at 0.3 + 0.01i is bracketed finely.
+        assert_eq!(
+            split_towards_pole([-1.0, 0.0], 4.0).intervals(),
+            &[(0.0, 1.0)]
+        );
+        let sp = split_towards_pole([0.3, 0.01], 4.0);
+        let iv = sp.intervals();
+        let total: f64 = iv.iter().map(|(a, b)| b - a).sum();
+        assert!((total - 1.0).abs() < 1e-15);
+        assert!(iv
+            .iter()
+            .all(|&(a, b)| bernstein_rho([0.3, 0.01], a, b) >= 4.0));
+        // ∫₀¹ dw/((w−0.3)² + 0.01²) = (atan(70) + atan(30))/0.01.
+        let g = gauss(10);
+        let mut s = 0.0;
+        for &(a, b) in iv {
+            for (u, w) in g.iter() {
+                let x = a + (b - a) * u;
+                s += w * (b - a) / ((x - 0.3) * (x - 0.3) + 1e-4);
+            }
+        }
+        let exact = (70f64.atan() + 30f64.atan()) / 0.01;
+        assert!((s - exact).abs() < 1e-10 * exact, "{s} vs {exact}");
     }
 
     #[test]
