@@ -371,20 +371,22 @@ struct SegmentMoments {
     u2_r2: f64,
 }
 
-/// `u ln(u² + h²)` with its limit 0 at u = 0.
+/// `ln(u² + h²)`, replaced by 0 where it vanishes: it is only ever multiplied by u, h or
+/// u² + h², which are then 0 as well (the limits of `u ln u` and `u² ln u²`).
 #[inline]
-fn u_ln_r2(u: f64, r2: f64) -> f64 {
-    if u == 0.0 {
-        0.0
+fn ln_r2(r2: f64) -> f64 {
+    if r2 > 0.0 {
+        r2.ln()
     } else {
-        u * r2.ln()
+        0.0
     }
 }
 
 fn segment_moments(seg: &Segment, x: Vec2) -> (SegmentMoments, f64, f64) {
-    let len = seg.length();
-    let tau = seg.tangent();
-    let n = seg.normal();
+    let c = seg.chord();
+    let len = c[0].hypot(c[1]);
+    let tau = [c[0] / len, c[1] / len];
+    let n = [tau[1], -tau[0]];
     let w = [x[0] - seg.p[0], x[1] - seg.p[1]];
     let a = w[0] * tau[0] + w[1] * tau[1];
     let h = w[0] * n[0] + w[1] * n[1];
@@ -393,26 +395,16 @@ fn segment_moments(seg: &Segment, x: Vec2) -> (SegmentMoments, f64, f64) {
     // t ∈ [0, L] ↔ u ∈ [a − L, a]; ∫_0^L g(a − t) dt = ∫_{a−L}^{a} g(u) du.
     let (u1, u2) = (a - len, a);
     let (r2_1, r2_2) = (u1 * u1 + h2, u2 * u2 + h2);
+    let (lg1, lg2) = (ln_r2(r2_1), ln_r2(r2_2));
     // atan2(u, |h|) is the continuous branch of atan(u/|h|); it is harmless when h = 0
     // because it always appears multiplied by |h|.
     let at = u2.atan2(ah) - u1.atan2(ah);
     // Antiderivative of ln r = ½ ln(u²+h²): ½ u ln(u²+h²) − u + |h| atan(u/|h|).
-    let ln = 0.5 * (u_ln_r2(u2, r2_2) - u_ln_r2(u1, r2_1)) - len + ah * at;
+    let ln = 0.5 * (u2 * lg2 - u1 * lg1) - len + ah * at;
     // Antiderivative of u ln r: ¼((u²+h²) ln(u²+h²) − u²).
-    let f1 = |r2: f64, u: f64| {
-        if r2 == 0.0 {
-            0.0
-        } else {
-            0.25 * (r2 * r2.ln() - u * u)
-        }
-    };
-    let u_ln = f1(r2_2, u2) - f1(r2_1, u1);
+    let u_ln = 0.25 * ((r2_2 * lg2 - u2 * u2) - (r2_1 * lg1 - u1 * u1));
     let u = 0.5 * (u2 * u2 - u1 * u1);
-    let h_u_r2 = if h == 0.0 {
-        0.0
-    } else {
-        0.5 * h * (r2_2.ln() - r2_1.ln())
-    };
+    let h_u_r2 = 0.5 * h * (lg2 - lg1);
     let h2_r2 = ah * at;
     let u2_r2 = len - ah * at;
     (
@@ -452,8 +444,9 @@ pub fn body_force_fields(
     let mut g = [[0.0; 2]; 2];
     for seg in boundary {
         let (mo, h, len) = segment_moments(seg, x);
-        let tau = seg.tangent();
-        let n = seg.normal();
+        let c = seg.chord();
+        let tau = [c[0] / len, c[1] / len];
+        let n = [tau[1], -tau[0]];
         let bn = b[0] * n[0] + b[1] * n[1];
         // ∫(2 ln r + 1) and ∫(2 ln r + 1) u.
         let l0 = 2.0 * mo.ln + len;

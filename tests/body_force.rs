@@ -293,3 +293,23 @@ fn body_force_calderon_residuals_converge() {
     // Without the body-force terms the residuals stall (formulation §4.1).
     assert!(bare[bare.len() - 1] > 0.5 * bare[0], "{bare:?}");
 }
+
+#[test]
+#[ignore = "timing report, run with --ignored --nocapture"]
+fn load_timings() {
+    let m = material();
+    let s = QuadratureSettings::standard();
+    let lp = Loop::circle([0.0, 0.0], 0.5, 4000);
+    let segs = lp.segments();
+    let area = boundary_area(&segs);
+    let t0 = std::time::Instant::now();
+    let mut acc = 0.0;
+    for e in segs.iter().take(200) {
+        acc += body_force_loads(&m, e, &segs, [0.0, -1.0], area, &s).p[0][1];
+    }
+    let dt = t0.elapsed().as_secs_f64() / 200.0;
+    println!(
+        "body-force loads, 4000-element boundary: {:.2} ms per test element ({acc:.3e})",
+        dt * 1e3
+    );
+}
