@@ -247,7 +247,8 @@ pub struct QuadratureSettings {
 }
 
 impl QuadratureSettings {
-    /// Cheap rules for previews: relative accuracy about 1e-8.
+    /// Cheap rules for previews: operator residuals about 1e-7 relative (patch test on graded
+    /// and thin meshes, tests/operators.rs).
     pub fn fast() -> Self {
         QuadratureSettings {
             duffy_order: 6,
@@ -258,7 +259,7 @@ impl QuadratureSettings {
         }
     }
 
-    /// The verified default (formulation Appendix A): relative accuracy about 1e-10 or better.
+    /// The verified default (formulation Appendix A): operator residuals about 1e-11 relative.
     pub fn standard() -> Self {
         QuadratureSettings {
             duffy_order: 10,
@@ -269,7 +270,7 @@ impl QuadratureSettings {
         }
     }
 
-    /// Rich rules for reference runs: close to machine precision.
+    /// Rich rules for reference runs: operator residuals about 1e-13 relative.
     pub fn accurate() -> Self {
         QuadratureSettings {
             duffy_order: 16,

@@ -743,3 +743,73 @@ fn pair_timings() {
         println!("{name:>14} ({kind:?}): {:.2} µs per pair", dt * 1e6);
     }
 }
+
+/// Nodes on a polygon with a per-side list of parameters in [0,1).
+fn graded_polygon(vertices: &[Vec2], params: &[Vec<f64>]) -> Loop {
+    let mut nodes = Vec::new();
+    for (i, p) in vertices.iter().enumerate() {
+        let q = vertices[(i + 1) % vertices.len()];
+        for &t in &params[i] {
+            nodes.push([p[0] + t * (q[0] - p[0]), p[1] + t * (q[1] - p[1])]);
+        }
+    }
+    Loop::from_nodes(nodes)
+}
+
+#[test]
+fn presets_on_graded_and_thin_meshes() {
+    // The patch (linear-field Calderón) residual and the rotation mode of D measure the
+    // quadrature floor of each preset on meshes that exercise every pair kind: a quadrilateral
+    // with quadratic grading (neighbour ratio 3), a 20:1 jump and a 9.5° corner, and a thin
+    // slab (aspect 50) whose long sides face each other as near pairs.
+    let m = steel_like();
+    let uniform = |n: usize| (0..n).map(|j| j as f64 / n as f64).collect::<Vec<_>>();
+    let squared = |n: usize| {
+        (0..n)
+            .map(|j| (j as f64 / n as f64).powi(2))
+            .collect::<Vec<_>>()
+    };
+    let jump: Vec<f64> = (0..20)
+        .map(|j| j as f64 * 0.005)
+        .chain((1..10).map(|j| 0.1 * j as f64))
+        .collect();
+    let meshes = [
+        (
+            "graded quad",
+            graded_polygon(
+                &[[0.0, 0.0], [1.0, 0.0], [1.2, 0.6], [0.9, 0.15]],
+                &[squared(8), jump, uniform(5), squared(6)],
+            ),
+        ),
+        (
+            "thin slab",
+            graded_polygon(
+                &[[0.0, 0.0], [1.0, 0.0], [1.0, 0.02], [0.0, 0.02]],
+                &[uniform(10), uniform(1), uniform(10), uniform(1)],
+            ),
+        ),
+    ];
+    let (_, uf, sf) = linear_field();
+    for (name, lp) in &meshes {
+        for (preset, tol_patch, tol_rot) in [
+            ("fast", 1e-6, 2e-8),
+            ("standard", 1e-10, 1e-12),
+            ("accurate", 1e-12, 1e-14),
+        ] {
+            let s = QuadratureSettings::from_name(preset).unwrap();
+            let ops = assemble(lp, &m, &s);
+            let u = nodal_displacement(lp, &uf);
+            let t = element_tractions(lp, &sf);
+            let (r1, r2) = calderon_residuals(&ops, &u, &t);
+            let patch = (max_abs(&r1) / max_abs(&matvec(&ops.v, &t)))
+                .max(max_abs(&r2) / max_abs(&matvec(&ops.d, &u)));
+            let rot = nodal_displacement(lp, |x| [-x[1], x[0]]);
+            let rr = max_abs(&matvec(&ops.d, &rot)) / (mat_max_abs(&ops.d) * max_abs(&rot));
+            println!("{name:>11}, {preset:>8}: patch residual {patch:.1e} (relative), D·rotation {rr:.1e}");
+            assert!(
+                patch <= tol_patch && rr <= tol_rot,
+                "{name} {preset}: {patch:e} {rr:e}"
+            );
+        }
+    }
+}
