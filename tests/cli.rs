@@ -1,9 +1,9 @@
 //! The command line on bad input: every class of input error exits with status 2 and one
 //! message naming the culprit; nothing panics. Plus `check` on a good scene.
 
-mod common;
+mod support;
 
-use common::*;
+use support::*;
 
 /// Runs `sgbem check` on a scene text and a mesh; returns (code, stdout, stderr).
 fn check(dir: &std::path::Path, scene: &str, mesh: &std::path::Path) -> (i32, String, String) {

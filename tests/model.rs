@@ -1,9 +1,9 @@
 //! The model built from gmsh meshes: the paper's example-2 geometry, orientation whatever the
 //! drawing direction, binary = ASCII, node classes and interface pairs.
 
-mod common;
+mod support;
 
-use common::*;
+use support::*;
 use sgbem::model::{DofClass, Model, Role};
 use sgbem::pipeline::load;
 

@@ -1,0 +1,243 @@
+//! Shared helpers for integration tests: temporary folders, gmsh meshing, a small MSH 4.1
+//! writer for hand-made (also deliberately broken) meshes, and the command line.
+#![allow(dead_code)]
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+/// A fresh temporary folder for one test.
+pub fn tmpdir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir()
+        .join("sgbem-tests")
+        .join(format!("{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).expect("create temp dir");
+    d
+}
+
+/// Repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Meshes a .geo file with gmsh (MSH 4.1, ASCII or binary) into `dir`.
+pub fn gmsh(geo: &Path, dir: &Path, out_name: &str, binary: bool, opts: &[&str]) -> PathBuf {
+    let out = dir.join(out_name);
+    let mut cmd = Command::new("gmsh");
+    cmd.arg("-2").arg("-format").arg("msh41");
+    if binary {
+        cmd.arg("-bin");
+    }
+    cmd.args(opts).arg(geo).arg("-o").arg(&out);
+    let o = cmd.output().expect("gmsh must be installed (make setup)");
+    assert!(
+        o.status.success(),
+        "gmsh failed on {}: {}",
+        geo.display(),
+        String::from_utf8_lossy(&o.stderr)
+    );
+    out
+}
+
+/// Writes a text file and returns its path.
+pub fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).expect("write file");
+    p
+}
+
+/// Runs the sgbem binary; returns (exit code, stdout, stderr).
+pub fn sgbem(args: &[&str]) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_sgbem"))
+        .args(args)
+        .output()
+        .expect("run sgbem");
+    (
+        o.status.code().unwrap_or(-1),
+        String::from_utf8_lossy(&o.stdout).into_owned(),
+        String::from_utf8_lossy(&o.stderr).into_owned(),
+    )
+}
+
+/// A hand-made 2D mesh written as MSH 4.1 ASCII: polyline curves, surfaces bounded by
+/// signed curves, physical groups.
+#[derive(Default)]
+pub struct Msh {
+    pub nodes: Vec<[f64; 2]>,
+    /// (tag, node indices along the curve, physical tags)
+    pub curves: Vec<(i32, Vec<usize>, Vec<i32>)>,
+    /// (tag, signed bounding curves, physical tags)
+    pub surfaces: Vec<(i32, Vec<i32>, Vec<i32>)>,
+    /// (dim, tag, name)
+    pub names: Vec<(i32, i32, String)>,
+}
+
+impl Msh {
+    /// Index of a node at p (reused if one exists there).
+    pub fn node(&mut self, p: [f64; 2]) -> usize {
+        if let Some(i) = self.nodes.iter().position(|q| *q == p) {
+            return i;
+        }
+        self.nodes.push(p);
+        self.nodes.len() - 1
+    }
+
+    /// A new node at p even if one exists there.
+    pub fn new_node(&mut self, p: [f64; 2]) -> usize {
+        self.nodes.push(p);
+        self.nodes.len() - 1
+    }
+
+    /// A straight curve from a to b with n elements; end nodes shared by position.
+    pub fn line(&mut self, tag: i32, a: [f64; 2], b: [f64; 2], n: usize, phys: &[i32]) {
+        let mut ids = Vec::new();
+        for k in 0..=n {
+            let t = k as f64 / n as f64;
+            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            ids.push(if k == 0 || k == n {
+                self.node(p)
+            } else {
+                self.new_node(p)
+            });
+        }
+        self.curves.push((tag, ids, phys.to_vec()));
+    }
+
+    pub fn surface(&mut self, tag: i32, bounding: &[i32], phys: &[i32]) {
+        self.surfaces.push((tag, bounding.to_vec(), phys.to_vec()));
+    }
+
+    pub fn name(&mut self, dim: i32, tag: i32, name: &str) {
+        self.names.push((dim, tag, name.to_string()));
+    }
+
+    pub fn to_text(&self) -> String {
+        let mut s = String::new();
+        let _ = writeln!(s, "$MeshFormat\n4.1 0 8\n$EndMeshFormat");
+        let _ = writeln!(s, "$PhysicalNames\n{}", self.names.len());
+        for (d, t, n) in &self.names {
+            let _ = writeln!(s, "{d} {t} \"{n}\"");
+        }
+        let _ = writeln!(s, "$EndPhysicalNames");
+        let _ = writeln!(
+            s,
+            "$Entities\n0 {} {} 0",
+            self.curves.len(),
+            self.surfaces.len()
+        );
+        for (tag, ids, phys) in &self.curves {
+            let (lo, hi) = if ids.is_empty() {
+                ([0.0; 2], [0.0; 2])
+            } else {
+                bbox(ids.iter().map(|&i| self.nodes[i]))
+            };
+            let _ = write!(
+                s,
+                "{tag} {} {} 0 {} {} 0 {}",
+                lo[0],
+                lo[1],
+                hi[0],
+                hi[1],
+                phys.len()
+            );
+            for p in phys {
+                let _ = write!(s, " {p}");
+            }
+            let _ = writeln!(s, " 0");
+        }
+        for (tag, bnd, phys) in &self.surfaces {
+            let _ = write!(s, "{tag} 0 0 0 1 1 0 {}", phys.len());
+            for p in phys {
+                let _ = write!(s, " {p}");
+            }
+            let _ = write!(s, " {}", bnd.len());
+            for b in bnd {
+                let _ = write!(s, " {b}");
+            }
+            let _ = writeln!(s);
+        }
+        let _ = writeln!(s, "$EndEntities");
+        let n = self.nodes.len();
+        let surf = self.surfaces.first().map(|x| x.0).unwrap_or(1);
+        let _ = writeln!(s, "$Nodes\n1 {n} 1 {n}\n2 {surf} 0 {n}");
+        for i in 0..n {
+            let _ = writeln!(s, "{}", i + 1);
+        }
+        for p in &self.nodes {
+            let _ = writeln!(s, "{} {} 0", p[0], p[1]);
+        }
+        let _ = writeln!(s, "$EndNodes");
+        // A curve with no nodes has no elements: what gmsh writes for an untagged curve.
+        let meshed: Vec<_> = self.curves.iter().filter(|c| c.1.len() >= 2).collect();
+        let total: usize = meshed.iter().map(|c| c.1.len() - 1).sum();
+        let _ = writeln!(s, "$Elements\n{} {total} 1 {total}", meshed.len());
+        let mut tag = 1;
+        for (ctag, ids, _) in meshed {
+            let _ = writeln!(s, "1 {ctag} 1 {}", ids.len() - 1);
+            for w in ids.windows(2) {
+                let _ = writeln!(s, "{tag} {} {}", w[0] + 1, w[1] + 1);
+                tag += 1;
+            }
+        }
+        let _ = writeln!(s, "$EndElements");
+        s
+    }
+
+    pub fn save(&self, dir: &Path, name: &str) -> PathBuf {
+        write(dir, name, &self.to_text())
+    }
+}
+
+fn bbox(points: impl Iterator<Item = [f64; 2]>) -> ([f64; 2], [f64; 2]) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (lo, hi)
+}
+
+/// Two unit-wide blocks stacked along y: lower [0,1]x[0,1] (surface 1), upper [0,1]x[1,2]
+/// (surface 2), joint y = 1 (curve 3), n elements per side. Physical tags: curves base 1,
+/// sides 2, joint 3, top 4; surfaces lower 1, upper 2.
+pub fn stacked_blocks(n: usize) -> Msh {
+    let mut m = Msh::default();
+    m.line(1, [0.0, 0.0], [1.0, 0.0], n, &[1]);
+    m.line(2, [1.0, 0.0], [1.0, 1.0], n, &[2]);
+    m.line(3, [1.0, 1.0], [0.0, 1.0], n, &[3]);
+    m.line(4, [0.0, 1.0], [0.0, 0.0], n, &[2]);
+    m.line(5, [1.0, 1.0], [1.0, 2.0], n, &[2]);
+    m.line(6, [1.0, 2.0], [0.0, 2.0], n, &[4]);
+    m.line(7, [0.0, 2.0], [0.0, 1.0], n, &[2]);
+    m.surface(1, &[1, 2, 3, 4], &[1]);
+    m.surface(2, &[-3, 5, 6, 7], &[2]);
+    m.name(1, 1, "base");
+    m.name(1, 2, "sides");
+    m.name(1, 3, "joint");
+    m.name(1, 4, "top");
+    m.name(2, 1, "lower");
+    m.name(2, 2, "upper");
+    m
+}
+
+/// A scene for [`stacked_blocks`].
+pub const STACKED_SCENE: &str = r#"
+plane = "strain"
+[body.lower]
+young = 1.0
+poisson = 0.3
+[body.upper]
+young = 1.0
+poisson = 0.3
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[boundary.top]
+ty = -1.0
+[interface.joint]
+model = "unilateral"
+"#;
