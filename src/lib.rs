@@ -6,6 +6,8 @@
 //! → `plan` (the effects a scene calls for) → `report` (what `sgbem check` prints)
 //! → `pipeline` (the stage order).
 
+pub mod assembly;
+pub mod condensation;
 pub mod error;
 pub mod expr;
 pub mod galerkin;

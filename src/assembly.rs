@@ -1,0 +1,594 @@
+//! Per-body Galerkin system of the SGBEM in residual-W form ([paper eq. 10], formulation §3).
+//!
+//! Place in the flow: `model` + `galerkin` → **`assembly`** → `condensation`. For one body it
+//! numbers the unknowns
+//!
+//! ```text
+//!   X  = [F1; −U2]   traction on Γ1 (per element end and constrained direction),
+//!                    displacement of free nodes (per unknown direction)
+//!   X0 = [F0; −U0]   interface traction hats and interface displacements, in the local
+//!                    pair frame (s_j, n_j) of formulation §5.4
+//! ```
+//!
+//! and assembles the symmetric matrix `G = [[A, A0], [A0ᵀ, A00]]` and the load `[L̂; L̂0]` of
+//!
+//! ```text
+//!   0  = A X + A0 X0 + L̂        (W rows on Γ1, P rows of free nodes)
+//!   Z0 = A0ᵀ X + A00 X0 + L̂0    (Z0 = [W0; P0], the interface outputs)
+//! ```
+//!
+//! Blocks (formulation §3.1–§3.2): (W, F) = V; (W, −U) = K + ½M on every W row (the
+//! residual form, which keeps every condensed operator symmetric); (P, −U) = −D;
+//! (P, F) = (W, −U)ᵀ. Known data go to the load: `V t̄ − (K + ½M) ū` on W rows,
+//! `(Kᵀ − ½Mᵀ) t̄ + D ū` on P rows, plus the body-force terms W^b, P^b (formulation §4).
+//!
+//! Degenerate scale (formulation §8.4): each body is integrated in coordinates centred on
+//! its bounding box and divided by its diagonal, so that it fits in a unit disk, and the
+//! blocks are brought back to physical units (V·L², K·L, D·1). This uses the single-layer
+//! kernel up to an additive constant, an equivalent formulation that is uniquely solvable.
+//!
+//! Assembly runs in parallel over test elements (rayon): each element yields the partial
+//! rows of the unknowns supported on it, which are then added in order.
+
+use faer::Mat;
+use rayon::prelude::*;
+
+use crate::error::{Error, Result};
+use crate::galerkin::{
+    body_force_loads, element_mass, pair_blocks, ElementRef, PairBlocks, Segment,
+};
+use crate::kernels::{boundary_area, Material};
+use crate::model::{Body, DofClass, Model, Role};
+use crate::quadrature::QuadratureSettings;
+use crate::scene::{Condition, Frame, Plane};
+
+/// What one unknown of a body is.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Unknown {
+    /// Traction component on a Γ1 element end (direction `dir`, global unit vector).
+    Traction1 { elem: usize, end: usize, dir: [f64; 2] },
+    /// Interface traction hat of pair `pair` of interface `iface`, local component `comp`
+    /// (0 = s, 1 = n).
+    Traction0 {
+        iface: usize,
+        pair: usize,
+        comp: usize,
+        dir: [f64; 2],
+    },
+    /// Displacement component of node `node` along `dir`; on an interface, its pair and
+    /// local component.
+    Displacement {
+        node: usize,
+        dir: [f64; 2],
+        on: Option<(usize, usize, usize)>,
+    },
+}
+
+impl Unknown {
+    pub fn is_traction(&self) -> bool {
+        !matches!(self, Unknown::Displacement { .. })
+    }
+}
+
+/// One unknown's shape function on one element: the end whose shape function it uses and
+/// its direction.
+#[derive(Debug, Clone, Copy)]
+struct Entry {
+    index: usize,
+    end: usize,
+    dir: [f64; 2],
+    traction: bool,
+}
+
+/// The assembled system of one body.
+pub struct BodySystem {
+    /// Unknowns: X (first `n_x`) then X0.
+    pub unknowns: Vec<Unknown>,
+    pub n_x: usize,
+    /// `[[A, A0], [A0ᵀ, A00]]`.
+    pub g: Mat<f64>,
+    /// `[L̂; L̂0]`.
+    pub load: Vec<f64>,
+    /// Known displacement of each node (the known components only, global x, y).
+    pub known_u: Vec<[f64; 2]>,
+    /// Known traction at each element end (global x, y).
+    pub known_t: Vec<[[f64; 2]; 2]>,
+    /// Largest relative asymmetry of G (diagnostic; zero up to roundoff in the usual case).
+    pub asymmetry: f64,
+    pub material: Material,
+    /// Centre and length of the scaled coordinates used for integration.
+    pub centre: [f64; 2],
+    pub length: f64,
+}
+
+impl BodySystem {
+    pub fn n(&self) -> usize {
+        self.unknowns.len()
+    }
+    pub fn n_x0(&self) -> usize {
+        self.unknowns.len() - self.n_x
+    }
+}
+
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+fn quad(d: [f64; 2], m: &[[f64; 2]; 2], e: [f64; 2]) -> f64 {
+    d[0] * (m[0][0] * e[0] + m[0][1] * e[1]) + d[1] * (m[1][0] * e[0] + m[1][1] * e[1])
+}
+
+/// The material of a body in the scene's plane.
+pub fn material(body: &Body, plane: Plane) -> Material {
+    Material::new(body.young, body.poisson, plane == Plane::Stress)
+}
+
+/// Numbers the unknowns of body `bi`, evaluates its known data, and assembles its system.
+pub fn assemble_body(
+    model: &Model,
+    bi: usize,
+    plane: Plane,
+    settings: &QuadratureSettings,
+    load_factor: f64,
+    scene_file: &std::path::Path,
+) -> Result<BodySystem> {
+    let body = &model.bodies[bi];
+    let mat = material(body, plane);
+    let ne = body.elements.len();
+    let nn = body.nodes.len();
+
+    // --- Interface membership of nodes: (iface, pair) ------------------------------------
+    let mut node_pair: Vec<Option<(usize, usize)>> = vec![None; nn];
+    for (k, it) in model.interfaces.iter().enumerate() {
+        let side_a = it.body_a == bi;
+        if !side_a && it.body_b != bi {
+            continue;
+        }
+        for (j, p) in it.pairs.iter().enumerate() {
+            let n = if side_a { p.node_a } else { p.node_b };
+            if let Some((k0, _)) = node_pair[n] {
+                return Err(Error::input(
+                    scene_file,
+                    format!(
+                        "node {} of body \"{}\" belongs to interfaces \"{}\" and \"{}\": a point \
+                         where three bodies meet is not supported; separate the joints",
+                        fmt_point(body.nodes[n]),
+                        body.name,
+                        model.interfaces[k0].spec.name,
+                        it.spec.name
+                    ),
+                ));
+            }
+            node_pair[n] = Some((k, j));
+        }
+    }
+
+    // --- Known data: tractions per element end, displacement constraints per node --------
+    let mut known_t = vec![[[0.0; 2]; 2]; ne];
+    let mut constraints: Vec<Vec<([f64; 2], f64)>> = vec![Vec::new(); nn];
+    let mut unknowns: Vec<Unknown> = Vec::new();
+    for (ei, e) in body.elements.iter().enumerate() {
+        let Role::Boundary(pi) = e.role else { continue };
+        let spec = &model.parts[pi].spec;
+        for (c, cond) in spec.components.iter().enumerate() {
+            let dir = match (spec.frame, c) {
+                (Frame::Global, 0) => [1.0, 0.0],
+                (Frame::Global, _) => [0.0, 1.0],
+                (Frame::Local, 0) => e.tangent,
+                (Frame::Local, _) => e.normal,
+            };
+            match cond {
+                Condition::Traction(v) => {
+                    for a in 0..2 {
+                        let val = load_factor * v.eval(body.nodes[e.nodes[a]]);
+                        known_t[ei][a][0] += val * dir[0];
+                        known_t[ei][a][1] += val * dir[1];
+                    }
+                }
+                Condition::Displacement(v) => {
+                    for a in 0..2 {
+                        unknowns.push(Unknown::Traction1 { elem: ei, end: a, dir });
+                        let n = e.nodes[a];
+                        constraints[n].push((dir, load_factor * v.eval(body.nodes[n])));
+                    }
+                }
+            }
+        }
+    }
+    let known_u = known_displacements(body, &constraints, scene_file)?;
+
+    // --- Displacement unknowns: U2 in X, U0 (pair frame) in X0 ---------------------------
+    let mut u0: Vec<Unknown> = Vec::new();
+    for (n, d) in body.dofs.iter().enumerate() {
+        for k in 0..2 {
+            match d.class[k] {
+                DofClass::Known => {}
+                DofClass::Free => unknowns.push(Unknown::Displacement {
+                    node: n,
+                    dir: d.frame[k],
+                    on: None,
+                }),
+                DofClass::Interface => {
+                    let Some((iface, pair)) = node_pair[n] else {
+                        return Err(Error::input(
+                            scene_file,
+                            format!(
+                                "node {} of body \"{}\" is marked as an interface node but \
+                                 belongs to no interface pair",
+                                fmt_point(body.nodes[n]),
+                                body.name
+                            ),
+                        ));
+                    };
+                    let p = &model.interfaces[iface].pairs[pair];
+                    let frame = [p.tangent, p.normal];
+                    // The unknown direction must be one of the pair's local directions.
+                    let comp = if d.class == [DofClass::Interface; 2] {
+                        k
+                    } else {
+                        match (0..2).find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9) {
+                            Some(c) => c,
+                            None => {
+                                return Err(Error::input(
+                                    scene_file,
+                                    format!(
+                                        "interface \"{}\" at {}: a displacement condition there \
+                                         prescribes a direction oblique to the interface; \
+                                         prescribe it along the interface or its normal",
+                                        model.interfaces[iface].spec.name,
+                                        fmt_point(body.nodes[n])
+                                    ),
+                                ))
+                            }
+                        }
+                    };
+                    u0.push(Unknown::Displacement {
+                        node: n,
+                        dir: frame[comp],
+                        on: Some((iface, pair, comp)),
+                    });
+                }
+            }
+        }
+    }
+    let n_x = unknowns.len();
+    // F0: interface traction hats, both local components at every pair node of this body.
+    let mut pairs_here: Vec<(usize, usize, usize)> = node_pair
+        .iter()
+        .enumerate()
+        .filter_map(|(n, p)| p.map(|(k, j)| (k, j, n)))
+        .collect();
+    pairs_here.sort_unstable();
+    for &(k, j, _) in &pairs_here {
+        let p = &model.interfaces[k].pairs[j];
+        for (comp, dir) in [p.tangent, p.normal].into_iter().enumerate() {
+            unknowns.push(Unknown::Traction0 {
+                iface: k,
+                pair: j,
+                comp,
+                dir,
+            });
+        }
+    }
+    unknowns.extend(u0);
+
+    // --- Entries per element ----------------------------------------------------------------
+    let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); ne];
+    let mut node_elems: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nn];
+    for (ei, e) in body.elements.iter().enumerate() {
+        node_elems[e.nodes[0]].push((ei, 0));
+        node_elems[e.nodes[1]].push((ei, 1));
+    }
+    for (index, u) in unknowns.iter().enumerate() {
+        match *u {
+            Unknown::Traction1 { elem, end, dir } => entries[elem].push(Entry {
+                index,
+                end,
+                dir,
+                traction: true,
+            }),
+            Unknown::Displacement { node, dir, .. } => {
+                for &(ei, end) in &node_elems[node] {
+                    entries[ei].push(Entry {
+                        index,
+                        end,
+                        dir,
+                        traction: false,
+                    });
+                }
+            }
+            Unknown::Traction0 {
+                iface, pair, dir, ..
+            } => {
+                let it = &model.interfaces[iface];
+                let node = if it.body_a == bi {
+                    it.pairs[pair].node_a
+                } else {
+                    it.pairs[pair].node_b
+                };
+                for &(ei, end) in &node_elems[node] {
+                    if body.elements[ei].role == Role::Interface(iface) {
+                        entries[ei].push(Entry {
+                            index,
+                            end,
+                            dir,
+                            traction: true,
+                        });
+                    }
+                }
+            }
+        }
+    }
+
+    // --- Scaled geometry ----------------------------------------------------------------------
+    let (centre, length) = scaling(body);
+    let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
+    let elems: Vec<ElementRef> = body
+        .elements
+        .iter()
+        .map(|e| {
+            ElementRef::new(
+                Segment::new(scaled(body.nodes[e.nodes[0]]), scaled(body.nodes[e.nodes[1]])),
+                e.nodes,
+            )
+        })
+        .collect();
+    let boundary: Vec<Segment> = elems.iter().map(|e| e.seg).collect();
+    let area = boundary_area(&boundary);
+    let body_force = body
+        .body_force
+        .filter(|b| *b != [0.0, 0.0])
+        .map(|b| [load_factor * b[0], load_factor * b[1]]);
+
+    // --- Pair loop ------------------------------------------------------------------------------
+    let n = unknowns.len();
+    let mut g = Mat::<f64>::zeros(n, n);
+    let mut load = vec![0.0; n];
+    let l2 = length * length;
+    let strip = |ei: usize| -> (Vec<usize>, Vec<f64>, Vec<f64>) {
+        let rows: Vec<&Entry> = entries[ei].iter().collect();
+        let mut vals = vec![0.0; rows.len() * n];
+        let mut ld = vec![0.0; n];
+        let e = &elems[ei];
+        let mass_e = element_mass(&body_segment(body, ei));
+        let te = known_t[ei];
+        let t_nonzero = te.iter().any(|t| t[0] != 0.0 || t[1] != 0.0);
+        for (fi, f) in elems.iter().enumerate() {
+            let raw: PairBlocks = pair_blocks(&mat, e, f, settings);
+            let (v, k, d) = (scale4(&raw.v, l2), scale4(&raw.k, length), raw.d);
+            let same = ei == fi;
+            let tf = known_t[fi];
+            let uf = [
+                known_u[body.elements[fi].nodes[0]],
+                known_u[body.elements[fi].nodes[1]],
+            ];
+            for (ri, r) in rows.iter().enumerate() {
+                let row = &mut vals[ri * n..(ri + 1) * n];
+                let a = r.end;
+                if r.traction {
+                    for c in &entries[fi] {
+                        let b = c.end;
+                        row[c.index] += if c.traction {
+                            quad(r.dir, &v[a][b], c.dir)
+                        } else {
+                            let mut x = quad(r.dir, &k[a][b], c.dir);
+                            if same {
+                                x += 0.5 * mass_e[a][b] * dot(r.dir, c.dir);
+                            }
+                            x
+                        };
+                    }
+                    for b in 0..2 {
+                        let mut x = quad(r.dir, &v[a][b], tf[b]) - quad(r.dir, &k[a][b], uf[b]);
+                        if same {
+                            x -= 0.5 * mass_e[a][b] * dot(r.dir, uf[b]);
+                        }
+                        ld[r.index] += x;
+                    }
+                } else {
+                    for c in entries[fi].iter().filter(|c| !c.traction) {
+                        row[c.index] -= quad(r.dir, &d[a][c.end], c.dir);
+                    }
+                    for b in 0..2 {
+                        ld[r.index] += quad(r.dir, &d[a][b], uf[b]);
+                    }
+                }
+            }
+            // Known traction on e acting on the displacement unknowns of f: (Kᵀ − ½Mᵀ) t̄.
+            if t_nonzero {
+                for c in entries[fi].iter().filter(|c| !c.traction) {
+                    for a in 0..2 {
+                        let mut x = quad(te[a], &k[a][c.end], c.dir);
+                        if same {
+                            x -= 0.5 * mass_e[a][c.end] * dot(te[a], c.dir);
+                        }
+                        ld[c.index] += x;
+                    }
+                }
+            }
+        }
+        if let Some(b) = body_force {
+            let bl = body_force_loads(&mat, &e.seg, &boundary, b, area, settings);
+            for r in &rows {
+                let (w, p) = (bl.w[r.end], bl.p[r.end]);
+                ld[r.index] += if r.traction {
+                    length * l2 * dot(r.dir, w)
+                } else {
+                    l2 * dot(r.dir, p)
+                };
+            }
+        }
+        (rows.iter().map(|r| r.index).collect(), vals, ld)
+    };
+    let chunk = 32;
+    for start in (0..ne).step_by(chunk) {
+        let end = (start + chunk).min(ne);
+        let strips: Vec<_> = (start..end).into_par_iter().map(strip).collect();
+        for (rows, vals, ld) in strips {
+            for (ri, &r) in rows.iter().enumerate() {
+                for c in 0..n {
+                    g[(r, c)] += vals[ri * n + c];
+                }
+            }
+            for (l, x) in load.iter_mut().zip(ld) {
+                *l += x;
+            }
+        }
+    }
+    // (P, F) = (W, −U)ᵀ.
+    let is_t: Vec<bool> = unknowns.iter().map(|u| u.is_traction()).collect();
+    for p in 0..n {
+        if is_t[p] {
+            continue;
+        }
+        for f in 0..n {
+            if is_t[f] {
+                g[(p, f)] = g[(f, p)];
+            }
+        }
+    }
+    let asymmetry = relative_asymmetry(&g);
+
+    Ok(BodySystem {
+        unknowns,
+        n_x,
+        g,
+        load,
+        known_u,
+        known_t,
+        asymmetry,
+        material: mat,
+        centre,
+        length,
+    })
+}
+
+/// The physical segment of element `ei`.
+pub fn body_segment(body: &Body, ei: usize) -> Segment {
+    let e = &body.elements[ei];
+    Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
+}
+
+/// Centre and diagonal of a body's bounding box: the scaled coordinates `(x − c)/L` put the
+/// body inside a disk of radius 1/2, below every degenerate scale (formulation §8.4).
+pub fn scaling(body: &Body) -> ([f64; 2], f64) {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in &body.nodes {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
+    let length = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
+    (centre, length)
+}
+
+fn scale4(b: &[[[[f64; 2]; 2]; 2]; 2], s: f64) -> [[[[f64; 2]; 2]; 2]; 2] {
+    let mut out = *b;
+    for row in out.iter_mut() {
+        for m in row.iter_mut() {
+            for r in m.iter_mut() {
+                for x in r.iter_mut() {
+                    *x *= s;
+                }
+            }
+        }
+    }
+    out
+}
+
+fn relative_asymmetry(g: &Mat<f64>) -> f64 {
+    let n = g.nrows();
+    let mut max = 0.0f64;
+    let mut diff = 0.0f64;
+    for i in 0..n {
+        for j in 0..n {
+            max = max.max(g[(i, j)].abs());
+            if j > i {
+                diff = diff.max((g[(i, j)] - g[(j, i)]).abs());
+            }
+        }
+    }
+    if max > 0.0 {
+        diff / max
+    } else {
+        0.0
+    }
+}
+
+/// The known displacement of each node from the constraints of its adjacent elements
+/// (least squares over the constrained directions); conflicting conditions are an error.
+fn known_displacements(
+    body: &Body,
+    constraints: &[Vec<([f64; 2], f64)>],
+    scene_file: &std::path::Path,
+) -> Result<Vec<[f64; 2]>> {
+    let mut out = vec![[0.0; 2]; body.nodes.len()];
+    for (n, list) in constraints.iter().enumerate() {
+        if list.is_empty() {
+            continue;
+        }
+        let d = body.dofs[n];
+        // Known directions of the node: both axes, or frame[1] only.
+        let known: Vec<[f64; 2]> = (0..2)
+            .filter(|&k| d.class[k] == DofClass::Known)
+            .map(|k| d.frame[k])
+            .collect();
+        // Solve min Σ (d_i·u − v_i)² over u in the span of the known directions.
+        let u = if known.len() == 2 {
+            let (mut a, mut r) = ([[0.0; 2]; 2], [0.0; 2]);
+            for (dir, v) in list {
+                for i in 0..2 {
+                    r[i] += dir[i] * v;
+                    for j in 0..2 {
+                        a[i][j] += dir[i] * dir[j];
+                    }
+                }
+            }
+            let det = a[0][0] * a[1][1] - a[0][1] * a[1][0];
+            [
+                (a[1][1] * r[0] - a[0][1] * r[1]) / det,
+                (a[0][0] * r[1] - a[1][0] * r[0]) / det,
+            ]
+        } else if known.len() == 1 {
+            let k = known[0];
+            let (mut num, mut den) = (0.0, 0.0);
+            for (dir, v) in list {
+                let c = dot(*dir, k);
+                num += c * v;
+                den += c * c;
+            }
+            let s = num / den;
+            [s * k[0], s * k[1]]
+        } else {
+            [0.0, 0.0]
+        };
+        let scale = list.iter().map(|(_, v)| v.abs()).fold(0.0, f64::max);
+        let worst = list
+            .iter()
+            .map(|(dir, v)| (dot(*dir, u) - v).abs())
+            .fold(0.0, f64::max);
+        if !(u[0].is_finite() && u[1].is_finite()) || worst > 1e-9 * scale.max(1e-300) {
+            return Err(Error::input(
+                scene_file,
+                format!(
+                    "the displacement conditions meeting at {} (body \"{}\") disagree: the \
+                     boundaries that share this node prescribe incompatible values",
+                    fmt_point(body.nodes[n]),
+                    body.name
+                ),
+            ));
+        }
+        out[n] = u;
+    }
+    Ok(out)
+}
+
+fn fmt_point(p: [f64; 2]) -> String {
+    format!(
+        "({}, {})",
+        crate::model::fmt_num(p[0]),
+        crate::model::fmt_num(p[1])
+    )
+}

@@ -1,0 +1,150 @@
+//! Condensation of a body onto its interface unknowns, and recovery of the rest
+//! ([paper eqs. 11–14], formulation §3.3, with the sign of eq. 14a fixed).
+//!
+//! Place in the flow: `assembly` → **`condensation`** → `interface`. From
+//! `0 = A X + A0 X0 + L̂` and `Z0 = A0ᵀ X + A00 X0 + L̂0`:
+//!
+//! ```text
+//!   Z0 = D00 X0 + Z̄0,   D00 = A00 − A0ᵀ A⁻¹ A0,   Z̄0 = L̂0 − A0ᵀ A⁻¹ L̂
+//!   X  = R X0 + r,       R = −A⁻¹ A0,              r = −A⁻¹ L̂
+//! ```
+//!
+//! A is symmetric indefinite (V positive definite, −D negative definite); it is factorised by
+//! LU with partial pivoting after symmetric diagonal (Jacobi) scaling, which evens out the
+//! traction (F) and displacement (U) scales. A singular A (a body not held, or a degenerate
+//! scale) is reported as a numerical failure naming the body, never hidden.
+
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+
+use crate::assembly::BodySystem;
+use crate::error::{Error, Result};
+
+/// A body condensed onto its interface unknowns.
+pub struct Condensed {
+    /// D00 (symmetrised), n_x0 × n_x0.
+    pub d00: Mat<f64>,
+    /// Z̄0.
+    pub z0: Vec<f64>,
+    /// R = −A⁻¹A0 (n_x × n_x0) and r = −A⁻¹L̂, for X = R X0 + r.
+    pub recover: Mat<f64>,
+    pub recover_load: Vec<f64>,
+    /// Relative asymmetry of D00 before symmetrisation.
+    pub asymmetry: f64,
+    /// Smallest over largest pivot of the scaled LU of A (small: nearly singular).
+    pub pivot_ratio: f64,
+    /// Relative residual of the solve with A.
+    pub residual: f64,
+}
+
+/// Condenses one body's system.
+pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
+    let (nx, n) = (sys.n_x, sys.n());
+    let nx0 = n - nx;
+    let g = &sys.g;
+    // Jacobi scaling of A.
+    let s: Vec<f64> = (0..nx)
+        .map(|i| {
+            let d = g[(i, i)].abs();
+            if d > 0.0 {
+                1.0 / d.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let a = Mat::<f64>::from_fn(nx, nx, |i, j| s[i] * g[(i, j)] * s[j]);
+    // Right-hand sides [A0 | L̂], scaled by rows.
+    let rhs = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| {
+        s[i] * if j < nx0 { g[(i, nx + j)] } else { sys.load[i] }
+    });
+    let (sol, pivot_ratio, residual) = if nx > 0 {
+        let lu = a.partial_piv_lu();
+        let u = lu.U();
+        let mut pmin = f64::INFINITY;
+        let mut pmax = 0.0f64;
+        for i in 0..nx {
+            let p = u[(i, i)].abs();
+            pmin = pmin.min(p);
+            pmax = pmax.max(p);
+        }
+        let ratio = if pmax > 0.0 { pmin / pmax } else { 0.0 };
+        if !(ratio > 1e-14) {
+            return Err(Error::numerical(format!(
+                "the boundary system of body \"{body}\" is singular (pivot ratio {ratio:.1e}): \
+                 the body may not be held, or its size meets a degenerate scale"
+            )));
+        }
+        let sol = lu.solve(&rhs);
+        let res = &a * &sol - &rhs;
+        let residual = res.norm_max() / rhs.norm_max().max(f64::MIN_POSITIVE);
+        (sol, ratio, residual)
+    } else {
+        (Mat::<f64>::zeros(0, nx0 + 1), 1.0, 0.0)
+    };
+    if !(residual < 1e-8) {
+        return Err(Error::numerical(format!(
+            "solving the boundary system of body \"{body}\" left a relative residual of \
+             {residual:.1e} (ill-conditioned)"
+        )));
+    }
+    // Unscale: A⁻¹[A0 | L̂] = S · sol.
+    let ainv = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| s[i] * sol[(i, j)]);
+    let mut d00 = Mat::<f64>::from_fn(nx0, nx0, |i, j| g[(nx + i, nx + j)]);
+    let mut z0: Vec<f64> = (0..nx0).map(|i| sys.load[nx + i]).collect();
+    // D00 −= A0ᵀ A⁻¹ A0; Z̄0 −= A0ᵀ A⁻¹ L̂.
+    for i in 0..nx0 {
+        for k in 0..nx {
+            let a0ki = g[(k, nx + i)];
+            if a0ki == 0.0 {
+                continue;
+            }
+            for j in 0..nx0 {
+                d00[(i, j)] -= a0ki * ainv[(k, j)];
+            }
+            z0[i] -= a0ki * ainv[(k, nx0)];
+        }
+    }
+    let mut max = 0.0f64;
+    let mut diff = 0.0f64;
+    for i in 0..nx0 {
+        for j in 0..nx0 {
+            max = max.max(d00[(i, j)].abs());
+            diff = diff.max((d00[(i, j)] - d00[(j, i)]).abs());
+        }
+    }
+    let asymmetry = if max > 0.0 { diff / max } else { 0.0 };
+    for i in 0..nx0 {
+        for j in 0..i {
+            let m = 0.5 * (d00[(i, j)] + d00[(j, i)]);
+            d00[(i, j)] = m;
+            d00[(j, i)] = m;
+        }
+    }
+    let recover = Mat::<f64>::from_fn(nx, nx0, |i, j| -ainv[(i, j)]);
+    let recover_load = (0..nx).map(|i| -ainv[(i, nx0)]).collect();
+    Ok(Condensed {
+        d00,
+        z0,
+        recover,
+        recover_load,
+        asymmetry,
+        pivot_ratio,
+        residual,
+    })
+}
+
+impl Condensed {
+    /// X = R X0 + r.
+    pub fn recover_x(&self, x0: &[f64]) -> Vec<f64> {
+        let nx = self.recover.nrows();
+        (0..nx)
+            .map(|i| {
+                self.recover_load[i]
+                    + (0..x0.len())
+                        .map(|j| self.recover[(i, j)] * x0[j])
+                        .sum::<f64>()
+            })
+            .collect()
+    }
+}
