@@ -16,7 +16,8 @@
 //! * `M_ab = ∫_e N_a N_b` — [`element_mass`].
 //!
 //! Pair kinds (formulation §2.4), decided by [`classify`] from the caller's node indices:
-//! coincident pairs use closed forms; vertex-adjacent pairs the graded Duffy rule; near pairs
+//! coincident pairs use closed forms; vertex-adjacent pairs the graded Duffy rule, its angular
+//! variable split towards the pole that acute corners and unequal lengths bring close; near pairs
 //! (distance < η·longer length) recursive bisection of the *longer* element with Gauss leaves;
 //! far pairs plain Gauss with orders by distance.
 //!

@@ -81,12 +81,6 @@ impl Material {
         2.0 * self.mu * self.nu / (1.0 - 2.0 * self.nu)
     }
 
-    /// Young's modulus recovered from (μ, effective ν) in the plane-strain reading,
-    /// `E_eff = 2μ(1+ν)`. Used by the boundary stress recovery formula.
-    pub fn young_effective(&self) -> f64 {
-        2.0 * self.mu * (1.0 + self.nu)
-    }
-
     /// The body-force constant `κ = (7−8ν)/(16πμ(1−ν))` of the Galerkin-vector identity
     /// (formulation §4.1); it exists because U as normalised here has no additive constant.
     pub fn body_force_kappa(&self) -> f64 {
@@ -285,7 +279,7 @@ impl Segment {
         [t[1], -t[0]]
     }
 
-    /// `x(ξ) = P + ξ(Q−P)`, ξ ∈ [0,1].
+    /// `x(ξ) = P + ξ(Q−P)`, ξ ∈ \[0,1\].
     #[inline]
     pub fn point(&self, xi: f64) -> Vec2 {
         [

@@ -3,7 +3,7 @@
 //! Place in the flow: `kernels` → **`quadrature`** → `galerkin`. Inputs are orders; outputs are
 //! plain point/weight tables on the unit interval or unit square, built once and cached.
 //!
-//! * Gauss–Legendre on [0,1] for any order (nodes by Newton iteration on the Legendre
+//! * Gauss–Legendre on \[0,1\] for any order (nodes by Newton iteration on the Legendre
 //!   three-term recurrence) — [`gauss`].
 //! * Vertex-adjacent element pairs (formulation §2.4b): the singularity sits at the corner
 //!   (0,0) of the parameter square. Split the square along its diagonal, map each triangle by
@@ -13,9 +13,9 @@
 //!   still with quartic grading from n = 8 on, `galerkin::duffy_grading`) —
 //!   [`duffy_graded`]. After the map the integrand separates into a function of ρ (handled by
 //!   the grading) and one of w whose only near-singularity is a complex pole; acute corners
-//!   and unequal lengths bring that pole close to [0,1], so the w-interval is bisected
+//!   and unequal lengths bring that pole close to \[0,1\], so the w-interval is bisected
 //!   towards it ([`split_towards_pole`]).
-//! * A rule graded at both ends of [0,1] for integrands with `d ln d` end-point behaviour (the
+//! * A rule graded at both ends of \[0,1\] for integrands with `d ln d` end-point behaviour (the
 //!   body-force traction near corners) — [`graded_both_ends`].
 //! * [`QuadratureSettings`] groups the orders and the near-pair factor η of §2.4c–d.
 
@@ -25,7 +25,7 @@ use std::sync::OnceLock;
 /// [`gauss_legendre`].
 pub const MAX_CACHED_ORDER: usize = 64;
 
-/// A one-dimensional rule on [0,1]: `∫₀¹ f ≈ Σ w_i f(x_i)`.
+/// A one-dimensional rule on \[0,1\]: `∫₀¹ f ≈ Σ w_i f(x_i)`.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Rule {
     pub nodes: Vec<f64>,
@@ -62,10 +62,10 @@ fn legendre(n: usize, x: f64) -> (f64, f64) {
     (p1, nf * (x * p1 - p0) / (x * x - 1.0))
 }
 
-/// n-point Gauss–Legendre rule on [0,1], exact for polynomials of degree 2n−1.
+/// n-point Gauss–Legendre rule on \[0,1\], exact for polynomials of degree 2n−1.
 ///
 /// The roots of `P_n` come from Newton iteration started at Tricomi's estimate
-/// `cos(π(i − ¼)/(n + ½))`; the nodes are then mapped to [0,1] symmetrically so the rule is
+/// `cos(π(i − ¼)/(n + ½))`; the nodes are then mapped to \[0,1\] symmetrically so the rule is
 /// exactly symmetric about ½.
 pub fn gauss_legendre(n: usize) -> Rule {
     assert!(n >= 1, "a Gauss rule needs at least one point");
@@ -109,7 +109,7 @@ fn gauss_cache() -> &'static [Rule] {
     CACHE.get_or_init(|| (1..=MAX_CACHED_ORDER).map(gauss_legendre).collect())
 }
 
-/// Cached n-point Gauss–Legendre rule on [0,1] (n ≤ [`MAX_CACHED_ORDER`]).
+/// Cached n-point Gauss–Legendre rule on \[0,1\] (n ≤ [`MAX_CACHED_ORDER`]).
 pub fn gauss(n: usize) -> &'static Rule {
     assert!(
         (1..=MAX_CACHED_ORDER).contains(&n),
@@ -162,7 +162,7 @@ pub fn bernstein_rho(z: [f64; 2], a: f64, b: f64) -> f64 {
 /// Most sub-intervals [`split_towards_pole`] produces.
 pub const MAX_POLE_INTERVALS: usize = 40;
 
-/// Sub-intervals of [0,1] produced by [`split_towards_pole`].
+/// Sub-intervals of \[0,1\] produced by [`split_towards_pole`].
 #[derive(Debug, Clone, Copy)]
 pub struct PoleSplit {
     buf: [(f64, f64); MAX_POLE_INTERVALS],
@@ -175,13 +175,13 @@ impl PoleSplit {
     }
 }
 
-/// Bisects [0,1] until every piece sees the complex point `pole` (a near-singularity of the
+/// Bisects \[0,1\] until every piece sees the complex point `pole` (a near-singularity of the
 /// integrand) outside its Bernstein ellipse of parameter `rho_min`, so that Gauss rules on
 /// the pieces converge at least like `rho_min^(−2n)`. Pieces shorter than 1e-9 are kept as
 /// they are; no allocation.
 ///
 /// Used for the angular Duffy variable of vertex-adjacent pairs: there `r = ρ|E_e − w E_f|`
-/// (edge vectors as complex numbers) vanishes at `w₀ = E_e/E_f`, which approaches [0,1] for
+/// (edge vectors as complex numbers) vanishes at `w₀ = E_e/E_f`, which approaches \[0,1\] for
 /// acute corners (w₀ near e^{iθ}) and for very unequal lengths (|w₀| ≪ 1).
 pub fn split_towards_pole(pole: [f64; 2], rho_min: f64) -> PoleSplit {
     let mut out = PoleSplit {
@@ -209,7 +209,7 @@ pub fn split_towards_pole(pole: [f64; 2], rho_min: f64) -> PoleSplit {
     out
 }
 
-/// n-point rule on [0,1] graded towards both ends by the quintic smoothstep
+/// n-point rule on \[0,1\] graded towards both ends by the quintic smoothstep
 /// `ξ = 10u³ − 15u⁴ + 6u⁵` (`dξ = 30u²(1−u)² du`), for integrands with `d ln d` behaviour
 /// at the end points: `ξ ln ξ dξ` becomes `900 u⁵ ln u`, integrated to 3e-8 at n = 10, 1e-10 at
 /// n = 16.
@@ -218,7 +218,7 @@ pub fn graded_both_ends(n: usize) -> Rule {
     Rule { nodes, weights }
 }
 
-/// Maps one Gauss point `(u, w)` of [0,1] to the [`graded_both_ends`] rule.
+/// Maps one Gauss point `(u, w)` of \[0,1\] to the [`graded_both_ends`] rule.
 #[inline]
 pub fn graded_point(u: f64, w: f64) -> (f64, f64) {
     let v = 1.0 - u;
