@@ -19,3 +19,4 @@ pub mod plan;
 pub mod quadrature;
 pub mod report;
 pub mod scene;
+pub mod solution;

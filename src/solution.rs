@@ -1,0 +1,36 @@
+//! Result records: what a solve produces, in plain data that post-processing and the
+//! writers read. Nothing here computes.
+
+/// The boundary solution of one body, in global components.
+#[derive(Debug, Clone, Default)]
+pub struct BodyField {
+    /// Displacement of each boundary node (body-local numbering, as `Body::nodes`).
+    pub u: Vec<[f64; 2]>,
+    /// Traction `t = σ n` at the two ends of each element (as `Body::elements`).
+    pub t: Vec<[[f64; 2]; 2]>,
+}
+
+/// State of one interface pair.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PairStatus {
+    /// In contact (real): tractions transmitted, displacements shared.
+    Closed,
+    /// Detached (virtual): no traction, displacements independent.
+    Open,
+}
+
+/// Result at one interface pair, in the pair frame (s, n) of the first body.
+#[derive(Debug, Clone, Copy)]
+pub struct PairResult {
+    pub status: PairStatus,
+    /// Traction on the first body: tangential, normal (tension positive).
+    pub traction: [f64; 2],
+    /// Relative displacement `u_B − u_A`: tangential (slip), normal (opening).
+    pub jump: [f64; 2],
+}
+
+/// Results of one interface.
+#[derive(Debug, Clone, Default)]
+pub struct InterfaceResult {
+    pub pairs: Vec<PairResult>,
+}
