@@ -46,7 +46,11 @@ use crate::scene::{Condition, Frame, Plane};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub enum Unknown {
     /// Traction component on a Γ1 element end (direction `dir`, global unit vector).
-    Traction1 { elem: usize, end: usize, dir: [f64; 2] },
+    Traction1 {
+        elem: usize,
+        end: usize,
+        dir: [f64; 2],
+    },
     /// Interface traction hat of pair `pair` of interface `iface`, local component `comp`
     /// (0 = s, 1 = n).
     Traction0 {
@@ -186,7 +190,11 @@ pub fn assemble_body(
                 }
                 Condition::Displacement(v) => {
                     for a in 0..2 {
-                        unknowns.push(Unknown::Traction1 { elem: ei, end: a, dir });
+                        unknowns.push(Unknown::Traction1 {
+                            elem: ei,
+                            end: a,
+                            dir,
+                        });
                         let n = e.nodes[a];
                         constraints[n].push((dir, load_factor * v.eval(body.nodes[n])));
                     }
@@ -327,7 +335,10 @@ pub fn assemble_body(
         .iter()
         .map(|e| {
             ElementRef::new(
-                Segment::new(scaled(body.nodes[e.nodes[0]]), scaled(body.nodes[e.nodes[1]])),
+                Segment::new(
+                    scaled(body.nodes[e.nodes[0]]),
+                    scaled(body.nodes[e.nodes[1]]),
+                ),
                 e.nodes,
             )
         })

@@ -1,0 +1,215 @@
+//! Status-driven multidomain assembly on the interfaces ([paper eqs. 15–25], formulation §5).
+//!
+//! Place in the flow: `condensation` → **`interface`** → solve / contact. Every interface pair
+//! j and local component c (s or n) has a status:
+//!
+//! * **closed (real)**: unknowns F_jc (traction on the first body A; −F on B) and −U_jc
+//!   (shared); rows W^A − W^B (dual to F) and P^A + P^B (dual to −U) — [paper 16–17];
+//! * **open (virtual)**: unknowns −U^A_jc and −U^B_jc, F = 0; rows P^A and P^B — [paper 18].
+//!
+//! With `X0_b = S_b Y` (a signed selection), `K(status) = Σ_b S_bᵀ D00_b S_b` and
+//! `L(status) = Σ_b S_bᵀ Z̄0_b`, and the interface system is `K Y + L = 0`. Switching a
+//! status changes only S_b: no boundary integral is ever recomputed.
+//!
+//! A displacement component prescribed on both sides (a symmetry plane crossing the
+//! interface) has no U unknown; its F remains, closed or open.
+
+use faer::linalg::solvers::Solve;
+use faer::Mat;
+
+use crate::assembly::{BodySystem, Unknown};
+use crate::condensation::Condensed;
+use crate::error::{Error, Result};
+use crate::model::Model;
+use crate::solution::PairStatus;
+
+/// Where the unknowns of one pair component sit in Y.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Slot {
+    /// Closed: F and shared −U (None when prescribed).
+    pub f: Option<usize>,
+    pub u: Option<usize>,
+    /// Open: −U of A and of B.
+    pub u_a: Option<usize>,
+    pub u_b: Option<usize>,
+}
+
+/// The interface unknowns Y for one status, and the selections S_b.
+pub struct Layout {
+    /// `slots[k][j][c]`.
+    pub slots: Vec<Vec<[Slot; 2]>>,
+    pub n: usize,
+    /// Per body: (index in X0, index in Y, sign).
+    pub select: Vec<Vec<(usize, usize, f64)>>,
+}
+
+/// Lookup table `(iface, pair, comp, traction) → X0 index` for one body.
+pub struct X0Map {
+    map: std::collections::HashMap<(usize, usize, usize, bool), usize>,
+}
+
+impl X0Map {
+    pub fn new(sys: &BodySystem) -> Self {
+        let mut map = std::collections::HashMap::new();
+        for (i, u) in sys.unknowns[sys.n_x..].iter().enumerate() {
+            match *u {
+                Unknown::Traction0 {
+                    iface, pair, comp, ..
+                } => {
+                    map.insert((iface, pair, comp, true), i);
+                }
+                Unknown::Displacement {
+                    on: Some((k, j, c)),
+                    ..
+                } => {
+                    map.insert((k, j, c, false), i);
+                }
+                _ => {}
+            }
+        }
+        X0Map { map }
+    }
+    pub fn get(&self, iface: usize, pair: usize, comp: usize, traction: bool) -> Option<usize> {
+        self.map.get(&(iface, pair, comp, traction)).copied()
+    }
+}
+
+/// Builds Y and the selections for the statuses `status[k][j][c]`.
+pub fn layout(model: &Model, maps: &[X0Map], status: &[Vec<[PairStatus; 2]>]) -> Result<Layout> {
+    let mut slots = Vec::with_capacity(model.interfaces.len());
+    let mut select: Vec<Vec<(usize, usize, f64)>> = vec![Vec::new(); model.bodies.len()];
+    let mut n = 0;
+    for (k, it) in model.interfaces.iter().enumerate() {
+        let (ba, bb) = (it.body_a, it.body_b);
+        let mut iface_slots = Vec::with_capacity(it.pairs.len());
+        for j in 0..it.pairs.len() {
+            let mut pair_slots = [Slot::default(); 2];
+            for c in 0..2 {
+                let ua = maps[ba].get(k, j, c, false);
+                let ub = maps[bb].get(k, j, c, false);
+                let fa = maps[ba].get(k, j, c, true);
+                let fb = maps[bb].get(k, j, c, true);
+                let (Some(fa), Some(fb)) = (fa, fb) else {
+                    return Err(Error::numerical(format!(
+                        "interface \"{}\": pair {j} has no traction unknowns (internal layout error)",
+                        it.spec.name
+                    )));
+                };
+                let s = &mut pair_slots[c];
+                match status[k][j][c] {
+                    PairStatus::Closed => {
+                        s.f = Some(n);
+                        select[ba].push((fa, n, 1.0));
+                        select[bb].push((fb, n, -1.0));
+                        n += 1;
+                        match (ua, ub) {
+                            (Some(ua), Some(ub)) => {
+                                s.u = Some(n);
+                                select[ba].push((ua, n, 1.0));
+                                select[bb].push((ub, n, 1.0));
+                                n += 1;
+                            }
+                            (None, None) => {}
+                            _ => {
+                                return Err(Error::input(
+                                    &model.mesh_path,
+                                    format!(
+                                        "interface \"{}\" at {:?}: a displacement component is \
+                                         prescribed on one side only; prescribe it on both \
+                                         bodies or on neither",
+                                        it.spec.name, it.pairs[j].x
+                                    ),
+                                ))
+                            }
+                        }
+                    }
+                    PairStatus::Open => {
+                        if let Some(ua) = ua {
+                            s.u_a = Some(n);
+                            select[ba].push((ua, n, 1.0));
+                            n += 1;
+                        }
+                        if let Some(ub) = ub {
+                            s.u_b = Some(n);
+                            select[bb].push((ub, n, 1.0));
+                            n += 1;
+                        }
+                    }
+                }
+            }
+            iface_slots.push(pair_slots);
+        }
+        slots.push(iface_slots);
+    }
+    Ok(Layout { slots, n, select })
+}
+
+/// K(status) and L(status).
+pub fn assemble(layout: &Layout, condensed: &[Condensed]) -> (Mat<f64>, Vec<f64>) {
+    let n = layout.n;
+    let mut k = Mat::<f64>::zeros(n, n);
+    let mut l = vec![0.0; n];
+    for (b, sel) in layout.select.iter().enumerate() {
+        let c = &condensed[b];
+        for &(xi, yi, si) in sel {
+            l[yi] += si * c.z0[xi];
+            for &(xj, yj, sj) in sel {
+                k[(yi, yj)] += si * sj * c.d00[(xi, xj)];
+            }
+        }
+    }
+    (k, l)
+}
+
+/// Solves `K Y + L = 0` with Jacobi scaling and LU; reports a singular or inaccurate system.
+pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
+    let n = k.nrows();
+    if n == 0 {
+        return Ok((Vec::new(), 0.0));
+    }
+    let s: Vec<f64> = (0..n)
+        .map(|i| {
+            let d = k[(i, i)].abs();
+            if d > 0.0 {
+                1.0 / d.sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let a = Mat::<f64>::from_fn(n, n, |i, j| s[i] * k[(i, j)] * s[j]);
+    let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -s[i] * l[i]);
+    let lu = a.partial_piv_lu();
+    let u = lu.U();
+    let (mut pmin, mut pmax) = (f64::INFINITY, 0.0f64);
+    for i in 0..n {
+        pmin = pmin.min(u[(i, i)].abs());
+        pmax = pmax.max(u[(i, i)].abs());
+    }
+    let ratio = if pmax > 0.0 { pmin / pmax } else { 0.0 };
+    if !(ratio > 1e-14) {
+        return Err(Error::numerical(format!(
+            "the {what} system is singular (pivot ratio {ratio:.1e}): a body may be held by \
+             nothing but open interfaces, or free to slide"
+        )));
+    }
+    let y = lu.solve(&rhs);
+    let res = &a * &y - &rhs;
+    let residual = res.norm_max() / rhs.norm_max().max(f64::MIN_POSITIVE);
+    if !(residual < 1e-8) {
+        return Err(Error::numerical(format!(
+            "the {what} system left a relative residual of {residual:.1e} after solving \
+             (ill-conditioned)"
+        )));
+    }
+    Ok(((0..n).map(|i| s[i] * y[(i, 0)]).collect(), residual))
+}
+
+/// X0 of body `b` from Y.
+pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
+    let mut x0 = vec![0.0; n_x0];
+    for &(xi, yi, si) in &layout.select[b] {
+        x0[xi] = si * y[yi];
+    }
+    x0
+}
