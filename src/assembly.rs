@@ -30,6 +30,8 @@
 //! Assembly runs in parallel over test elements (rayon): each element yields the partial
 //! rows of the unknowns supported on it, which are then added in order.
 
+// Index loops mirror the block formulas and read better than iterators here.
+#![allow(clippy::needless_range_loop)]
 use faer::Mat;
 use rayon::prelude::*;
 

@@ -69,7 +69,7 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
             pmax = pmax.max(p);
         }
         let ratio = if pmax > 0.0 { pmin / pmax } else { 0.0 };
-        if !(ratio > 1e-14) {
+        if ratio.is_nan() || ratio <= 1e-14 {
             return Err(Error::numerical(format!(
                 "the boundary system of body \"{body}\" is singular (pivot ratio {ratio:.1e}): \
                  the body may not be held, or its size meets a degenerate scale"
@@ -82,7 +82,7 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
     } else {
         (Mat::<f64>::zeros(0, nx0 + 1), 1.0, 0.0)
     };
-    if !(residual < 1e-8) {
+    if residual.is_nan() || residual >= 1e-8 {
         return Err(Error::numerical(format!(
             "solving the boundary system of body \"{body}\" left a relative residual of \
              {residual:.1e} (ill-conditioned)"

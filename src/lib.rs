@@ -17,6 +17,7 @@ pub mod mesh;
 pub mod model;
 pub mod pipeline;
 pub mod plan;
+pub mod postprocess;
 pub mod quadrature;
 pub mod report;
 pub mod scene;

@@ -174,10 +174,10 @@ pub fn body_field(model: &Model, b: usize, sys: &BodySystem, x: &[f64], x0: &[f6
                     if el.role != crate::model::Role::Interface(iface) {
                         continue;
                     }
-                    for end in 0..2 {
+                    for (end, te) in t[e].iter_mut().enumerate() {
                         if el.nodes[end] == node {
-                            t[e][end][0] += v * dir[0];
-                            t[e][end][1] += v * dir[1];
+                            te[0] += v * dir[0];
+                            te[1] += v * dir[1];
                         }
                     }
                 }

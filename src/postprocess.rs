@@ -1,0 +1,673 @@
+//! Post-processing of one solved state: boundary stresses, interior fields, sections and
+//! stress invariants.
+//!
+//! Place in the flow: `solution` (the boundary fields `u`, `t` of each body) →
+//! **`postprocess`** → output writers. Inputs are plain: a [`Body`], its [`Material`], its
+//! [`BodyField`], its body force (already multiplied by the load factor) and the
+//! [`QuadratureSettings`]. Outputs are plain arrays in global components.
+//!
+//! * **Boundary stress** (formulation §2.4, "Interior points"): at an element end the traction
+//!   gives `σ_nn = t_n`, `σ_ns = t_s`, and the tangential strain of the P1 displacement gives
+//!   `σ_ss = E'ε_ss + ν'σ_nn`, `ε_ss = du_s/ds` (constant on the element). With the effective
+//!   Poisson ratio ν of [`Material`] (ν̄ = ν/(1+ν) in plane stress) both planes read
+//!   `E' = 2μ/(1−ν)`, `ν' = ν/(1−ν)`: the plane-strain `E/(1−ν²)`, `ν/(1−ν)` and the
+//!   plane-stress `E`, `ν` of the formulation. [`boundary_stress`], [`nodal_boundary_stress`].
+//! * **Interior points**: the Somigliana identities [paper eqs. 1a,b] (formulation §2.1),
+//!   `u_i(x) = ∫ U_ik t_k − ∫ T_ik u_k + u^b_i` and `σ_ij(x) = ∫ Σ_ijk t_k − ∫ S_kij u_k + σ^b_ij`,
+//!   with the P1 boundary data and the exact body-force terms of formulation §4.1.
+//!   [`somigliana`], [`interior`].
+//! * **Near the boundary** (formulation §8.5) the identities are replaced by the boundary
+//!   values (linear displacement, recovered stress) along the nearest element, below
+//!   [`NEAR_BOUNDARY_FRACTION`] of its length.
+//! * **Points in a model**: which body contains a point (winding number), then the interior
+//!   field, in parallel: [`evaluate_points`], [`field_at_nodes`], [`section_points`].
+//! * **Invariants**: [`out_of_plane_stress`], [`von_mises`], [`principal_stresses`].
+//!
+//! **Scaled coordinates.** The boundary operators of a body are integrated in the scaled
+//! coordinates `x' = (x − c)/L` of [`crate::assembly::scaling`] (formulation §8.4), which
+//! amounts to the single-layer kernel `U + const·I`. The interior identities use the same
+//! coordinates so that interior and boundary results belong to the same discrete solution;
+//! back in physical units the single-layer displacement integrals carry a factor L, the
+//! double layer 1, the stress single layer 1, the stress double layer 1/L, and the body-force
+//! terms `u^b` and `σ^b` the factors L² and L (the kernels are homogeneous of degree
+//! 0 (up to the constant), −1 and −2 in r). For equilibrated data the constant drops out and
+//! the identities are the physical ones.
+
+// Index loops mirror the component formulas (δ_ik, r̂_i r̂_k, …) and read better than iterators.
+#![allow(clippy::needless_range_loop)]
+
+use std::collections::HashMap;
+
+use rayon::prelude::*;
+
+use crate::assembly::scaling;
+use crate::galerkin::{point_displacement_integrals, point_stress_integrals, Segment};
+use crate::kernels::{body_force_fields, boundary_area, Mat2, Material, Vec2};
+use crate::model::Body;
+use crate::quadrature::QuadratureSettings;
+use crate::scene::Plane;
+use crate::solution::BodyField;
+
+/// Points closer to the boundary than this fraction of the nearest element's length take the
+/// boundary values instead of the Somigliana identities (formulation §8.5).
+///
+/// Why 1e-3: with exact P1 data of a linear field the identities lose about `ε·(L/d)²` to
+/// rounding in the stress double layer, measured 1e-14 at d = 1e-2·L, 4e-13 at 1e-3·L and
+/// 4e-11 at 1e-4·L (relative to the stress), so down to 1e-3·L the identities are as exact as
+/// far away (tests/postprocess.rs). For a field that P1 does not represent, the identity
+/// error grows only slowly (logarithmically) towards the boundary and is, at d = 1e-3·L, of
+/// the same size as the error of the recovered boundary stress, so the switch does not
+/// introduce a visible jump.
+pub const NEAR_BOUNDARY_FRACTION: f64 = 1e-3;
+
+/// A point within this fraction of the body's scaling length (the diagonal of its bounding
+/// box) of the boundary is on the boundary: it belongs to the body (in [`locate`]) and takes
+/// the boundary values (in [`interior`]) whatever the element lengths.
+pub const ON_BOUNDARY_TOLERANCE: f64 = 1e-9;
+
+/// Turning angle at a node above which the nodal stress is fitted to the tractions of both
+/// elements instead of averaging the recovered element-end stresses
+/// ([`nodal_boundary_stress`]): 30°.
+pub const CORNER_ANGLE: f64 = std::f64::consts::PI / 6.0;
+
+// ---------------------------------------------------------------------------------------
+// Small 2-vector helpers.
+
+#[inline]
+fn dot(a: Vec2, b: Vec2) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+
+#[inline]
+fn lerp2(a: Vec2, b: Vec2, xi: f64) -> Vec2 {
+    [a[0] + xi * (b[0] - a[0]), a[1] + xi * (b[1] - a[1])]
+}
+
+#[inline]
+fn lerp_mat(a: &Mat2, b: &Mat2, xi: f64) -> Mat2 {
+    let mut out = [[0.0; 2]; 2];
+    for i in 0..2 {
+        for j in 0..2 {
+            out[i][j] = a[i][j] + xi * (b[i][j] - a[i][j]);
+        }
+    }
+    out
+}
+
+/// The physical segment of element `ei` of `body`.
+fn segment(body: &Body, ei: usize) -> Segment {
+    let e = &body.elements[ei];
+    Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
+}
+
+/// Nearest point of segment `seg` to `x`: (distance, parameter ξ ∈ \[0,1\]).
+fn project(seg: &Segment, x: Vec2) -> (f64, f64) {
+    let c = seg.chord();
+    let w = [x[0] - seg.p[0], x[1] - seg.p[1]];
+    let cc = dot(c, c);
+    let xi = if cc > 0.0 {
+        (dot(w, c) / cc).clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
+    ((w[0] - xi * c[0]).hypot(w[1] - xi * c[1]), xi)
+}
+
+// ---------------------------------------------------------------------------------------
+// Boundary stress recovery.
+
+/// `E' = 2μ/(1−ν)` and `ν' = ν/(1−ν)` with the effective ν of the material: plane strain
+/// `E/(1−ν²)`, `ν/(1−ν)`; plane stress (ν̄ = ν/(1+ν)) `E`, `ν` (formulation §2.4).
+fn recovery_moduli(m: &Material) -> (f64, f64) {
+    (2.0 * m.mu / (1.0 - m.nu), m.nu / (1.0 - m.nu))
+}
+
+/// Stress tensor (global xx, xy, yy) from its components in the element frame (s = tangent,
+/// n = outward normal).
+fn from_local(s: Vec2, n: Vec2, ss: f64, nn: f64, ns: f64) -> Mat2 {
+    let mut out = [[0.0; 2]; 2];
+    for i in 0..2 {
+        for j in 0..2 {
+            out[i][j] = ss * s[i] * s[j] + nn * n[i] * n[j] + ns * (n[i] * s[j] + s[i] * n[j]);
+        }
+    }
+    out
+}
+
+/// The stress tensor at both ends of every element, indexed `[element][end][i][j]` in global
+/// components, by the recovery formula (formulation §2.4): `σ_nn = t_n`, `σ_ns = t_s`,
+/// `σ_ss = E'ε_ss + ν'σ_nn` with `ε_ss = (u_Q − u_P)·τ/L` of the element's P1 displacement.
+/// Exact for a linear displacement field with its constant stress.
+pub fn boundary_stress(body: &Body, material: &Material, field: &BodyField) -> Vec<[Mat2; 2]> {
+    assert_eq!(
+        field.u.len(),
+        body.nodes.len(),
+        "boundary field of body \"{}\" has {} displacements for {} nodes",
+        body.name,
+        field.u.len(),
+        body.nodes.len()
+    );
+    assert_eq!(
+        field.t.len(),
+        body.elements.len(),
+        "boundary field of body \"{}\" has {} traction pairs for {} elements",
+        body.name,
+        field.t.len(),
+        body.elements.len()
+    );
+    let (e_mod, nu_mod) = recovery_moduli(material);
+    body.elements
+        .iter()
+        .enumerate()
+        .map(|(ei, e)| {
+            let (s, n) = (e.tangent, e.normal);
+            let du = [
+                field.u[e.nodes[1]][0] - field.u[e.nodes[0]][0],
+                field.u[e.nodes[1]][1] - field.u[e.nodes[0]][1],
+            ];
+            let eps_ss = dot(du, s) / e.length;
+            let end = |a: usize| {
+                let t = field.t[ei][a];
+                let (nn, ns) = (dot(t, n), dot(t, s));
+                from_local(s, n, e_mod * eps_ss + nu_mod * nn, nn, ns)
+            };
+            [end(0), end(1)]
+        })
+        .collect()
+}
+
+/// The stress at each boundary node (body-local numbering), from the element-end stresses of
+/// [`boundary_stress`] (`ends`).
+///
+/// * Where the boundary turns by less than [`CORNER_ANGLE`] the recovered stresses of the
+///   element ends meeting at the node are averaged. On a smooth boundary this turns the two
+///   one-sided strains `ε_ss` into a centred difference.
+/// * At a corner (turning angle of at least [`CORNER_ANGLE`]) the two tractions `σn₁ = t₁`
+///   and `σn₂ = t₂` determine the whole symmetric tensor: it is their least-squares fit (four
+///   equations, three unknowns), which uses only the nodal traction values and no one-sided
+///   strain. At a traction-free convex corner it gives σ = 0, as it must; where the stress is
+///   singular (re-entrant corners, ends of a clamp) no nodal value is meaningful and the fit
+///   is a compromise between the two sides.
+pub fn nodal_boundary_stress(body: &Body, field: &BodyField, ends: &[[Mat2; 2]]) -> Vec<Mat2> {
+    let mut meeting: Vec<Vec<(usize, usize)>> = vec![Vec::new(); body.nodes.len()];
+    for (ei, e) in body.elements.iter().enumerate() {
+        meeting[e.nodes[0]].push((ei, 0));
+        meeting[e.nodes[1]].push((ei, 1));
+    }
+    let cos_corner = CORNER_ANGLE.cos();
+    meeting
+        .iter()
+        .map(|list| {
+            if list.is_empty() {
+                return [[0.0; 2]; 2];
+            }
+            if list.len() == 2 {
+                let (e1, e2) = (&body.elements[list[0].0], &body.elements[list[1].0]);
+                if dot(e1.normal, e2.normal) < cos_corner {
+                    let t1 = field.t[list[0].0][list[0].1];
+                    let t2 = field.t[list[1].0][list[1].1];
+                    return traction_fit(&[(e1.normal, t1), (e2.normal, t2)]);
+                }
+            }
+            let mut avg = [[0.0; 2]; 2];
+            let w = 1.0 / list.len() as f64;
+            for &(ei, a) in list {
+                for i in 0..2 {
+                    for j in 0..2 {
+                        avg[i][j] += w * ends[ei][a][i][j];
+                    }
+                }
+            }
+            avg
+        })
+        .collect()
+}
+
+/// Least-squares symmetric stress with `σ n_k ≈ t_k` for the given (normal, traction) pairs.
+fn traction_fit(data: &[(Vec2, Vec2)]) -> Mat2 {
+    // Unknowns (σxx, σyy, σxy); rows σxx n_x + σxy n_y = t_x and σxy n_x + σyy n_y = t_y.
+    let mut a = [[0.0; 3]; 3];
+    let mut r = [0.0; 3];
+    for &(n, t) in data {
+        for (row, rhs) in [([n[0], 0.0, n[1]], t[0]), ([0.0, n[1], n[0]], t[1])] {
+            for i in 0..3 {
+                r[i] += row[i] * rhs;
+                for j in 0..3 {
+                    a[i][j] += row[i] * row[j];
+                }
+            }
+        }
+    }
+    let s = solve3(a, r);
+    [[s[0], s[2]], [s[2], s[1]]]
+}
+
+/// Solves a 3×3 system by Cramer's rule (the normal equations of [`traction_fit`], well
+/// conditioned at corners of at least [`CORNER_ANGLE`]).
+fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> [f64; 3] {
+    let det = |m: [[f64; 3]; 3]| {
+        m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1])
+            - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0])
+            + m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])
+    };
+    let d = det(a);
+    let mut out = [0.0; 3];
+    for k in 0..3 {
+        let mut m = a;
+        for i in 0..3 {
+            m[i][k] = r[i];
+        }
+        out[k] = det(m) / d;
+    }
+    out
+}
+
+// ---------------------------------------------------------------------------------------
+// Interior points.
+
+/// One body prepared for point evaluation: scaled geometry and recovered boundary stresses,
+/// computed once and shared by all points.
+struct Prepared<'a> {
+    body: &'a Body,
+    material: Material,
+    field: &'a BodyField,
+    body_force: Option<Vec2>,
+    centre: Vec2,
+    length: f64,
+    /// Physical segments (for distances) and scaled segments (for the integrals).
+    segments: Vec<Segment>,
+    scaled: Vec<Segment>,
+    scaled_area: f64,
+    ends: Vec<[Mat2; 2]>,
+}
+
+impl<'a> Prepared<'a> {
+    fn new(
+        body: &'a Body,
+        material: &Material,
+        field: &'a BodyField,
+        (centre, length): (Vec2, f64),
+        body_force: Option<Vec2>,
+    ) -> Self {
+        assert!(
+            length > 0.0,
+            "body \"{}\" has a degenerate scaling length {length}",
+            body.name
+        );
+        let sc = |p: Vec2| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
+        let segments: Vec<Segment> = (0..body.elements.len())
+            .map(|ei| segment(body, ei))
+            .collect();
+        let scaled: Vec<Segment> = segments
+            .iter()
+            .map(|s| Segment::new(sc(s.p), sc(s.q)))
+            .collect();
+        let scaled_area = boundary_area(&scaled);
+        Prepared {
+            body,
+            material: *material,
+            field,
+            body_force: body_force.filter(|b| *b != [0.0, 0.0]),
+            centre,
+            length,
+            segments,
+            scaled,
+            scaled_area,
+            ends: boundary_stress(body, material, field),
+        }
+    }
+
+    /// The Somigliana identities at x (no near-boundary switch).
+    fn somigliana(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+        let m = &self.material;
+        let l = self.length;
+        let xs = [(x[0] - self.centre[0]) / l, (x[1] - self.centre[1]) / l];
+        let (mut u_single, mut u_double) = ([0.0; 2], [0.0; 2]);
+        let (mut s_single, mut s_double) = ([[0.0; 2]; 2], [[0.0; 2]; 2]);
+        for (ei, seg) in self.scaled.iter().enumerate() {
+            let pd = point_displacement_integrals(m, xs, seg, settings);
+            let ps = point_stress_integrals(m, xs, seg, settings);
+            let nodes = self.body.elements[ei].nodes;
+            for b in 0..2 {
+                let ub = self.field.u[nodes[b]];
+                let tb = self.field.t[ei][b];
+                for i in 0..2 {
+                    for k in 0..2 {
+                        u_single[i] += pd.single[b][i][k] * tb[k];
+                        u_double[i] += pd.double[b][i][k] * ub[k];
+                        for j in 0..2 {
+                            s_single[i][j] += ps.single[b][i][j][k] * tb[k];
+                            s_double[i][j] += ps.double[b][k][i][j] * ub[k];
+                        }
+                    }
+                }
+            }
+        }
+        let mut u = [0.0; 2];
+        let mut s = [[0.0; 2]; 2];
+        for i in 0..2 {
+            u[i] = l * u_single[i] - u_double[i];
+            for j in 0..2 {
+                s[i][j] = s_single[i][j] - s_double[i][j] / l;
+            }
+        }
+        if let Some(b) = self.body_force {
+            let (ub, g) = body_force_fields(m, xs, &self.scaled, b, self.scaled_area);
+            let sb = m.stress_from_gradient(g);
+            for i in 0..2 {
+                u[i] += l * l * ub[i];
+                for j in 0..2 {
+                    s[i][j] += l * sb[i][j];
+                }
+            }
+        }
+        (u, s)
+    }
+
+    /// Nearest element to x: (element, distance, parameter ξ).
+    fn nearest(&self, x: Vec2) -> (usize, f64, f64) {
+        let mut best = (0, f64::INFINITY, 0.0);
+        for (ei, seg) in self.segments.iter().enumerate() {
+            let (d, xi) = project(seg, x);
+            if d < best.1 {
+                best = (ei, d, xi);
+            }
+        }
+        best
+    }
+
+    /// Boundary values at parameter ξ of element `ei`: linear displacement, recovered stress
+    /// interpolated between the element ends.
+    fn boundary_value(&self, ei: usize, xi: f64) -> (Vec2, Mat2) {
+        let nodes = self.body.elements[ei].nodes;
+        let u = lerp2(self.field.u[nodes[0]], self.field.u[nodes[1]], xi);
+        let s = lerp_mat(&self.ends[ei][0], &self.ends[ei][1], xi);
+        (u, s)
+    }
+
+    /// Interior value with the near-boundary switch.
+    fn interior(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+        let (ei, d, xi) = self.nearest(x);
+        let band = (NEAR_BOUNDARY_FRACTION * self.body.elements[ei].length)
+            .max(ON_BOUNDARY_TOLERANCE * self.length);
+        if d < band {
+            self.boundary_value(ei, xi)
+        } else {
+            self.somigliana(settings, x)
+        }
+    }
+}
+
+/// Displacement and stress at x by the Somigliana identities [paper eqs. 1a,b] alone, without
+/// the near-boundary switch of [`interior`]. `scaling` is [`crate::assembly::scaling`] of the
+/// body, `body_force` the body force already multiplied by the load factor. The point must lie
+/// inside the body and off its boundary; the stress loses about `ε·(L/d)²` to rounding at a
+/// distance d from an element of length L.
+pub fn somigliana(
+    body: &Body,
+    material: &Material,
+    field: &BodyField,
+    scaling: (Vec2, f64),
+    body_force: Option<Vec2>,
+    settings: &QuadratureSettings,
+    x: Vec2,
+) -> (Vec2, Mat2) {
+    Prepared::new(body, material, field, scaling, body_force).somigliana(settings, x)
+}
+
+/// Displacement and stress at a point x of the body (inside it or on its boundary):
+/// the Somigliana identities ([`somigliana`]), except within [`NEAR_BOUNDARY_FRACTION`] of
+/// the nearest element's length (or [`ON_BOUNDARY_TOLERANCE`] of the body size) from the
+/// boundary, where x takes the boundary values at its projection on that element: the linear
+/// displacement and the recovered stress ([`boundary_stress`]) interpolated between the
+/// element ends (formulation §8.5). For a point outside the body the result is meaningless;
+/// [`evaluate_points`] locates points first.
+pub fn interior(
+    body: &Body,
+    material: &Material,
+    field: &BodyField,
+    scaling: (Vec2, f64),
+    body_force: Option<Vec2>,
+    settings: &QuadratureSettings,
+    x: Vec2,
+) -> (Vec2, Mat2) {
+    Prepared::new(body, material, field, scaling, body_force).interior(settings, x)
+}
+
+// ---------------------------------------------------------------------------------------
+// Points in a model.
+
+/// What [`evaluate_points`] and [`field_at_nodes`] need of one body.
+#[derive(Debug, Clone, Copy)]
+pub struct BodyInput<'a> {
+    pub body: &'a Body,
+    /// `assembly::material(body, plane)`.
+    pub material: Material,
+    pub field: &'a BodyField,
+    /// The body force already multiplied by the load factor.
+    pub body_force: Option<Vec2>,
+}
+
+impl<'a> BodyInput<'a> {
+    fn prepare(&self) -> Prepared<'a> {
+        Prepared::new(
+            self.body,
+            &self.material,
+            self.field,
+            scaling(self.body),
+            self.body_force,
+        )
+    }
+}
+
+/// The field at a located point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointValue {
+    /// Index of the body containing the point (in the slice passed in).
+    pub body: usize,
+    pub u: Vec2,
+    pub sigma: Mat2,
+}
+
+/// Winding number of the boundary loops of `body` around x: 1 inside the material (outer
+/// loops counter-clockwise, holes clockwise), 0 outside and in holes.
+pub fn winding_number(body: &Body, x: Vec2) -> i32 {
+    let mut wn = 0;
+    for e in &body.elements {
+        let (p, q) = (body.nodes[e.nodes[0]], body.nodes[e.nodes[1]]);
+        let left = (q[0] - p[0]) * (x[1] - p[1]) - (x[0] - p[0]) * (q[1] - p[1]);
+        if p[1] <= x[1] {
+            if q[1] > x[1] && left > 0.0 {
+                wn += 1;
+            }
+        } else if q[1] <= x[1] && left < 0.0 {
+            wn -= 1;
+        }
+    }
+    wn
+}
+
+/// Distance from x to the boundary of `body`.
+pub fn boundary_distance(body: &Body, x: Vec2) -> f64 {
+    (0..body.elements.len())
+        .map(|ei| project(&segment(body, ei), x).0)
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// Index of the first body that contains x: inside by [`winding_number`], or on its boundary
+/// within [`ON_BOUNDARY_TOLERANCE`] of the body size. A point on an interface shared by two
+/// bodies therefore belongs to the one that comes first in `bodies`.
+pub fn locate(bodies: &[&Body], x: Vec2) -> Option<usize> {
+    bodies.iter().position(|b| {
+        let (c, l) = scaling(b);
+        let tol = ON_BOUNDARY_TOLERANCE * l;
+        // Bounding-box rejection: the box is [c − half extents] and the diagonal bounds both.
+        if (x[0] - c[0]).abs() > 0.5 * l + tol || (x[1] - c[1]).abs() > 0.5 * l + tol {
+            return false;
+        }
+        winding_number(b, x) != 0 || boundary_distance(b, x) <= tol
+    })
+}
+
+/// Displacement and stress at each point, with the index of the body containing it
+/// ([`locate`]: the first body wins on an interface), or `None` for a point in no body.
+/// Values by [`interior`]; points are evaluated in parallel (rayon).
+pub fn evaluate_points(
+    bodies: &[BodyInput],
+    settings: &QuadratureSettings,
+    points: &[Vec2],
+) -> Vec<Option<PointValue>> {
+    let prepared: Vec<Prepared> = bodies.iter().map(|b| b.prepare()).collect();
+    let plain: Vec<&Body> = bodies.iter().map(|b| b.body).collect();
+    points
+        .par_iter()
+        .map(|&x| {
+            let bi = locate(&plain, x)?;
+            let (u, sigma) = prepared[bi].interior(settings, x);
+            Some(PointValue { body: bi, u, sigma })
+        })
+        .collect()
+}
+
+/// The field at one node of the body's triangle mesh.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeValue {
+    /// Index into the mesh node list.
+    pub mesh_node: usize,
+    pub u: Vec2,
+    pub sigma: Mat2,
+}
+
+/// The field at every node of the body's triangles (`body.triangles`), one entry per distinct
+/// mesh node in increasing order of mesh index. `mesh_nodes` are the coordinates of all mesh
+/// nodes. Nodes that are boundary nodes of the body (`body.mesh_nodes`) take the boundary
+/// values exactly: `field.u` and [`nodal_boundary_stress`]; the others [`interior`], in
+/// parallel.
+pub fn field_at_nodes(
+    input: &BodyInput,
+    settings: &QuadratureSettings,
+    mesh_nodes: &[Vec2],
+) -> Vec<NodeValue> {
+    let prepared = input.prepare();
+    let nodal = nodal_boundary_stress(input.body, input.field, &prepared.ends);
+    let mut on_boundary: HashMap<usize, usize> = HashMap::new();
+    for (n, &mn) in input.body.mesh_nodes.iter().enumerate() {
+        on_boundary.entry(mn).or_insert(n);
+    }
+    let mut ids: Vec<usize> = input.body.triangles.iter().flatten().copied().collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.par_iter()
+        .map(|&mn| {
+            let (u, sigma) = match on_boundary.get(&mn) {
+                Some(&n) => (input.field.u[n], nodal[n]),
+                None => prepared.interior(settings, mesh_nodes[mn]),
+            };
+            NodeValue {
+                mesh_node: mn,
+                u,
+                sigma,
+            }
+        })
+        .collect()
+}
+
+/// `count` equally spaced points from `from` to `to`, both included (a section line).
+pub fn section_points(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
+    assert!(count >= 2, "a section needs at least 2 points, got {count}");
+    (0..count)
+        .map(|k| lerp2(from, to, k as f64 / (count - 1) as f64))
+        .collect()
+}
+
+// ---------------------------------------------------------------------------------------
+// Stress invariants.
+
+/// Out-of-plane stress σ_zz: `ν(σxx + σyy)` in plane strain, with the *real* Poisson ratio
+/// ν of the body (not the effective one of [`Material`]); 0 in plane stress.
+pub fn out_of_plane_stress(sigma: &Mat2, plane: Plane, poisson: f64) -> f64 {
+    match plane {
+        Plane::Strain => poisson * (sigma[0][0] + sigma[1][1]),
+        Plane::Stress => 0.0,
+    }
+}
+
+/// Von Mises equivalent stress of the in-plane tensor with out-of-plane stress `sigma_zz`
+/// ([`out_of_plane_stress`]):
+/// `√(½[(σxx−σyy)² + (σyy−σzz)² + (σzz−σxx)²] + 3σxy²)`.
+pub fn von_mises(sigma: &Mat2, sigma_zz: f64) -> f64 {
+    let (xx, yy, xy) = (sigma[0][0], sigma[1][1], 0.5 * (sigma[0][1] + sigma[1][0]));
+    let zz = sigma_zz;
+    (0.5 * ((xx - yy).powi(2) + (yy - zz).powi(2) + (zz - xx).powi(2)) + 3.0 * xy * xy).sqrt()
+}
+
+/// In-plane principal stresses `[σ1, σ2]` with σ1 ≥ σ2, and the angle (radians, from the
+/// x axis, in (−π/2, π/2\]) of the direction of σ1.
+pub fn principal_stresses(sigma: &Mat2) -> ([f64; 2], f64) {
+    let (xx, yy, xy) = (sigma[0][0], sigma[1][1], 0.5 * (sigma[0][1] + sigma[1][0]));
+    let mean = 0.5 * (xx + yy);
+    let radius = (0.5 * (xx - yy)).hypot(xy);
+    let angle = 0.5 * (2.0 * xy).atan2(xx - yy);
+    ([mean + radius, mean - radius], angle)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn principal_and_von_mises() {
+        // Pure shear τ: principal ±τ at 45°, von Mises √3 τ.
+        let s = [[0.0, 2.0], [2.0, 0.0]];
+        let (p, a) = principal_stresses(&s);
+        assert!((p[0] - 2.0).abs() < 1e-15 && (p[1] + 2.0).abs() < 1e-15);
+        assert!((a - std::f64::consts::FRAC_PI_4).abs() < 1e-15);
+        assert!((von_mises(&s, 0.0) - 2.0 * 3f64.sqrt()).abs() < 1e-14);
+        // Uniaxial σ along y: σ1 = σ along 90°, von Mises σ in plane stress.
+        let s = [[0.0, 0.0], [0.0, 5.0]];
+        let (p, a) = principal_stresses(&s);
+        assert!((p[0] - 5.0).abs() < 1e-15 && p[1].abs() < 1e-15);
+        assert!((a.abs() - std::f64::consts::FRAC_PI_2).abs() < 1e-15);
+        let zz = out_of_plane_stress(&s, Plane::Stress, 0.3);
+        assert_eq!(zz, 0.0);
+        assert!((von_mises(&s, zz) - 5.0).abs() < 1e-14);
+        // Plane strain, hydrostatic in-plane p: σ_zz = 2νp, von Mises |p − 2νp|.
+        let s = [[-1.0, 0.0], [0.0, -1.0]];
+        let zz = out_of_plane_stress(&s, Plane::Strain, 0.3);
+        assert!((zz + 0.6).abs() < 1e-15);
+        assert!((von_mises(&s, zz) - 0.4).abs() < 1e-14);
+    }
+
+    #[test]
+    fn sections_include_both_ends() {
+        let p = section_points([1.0, 2.0], [3.0, -2.0], 5);
+        assert_eq!(p.len(), 5);
+        assert_eq!(p[0], [1.0, 2.0]);
+        assert_eq!(p[4], [3.0, -2.0]);
+        assert!((p[2][0] - 2.0).abs() < 1e-15 && p[2][1].abs() < 1e-15);
+    }
+
+    #[test]
+    fn traction_fit_recovers_a_tensor_at_a_corner() {
+        let s = [[0.3, -0.7], [-0.7, 1.9]];
+        let normals = [[0.0, -1.0], [0.6, 0.8]];
+        let data: Vec<(Vec2, Vec2)> = normals
+            .iter()
+            .map(|&n| {
+                (
+                    n,
+                    [
+                        s[0][0] * n[0] + s[0][1] * n[1],
+                        s[1][0] * n[0] + s[1][1] * n[1],
+                    ],
+                )
+            })
+            .collect();
+        let f = traction_fit(&data);
+        for i in 0..2 {
+            for j in 0..2 {
+                assert!((f[i][j] - s[i][j]).abs() < 1e-14, "{f:?}");
+            }
+        }
+    }
+}
