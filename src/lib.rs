@@ -15,6 +15,7 @@ pub mod interface;
 pub mod kernels;
 pub mod mesh;
 pub mod model;
+pub mod output;
 pub mod pipeline;
 pub mod plan;
 pub mod postprocess;

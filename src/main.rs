@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand, ValueEnum};
 
 use sgbem::error::Error;
+use sgbem::scene::Method;
 use sgbem::{pipeline, report};
 
 #[derive(Parser)]
@@ -83,19 +84,29 @@ fn main() -> ExitCode {
         Command::Run {
             scene,
             mesh,
-            out: _,
-            method: _,
-            quiet: _,
-        } => pipeline::load(&scene, mesh.as_deref()).and_then(|l| {
-            Err(Error::io(
-                &l.scene.path,
-                format!(
-                    "the scene is valid (plan: {}), but this build of sgbem cannot solve yet; \
-                     `sgbem check` prints the model and the plan",
-                    l.plan.effects_line()
-                ),
-            ))
-        }),
+            out,
+            method,
+            quiet,
+        } => {
+            let opts = pipeline::RunOptions {
+                mesh,
+                out,
+                method: method.map(|m| match m {
+                    MethodArg::Lcp => Method::Lcp,
+                    MethodArg::Qp => Method::Qp,
+                    MethodArg::Both => Method::Both,
+                }),
+                quiet,
+            };
+            pipeline::run(&scene, &opts).map(|r| {
+                for n in &r.notes {
+                    eprintln!("sgbem: note: {n}");
+                }
+                if !quiet {
+                    println!("results in {}", r.out_dir.display());
+                }
+            })
+        }
         Command::Inspect { archive } => Err(Error::io(
             &archive,
             "this build of sgbem does not read archives yet",

@@ -56,3 +56,209 @@ pub fn load(scene_path: &Path, mesh_override: Option<&Path>) -> Result<Loaded> {
         plan,
     })
 }
+
+/// Command-line overrides of a run.
+#[derive(Debug, Clone, Default)]
+pub struct RunOptions {
+    pub mesh: Option<PathBuf>,
+    pub out: Option<PathBuf>,
+    pub method: Option<crate::scene::Method>,
+    pub quiet: bool,
+}
+
+/// What a run produced, for the caller to report.
+#[derive(Debug, Clone)]
+pub struct RunReport {
+    pub out_dir: PathBuf,
+    pub summary: serde_json::Value,
+    pub notes: Vec<String>,
+}
+
+/// Seconds per stage, in stage order.
+#[derive(Debug, Clone, Default)]
+pub struct Timings(pub Vec<(&'static str, f64)>);
+
+impl Timings {
+    fn add(&mut self, stage: &'static str, seconds: f64) {
+        match self.0.iter_mut().find(|(s, _)| *s == stage) {
+            Some((_, t)) => *t += seconds,
+            None => self.0.push((stage, seconds)),
+        }
+    }
+    fn json(&self) -> serde_json::Value {
+        let mut m = serde_json::Map::new();
+        let mut total = 0.0;
+        for (s, t) in &self.0 {
+            m.insert((*s).to_string(), serde_json::json!(t));
+            total += t;
+        }
+        m.insert("total".into(), serde_json::json!(total));
+        serde_json::Value::Object(m)
+    }
+}
+
+/// Reads, validates, solves and writes every output of a scene.
+pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
+    use crate::assembly::material;
+    use crate::output::{csv, summary, write_atomic};
+    use crate::postprocess::{evaluate_points, field_at_nodes, section_points, BodyInput};
+    use crate::quadrature::QuadratureSettings;
+    use crate::scene::{InitialState, InterfaceModel};
+    use crate::solve::{all_closed, prepare, solve_status};
+    use std::time::Instant;
+
+    let mut timings = Timings::default();
+    let t0 = Instant::now();
+    let mut loaded = load(scene_path, opts.mesh.as_deref())?;
+    if let Some(m) = opts.method {
+        loaded.scene.solve.method = m;
+    }
+    if let Some(o) = &opts.out {
+        loaded.scene.output.directory = o.clone();
+    }
+    timings.add("read", t0.elapsed().as_secs_f64());
+    let Loaded {
+        scene, model, plan, ..
+    } = &loaded;
+    let out_dir = scene.output.directory.clone();
+    let mut notes = Vec::new();
+
+    for it in &model.interfaces {
+        if it.spec.model == InterfaceModel::Unilateral {
+            if it.spec.initial == InitialState::Open {
+                return Err(Error::io(
+                    &scene.path,
+                    format!(
+                        "interface \"{}\" starts open: the contact solver is not available in \
+                         this build",
+                        it.spec.name
+                    ),
+                ));
+            }
+            notes.push(format!(
+                "interface \"{}\" is unilateral but solved as bonded: the contact solver is not \
+                 available in this build",
+                it.spec.name
+            ));
+        }
+    }
+    let settings = QuadratureSettings::from_name(scene.solve.quadrature.name())
+        .unwrap_or_else(QuadratureSettings::standard);
+    let factor = scene.solve.load_factors.last().copied().unwrap_or(1.0);
+
+    let prepared = prepare(model, scene.plane, &settings, factor, &scene.path, &|_| {})?;
+    timings.add("assemble", prepared.assemble_seconds);
+    timings.add("condense", prepared.condense_seconds);
+    let t1 = Instant::now();
+    let sol = solve_status(model, &prepared, &all_closed(model))?;
+    timings.add("solve", t1.elapsed().as_secs_f64());
+
+    // Post-processing.
+    let t2 = Instant::now();
+    let inputs: Vec<BodyInput> = model
+        .bodies
+        .iter()
+        .zip(&sol.fields)
+        .map(|(b, f)| BodyInput {
+            body: b,
+            material: material(b, scene.plane),
+            field: f,
+            body_force: b
+                .body_force
+                .filter(|v| *v != [0.0, 0.0])
+                .map(|v| [factor * v[0], factor * v[1]]),
+        })
+        .collect();
+    let mut sections = Vec::new();
+    for s in &scene.output.sections {
+        let pts = section_points(s.from, s.to, s.points);
+        let vals = evaluate_points(&inputs, &settings, &pts);
+        let rows: Vec<csv::SectionRow> = pts
+            .iter()
+            .zip(vals)
+            .map(|(x, v)| {
+                (
+                    *x,
+                    v.map(|p| (p.u, [p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]])),
+                )
+            })
+            .collect();
+        if rows.iter().any(|r| r.1.is_none()) {
+            notes.push(format!(
+                "section {}: some points lie outside every body (written as nan)",
+                s.name
+            ));
+        }
+        sections.push((s.name.clone(), rows));
+    }
+    let mut field_nodes = 0usize;
+    if scene.output.field {
+        for input in &inputs {
+            field_nodes += field_at_nodes(input, &settings, &loaded.mesh.nodes).len();
+        }
+    }
+    timings.add("postprocess", t2.elapsed().as_secs_f64());
+
+    // Outputs.
+    let t3 = Instant::now();
+    for (it, r) in model.interfaces.iter().zip(&sol.interfaces) {
+        write_atomic(
+            &out_dir
+                .join("interfaces")
+                .join(format!("{}.csv", it.spec.name)),
+            csv::interface_table(it, r).as_bytes(),
+        )?;
+    }
+    for (name, rows) in &sections {
+        write_atomic(
+            &out_dir.join("sections").join(format!("{name}.csv")),
+            csv::section_table(rows).as_bytes(),
+        )?;
+    }
+    timings.add("write", t3.elapsed().as_secs_f64());
+    let dofs: usize = prepared.systems.iter().map(|s| s.n()).sum();
+    let asym = prepared
+        .condensed
+        .iter()
+        .map(|c| c.asymmetry)
+        .fold(0.0, f64::max);
+    let pivot = prepared
+        .condensed
+        .iter()
+        .map(|c| c.pivot_ratio)
+        .fold(1.0, f64::min);
+    let summary = serde_json::json!({
+        "title": scene.title,
+        "status": "solved",
+        "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { "bonded (contact solver not available)" },
+        "effects": plan.effects,
+        "plane": match scene.plane { crate::scene::Plane::Strain => "strain", crate::scene::Plane::Stress => "stress" },
+        "thickness": scene.thickness,
+        "units": {"length": scene.units.length, "force": scene.units.force},
+        "load_factor": factor,
+        "quadrature": scene.solve.quadrature.name(),
+        "counts": {
+            "bodies": model.bodies.len(),
+            "boundary_elements": model.element_count(),
+            "interface_pairs": model.pair_count(),
+            "dofs": dofs,
+            "field_nodes": field_nodes,
+        },
+        "interfaces": summary::interfaces(&model.interfaces, &sol.interfaces, scene.thickness),
+        "diagnostics": {
+            "d00_asymmetry": asym,
+            "min_pivot_ratio": pivot,
+            "interface_residual": sol.residual,
+        },
+        "notes": notes,
+        "timings": timings.json(),
+    });
+    let text = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
+    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    Ok(RunReport {
+        out_dir,
+        summary,
+        notes,
+    })
+}

@@ -176,49 +176,143 @@ pub fn boundary_stress(body: &Body, material: &Material, field: &BodyField) -> V
         .collect()
 }
 
-/// The stress at each boundary node (body-local numbering), from the element-end stresses of
-/// [`boundary_stress`] (`ends`).
-///
-/// * Where the boundary turns by less than [`CORNER_ANGLE`] the recovered stresses of the
-///   element ends meeting at the node are averaged. On a smooth boundary this turns the two
-///   one-sided strains `ε_ss` into a centred difference.
-/// * At a corner (turning angle of at least [`CORNER_ANGLE`]) the two tractions `σn₁ = t₁`
-///   and `σn₂ = t₂` determine the whole symmetric tensor: it is their least-squares fit (four
-///   equations, three unknowns), which uses only the nodal traction values and no one-sided
-///   strain. At a traction-free convex corner it gives σ = 0, as it must; where the stress is
-///   singular (re-entrant corners, ends of a clamp) no nodal value is meaningful and the fit
-///   is a compromise between the two sides.
-pub fn nodal_boundary_stress(body: &Body, field: &BodyField, ends: &[[Mat2; 2]]) -> Vec<Mat2> {
+/// How the boundary turns at a node: the element ends meeting there and, for two ends, whether
+/// they form a corner ([`CORNER_ANGLE`]).
+enum NodeKind {
+    /// Two ends on a smooth stretch: (element, end) of the arriving and leaving elements.
+    Smooth([(usize, usize); 2]),
+    /// Two ends at a corner.
+    Corner([(usize, usize); 2]),
+    /// Any other number of ends (loops touching at a point).
+    Other(Vec<(usize, usize)>),
+}
+
+fn node_kinds(body: &Body) -> Vec<NodeKind> {
     let mut meeting: Vec<Vec<(usize, usize)>> = vec![Vec::new(); body.nodes.len()];
     for (ei, e) in body.elements.iter().enumerate() {
-        meeting[e.nodes[0]].push((ei, 0));
         meeting[e.nodes[1]].push((ei, 1));
+        meeting[e.nodes[0]].push((ei, 0));
     }
     let cos_corner = CORNER_ANGLE.cos();
     meeting
-        .iter()
+        .into_iter()
         .map(|list| {
-            if list.is_empty() {
-                return [[0.0; 2]; 2];
-            }
             if list.len() == 2 {
-                let (e1, e2) = (&body.elements[list[0].0], &body.elements[list[1].0]);
+                let pair = [list[0], list[1]];
+                let (e1, e2) = (&body.elements[pair[0].0], &body.elements[pair[1].0]);
                 if dot(e1.normal, e2.normal) < cos_corner {
-                    let t1 = field.t[list[0].0][list[0].1];
-                    let t2 = field.t[list[1].0][list[1].1];
-                    return traction_fit(&[(e1.normal, t1), (e2.normal, t2)]);
+                    NodeKind::Corner(pair)
+                } else {
+                    NodeKind::Smooth(pair)
+                }
+            } else {
+                NodeKind::Other(list)
+            }
+        })
+        .collect()
+}
+
+/// Tangential strain `ε_ss = (u_Q − u_P)·τ/L` of each element's P1 displacement.
+fn element_strains(body: &Body, field: &BodyField) -> Vec<f64> {
+    body.elements
+        .iter()
+        .map(|e| {
+            let (p, q) = (field.u[e.nodes[0]], field.u[e.nodes[1]]);
+            dot([q[0] - p[0], q[1] - p[1]], e.tangent) / e.length
+        })
+        .collect()
+}
+
+/// The stress at both ends of every element, like [`boundary_stress`] but with a better
+/// tangential component at the nodes: `σ_nn = t_n` and `σ_ns = t_s` from the end's own
+/// traction (so traction jumps are kept), and
+///
+/// * at a smooth node, `σ_ss = E'ε̄_ss + ν'σ_nn` with `ε̄_ss = (L₂ε₁ + L₁ε₂)/(L₁ + L₂)`, the
+///   derivative at the node of the quadratic through the three nodal displacements: second
+///   order where the one-sided `ε_ss` of one element is first order;
+/// * at a corner, `σ_ss = s·σ̂·s` with σ̂ the traction fit of [`nodal_boundary_stress`]: the
+///   tangential stress of one side is the normal stress of the other.
+///
+/// These are the boundary values [`interior`] interpolates along an element.
+pub fn smoothed_boundary_stress(
+    body: &Body,
+    material: &Material,
+    field: &BodyField,
+) -> Vec<[Mat2; 2]> {
+    let mut ends = boundary_stress(body, material, field);
+    let strains = element_strains(body, field);
+    let (e_mod, nu_mod) = recovery_moduli(material);
+    for kind in node_kinds(body) {
+        match kind {
+            NodeKind::Smooth(pair) => {
+                let (l1, l2) = (
+                    body.elements[pair[0].0].length,
+                    body.elements[pair[1].0].length,
+                );
+                let eps = (l2 * strains[pair[0].0] + l1 * strains[pair[1].0]) / (l1 + l2);
+                for (ei, a) in pair {
+                    let e = &body.elements[ei];
+                    let t = field.t[ei][a];
+                    let (nn, ns) = (dot(t, e.normal), dot(t, e.tangent));
+                    ends[ei][a] =
+                        from_local(e.tangent, e.normal, e_mod * eps + nu_mod * nn, nn, ns);
                 }
             }
-            let mut avg = [[0.0; 2]; 2];
-            let w = 1.0 / list.len() as f64;
-            for &(ei, a) in list {
-                for i in 0..2 {
-                    for j in 0..2 {
-                        avg[i][j] += w * ends[ei][a][i][j];
+            NodeKind::Corner(pair) => {
+                let fit = corner_fit(body, field, pair);
+                for (ei, a) in pair {
+                    let e = &body.elements[ei];
+                    let t = field.t[ei][a];
+                    let s = e.tangent;
+                    let ss = dot(s, [dot(fit[0], s), dot(fit[1], s)]);
+                    ends[ei][a] = from_local(s, e.normal, ss, dot(t, e.normal), dot(t, s));
+                }
+            }
+            NodeKind::Other(_) => {}
+        }
+    }
+    ends
+}
+
+fn corner_fit(body: &Body, field: &BodyField, pair: [(usize, usize); 2]) -> Mat2 {
+    let data = pair.map(|(ei, a)| (body.elements[ei].normal, field.t[ei][a]));
+    traction_fit(&data)
+}
+
+/// The stress at each boundary node (body-local numbering).
+///
+/// * Where the boundary turns by less than [`CORNER_ANGLE`]: the average of the two
+///   element-end stresses of [`smoothed_boundary_stress`], which share the second-order
+///   tangential strain; with continuous traction this is the recovery formula with that strain.
+/// * At a corner (turning angle of at least [`CORNER_ANGLE`]): the two tractions `σn₁ = t₁`
+///   and `σn₂ = t₂` determine the whole symmetric tensor, which is their least-squares fit
+///   (four equations, three unknowns). It uses only nodal traction values, no one-sided
+///   strain, and is exact whenever the tractions are. At a traction-free convex corner it
+///   gives σ = 0, as it must; where the stress is singular (re-entrant corners, ends of a
+///   clamp) no nodal value is meaningful and the fit is a compromise between the two sides.
+/// * Elsewhere (loops touching at a node): the average of the plain recovered stresses.
+pub fn nodal_boundary_stress(body: &Body, material: &Material, field: &BodyField) -> Vec<Mat2> {
+    let ends = smoothed_boundary_stress(body, material, field);
+    node_kinds(body)
+        .into_iter()
+        .map(|kind| match kind {
+            NodeKind::Corner(pair) => corner_fit(body, field, pair),
+            NodeKind::Smooth(pair) => {
+                let [(e1, a1), (e2, a2)] = pair;
+                lerp_mat(&ends[e1][a1], &ends[e2][a2], 0.5)
+            }
+            NodeKind::Other(list) => {
+                let mut avg = [[0.0; 2]; 2];
+                let w = 1.0 / list.len().max(1) as f64;
+                for &(ei, a) in &list {
+                    for i in 0..2 {
+                        for j in 0..2 {
+                            avg[i][j] += w * ends[ei][a][i][j];
+                        }
                     }
                 }
+                avg
             }
-            avg
         })
         .collect()
 }

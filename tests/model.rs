@@ -3,9 +3,9 @@
 
 mod support;
 
-use support::*;
 use sgbem::model::{DofClass, Model, Role};
 use sgbem::pipeline::load;
+use support::*;
 
 fn load_geo(
     geo: &str,

@@ -1,0 +1,55 @@
+//! CSV tables: one row per interface pair (final state), one row per section point.
+
+use std::fmt::Write;
+
+use crate::model::Interface;
+use crate::solution::{InterfaceResult, PairStatus};
+
+/// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:
+/// tractions on the first body (tension positive); the opening is the current normal
+/// distance `gap + n·(u_B − u_A)`; the slip `s·(u_B − u_A)`.
+pub fn interface_table(it: &Interface, r: &InterfaceResult) -> String {
+    let mut o = String::from(
+        "x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap\n",
+    );
+    for (p, q) in it.pairs.iter().zip(&r.pairs) {
+        let status = match q.status {
+            PairStatus::Closed => "closed",
+            PairStatus::Open => "open",
+        };
+        let opening = match q.status {
+            PairStatus::Closed => 0.0,
+            PairStatus::Open => p.gap + q.jump[1],
+        };
+        let slip = q.jump[0];
+        let _ = writeln!(
+            o,
+            "{:e},{:e},{:e},{status},{:e},{:e},{:e},{:e},{:e}",
+            p.x[0], p.x[1], p.s, q.traction[1], q.traction[0], opening, slip, p.gap
+        );
+    }
+    o
+}
+
+/// One sampled point: position, displacement, stress (xx, yy, xy); `None` outside the bodies.
+pub type SectionRow = ([f64; 2], Option<([f64; 2], [f64; 3])>);
+
+/// `x,y,ux,uy,sxx,syy,sxy`; points outside every body get `nan`.
+pub fn section_table(rows: &[SectionRow]) -> String {
+    let mut o = String::from("x,y,ux,uy,sxx,syy,sxy\n");
+    for (x, v) in rows {
+        match v {
+            Some((u, s)) => {
+                let _ = writeln!(
+                    o,
+                    "{:e},{:e},{:e},{:e},{:e},{:e},{:e}",
+                    x[0], x[1], u[0], u[1], s[0], s[1], s[2]
+                );
+            }
+            None => {
+                let _ = writeln!(o, "{:e},{:e},nan,nan,nan,nan,nan", x[0], x[1]);
+            }
+        }
+    }
+    o
+}

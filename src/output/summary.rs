@@ -1,0 +1,58 @@
+//! `summary.json`: the headline results of a run (SPEC.md "Outputs").
+
+use serde_json::{json, Map, Value};
+
+use crate::model::Interface;
+use crate::solution::{InterfaceResult, PairStatus};
+
+/// Per-interface figures: detached and closed lengths, open pairs, resultants, extreme
+/// normal tractions (tension positive; resultants times the thickness).
+pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) -> Value {
+    let mut detached = 0.0;
+    let mut closed = 0.0;
+    let mut normal = 0.0;
+    let mut tangential = 0.0;
+    for (ie, e) in it.elements.iter().enumerate() {
+        let _ = ie;
+        let [j, k] = e.pairs;
+        let l = (0..2)
+            .map(|c| it.pairs[k].x[c] - it.pairs[j].x[c])
+            .map(|d| d * d)
+            .sum::<f64>()
+            .sqrt();
+        let (sj, sk) = (r.pairs[j].status, r.pairs[k].status);
+        if sj == PairStatus::Open && sk == PairStatus::Open {
+            detached += l;
+        }
+        if sj == PairStatus::Closed && sk == PairStatus::Closed {
+            closed += l;
+        }
+        normal += 0.5 * l * (r.pairs[j].traction[1] + r.pairs[k].traction[1]);
+        tangential += 0.5 * l * (r.pairs[j].traction[0] + r.pairs[k].traction[0]);
+    }
+    let tn: Vec<f64> = r.pairs.iter().map(|p| p.traction[1]).collect();
+    let open = r
+        .pairs
+        .iter()
+        .filter(|p| p.status == PairStatus::Open)
+        .count();
+    json!({
+        "detached_length": detached,
+        "closed_length": closed,
+        "open_pairs": open,
+        "pairs": it.pairs.len(),
+        "normal_resultant": normal * thickness,
+        "tangential_resultant": tangential * thickness,
+        "max_normal_traction": tn.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        "min_normal_traction": tn.iter().copied().fold(f64::INFINITY, f64::min),
+    })
+}
+
+/// Builds the `interfaces` object.
+pub fn interfaces(its: &[Interface], results: &[InterfaceResult], thickness: f64) -> Value {
+    let mut m = Map::new();
+    for (it, r) in its.iter().zip(results) {
+        m.insert(it.spec.name.clone(), interface_figures(it, r, thickness));
+    }
+    Value::Object(m)
+}
