@@ -119,6 +119,15 @@ fn binary_and_ascii_fixtures_agree() {
 }
 
 #[test]
+fn binary_parametric_coordinates_are_skipped() {
+    // Same mesh saved with Mesh.SaveParametric = 1: u after the curve nodes, u v after
+    // the surface nodes.
+    let plain = read_msh(&fixture("two_squares_binary.msh")).unwrap();
+    let parametric = read_msh(&fixture("two_squares_param_binary.msh")).unwrap();
+    assert_eq!(parametric, plain);
+}
+
+#[test]
 fn missing_file_is_an_io_error() {
     let err = read_msh(Path::new("tests/fixtures/no_such_file.msh")).unwrap_err();
     assert_eq!(err.exit_code(), 1);
@@ -126,7 +135,8 @@ fn missing_file_is_an_io_error() {
 
 #[test]
 fn every_truncation_of_the_fixtures_is_an_error() {
-    for bytes in [ascii_bytes(), binary_bytes()] {
+    let parametric = std::fs::read(fixture("two_squares_param_binary.msh")).unwrap();
+    for bytes in [ascii_bytes(), binary_bytes(), parametric] {
         // Dropping only the final newline leaves a complete file.
         for cut in 0..bytes.len() - 1 {
             match parse_no_panic(&bytes[..cut]) {
