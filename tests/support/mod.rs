@@ -94,7 +94,11 @@ impl Msh {
         let mut ids = Vec::new();
         for k in 0..=n {
             let t = k as f64 / n as f64;
-            let p = [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])];
+            let p = if k == n {
+                b
+            } else {
+                [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
+            };
             ids.push(if k == 0 || k == n {
                 self.node(p)
             } else {
