@@ -481,20 +481,22 @@ pub fn body_segment(body: &Body, ei: usize) -> Segment {
     Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
 }
 
-/// Centre and diagonal of a body's bounding box: the scaled coordinates `(x − c)/L` put the
-/// body inside a disk of radius 1/2, below every degenerate scale (formulation §8.4).
+/// Centre and length of the scaled coordinates `(x − c)/L`: c is the centroid of the
+/// boundary nodes and L twice the largest distance from it, so the scaled body lies in a
+/// disk of radius 1/2, below every degenerate scale (formulation §8.4). Both follow rotations,
+/// translations and rescalings of the body exactly, so results do too.
 pub fn scaling(body: &Body) -> ([f64; 2], f64) {
-    let mut lo = [f64::INFINITY; 2];
-    let mut hi = [f64::NEG_INFINITY; 2];
-    for p in &body.nodes {
-        for k in 0..2 {
-            lo[k] = lo[k].min(p[k]);
-            hi[k] = hi[k].max(p[k]);
-        }
-    }
-    let centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
-    let length = (hi[0] - lo[0]).hypot(hi[1] - lo[1]);
-    (centre, length)
+    let n = body.nodes.len().max(1) as f64;
+    let c = [
+        body.nodes.iter().map(|p| p[0]).sum::<f64>() / n,
+        body.nodes.iter().map(|p| p[1]).sum::<f64>() / n,
+    ];
+    let r = body
+        .nodes
+        .iter()
+        .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
+        .fold(0.0, f64::max);
+    (c, 2.0 * r)
 }
 
 fn scale4(b: &[[[[f64; 2]; 2]; 2]; 2], s: f64) -> [[[[f64; 2]; 2]; 2]; 2] {

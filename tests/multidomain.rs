@@ -426,3 +426,97 @@ fn bonded_cut_reproduces_the_uncut_body() {
     // Measured 1.5e-3, 4.2e-4, 1.1e-4 (rate 1.90).
     assert!(d32 < 2e-4, "{d32:e}");
 }
+
+/// Rotating, translating and rescaling a scene (geometry and loads, the loads given in the
+/// local normal/tangential frame) transforms the results accordingly: interface tractions
+/// unchanged, displacements rotated and scaled with the lengths (≤ 1e-8 relative).
+#[test]
+fn results_follow_rotation_translation_and_scaling() {
+    let build = |s: f64, theta: f64, c: [f64; 2]| -> Msh {
+        let mut m = Msh::default();
+        let n = 8;
+        m.line(1, [0.0, 0.0], [1.0, 0.0], n, &[1]);
+        m.line(2, [1.0, 0.0], [1.0, 0.5], n / 2, &[2]);
+        m.line(3, [1.0, 0.5], [0.0, 0.5], n, &[3]);
+        m.line(4, [0.0, 0.5], [0.0, 0.0], n / 2, &[2]);
+        m.line(5, [1.0, 0.5], [1.0, 1.0], n / 2, &[2]);
+        m.line(6, [1.0, 1.0], [0.5, 1.0], n / 2, &[4]);
+        m.line(8, [0.5, 1.0], [0.0, 1.0], n / 2, &[5]);
+        m.line(7, [0.0, 1.0], [0.0, 0.5], n / 2, &[2]);
+        m.surface(1, &[1, 2, 3, 4], &[1]);
+        m.surface(2, &[-3, 5, 6, 8, 7], &[2]);
+        for (t, name) in [
+            (1, "base"),
+            (2, "sides"),
+            (3, "joint"),
+            (4, "top_a"),
+            (5, "top_b"),
+        ] {
+            m.name(1, t, name);
+        }
+        m.name(2, 1, "lower");
+        m.name(2, 2, "upper");
+        let (co, si) = (theta.cos(), theta.sin());
+        for p in m.nodes.iter_mut() {
+            *p = [
+                s * (co * p[0] - si * p[1]) + c[0],
+                s * (si * p[0] + co * p[1]) + c[1],
+            ];
+        }
+        m
+    };
+    let scene = "plane = \"strain\"\n[body.lower]\nyoung = 10.0\npoisson = 0.3\n[body.upper]\nyoung = 1.0\npoisson = 0.25\n\
+                 [boundary.base]\nun = 0.0\nut = 0.0\n[boundary.top_a]\ntn = -1.0\n[boundary.top_b]\ntn = -2.0\ntt = 0.5\n\
+                 [interface.joint]\nmodel = \"bonded\"\n";
+    let (l0, _, s0) = solve_scene(
+        &tmpdir("inv0"),
+        scene,
+        &build(1.0, 0.0, [0.0, 0.0]),
+        "standard",
+    );
+    for (s, theta, c) in [
+        (1.0, 0.7, [3.0, -2.0]),
+        (1000.0, -2.1, [1e4, -5e3]),
+        (1e-3, 0.3, [0.0, 0.0]),
+    ] {
+        let (l1, _, s1) = solve_scene(&tmpdir("inv1"), scene, &build(s, theta, c), "standard");
+        let (co, si) = (theta.cos(), theta.sin());
+        let (mut eu, mut su) = (0.0f64, 0.0f64);
+        for b in 0..2 {
+            for (k, x) in l0.model.bodies[b].nodes.iter().enumerate() {
+                let y = [
+                    s * (co * x[0] - si * x[1]) + c[0],
+                    s * (si * x[0] + co * x[1]) + c[1],
+                ];
+                let m = l1.model.bodies[b]
+                    .nodes
+                    .iter()
+                    .position(|z| {
+                        (z[0] - y[0]).abs() + (z[1] - y[1]).abs() < 1e-9 * s.max(c[0].abs())
+                    })
+                    .expect("node maps");
+                let u0 = s0.fields[b].u[k];
+                let expect = [s * (co * u0[0] - si * u0[1]), s * (si * u0[0] + co * u0[1])];
+                let u1 = s1.fields[b].u[m];
+                eu = eu
+                    .max((u1[0] - expect[0]).abs())
+                    .max((u1[1] - expect[1]).abs());
+                su = su.max(expect[0].abs()).max(expect[1].abs());
+            }
+        }
+        let (mut et, mut st) = (0.0f64, 0.0f64);
+        for (p0, p1) in s0.interfaces[0].pairs.iter().zip(&s1.interfaces[0].pairs) {
+            for k in 0..2 {
+                et = et.max((p0.traction[k] - p1.traction[k]).abs());
+                st = st.max(p0.traction[k].abs());
+            }
+        }
+        println!("scale {s:e}, rotation {theta}, shift {c:?}: displacement {:.1e}, interface traction {:.1e} (relative)", eu / su, et / st);
+        assert!(
+            eu < 1e-8 * su && et < 1e-8 * st,
+            "{:e} {:e}",
+            eu / su,
+            et / st
+        );
+    }
+}
