@@ -137,6 +137,21 @@ pub fn assemble_body(
     load_factor: f64,
     scene_file: &std::path::Path,
 ) -> Result<BodySystem> {
+    let s = scaling(&model.bodies[bi]);
+    assemble_body_scaled(model, bi, plane, settings, load_factor, scene_file, s)
+}
+
+/// [`assemble_body`] with the integration coordinates `(x − centre)/length` given; the
+/// degenerate-scale test uses it to integrate a body at its physical size.
+pub fn assemble_body_scaled(
+    model: &Model,
+    bi: usize,
+    plane: Plane,
+    settings: &QuadratureSettings,
+    load_factor: f64,
+    scene_file: &std::path::Path,
+    (centre, length): ([f64; 2], f64),
+) -> Result<BodySystem> {
     let body = &model.bodies[bi];
     let mat = material(body, plane);
     let ne = body.elements.len();
@@ -330,7 +345,6 @@ pub fn assemble_body(
     }
 
     // --- Scaled geometry ----------------------------------------------------------------------
-    let (centre, length) = scaling(body);
     let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
     let elems: Vec<ElementRef> = body
         .elements
@@ -473,6 +487,43 @@ pub fn assemble_body(
         centre,
         length,
     })
+}
+
+/// Degenerate-scale detector (formulation §8.4, §7 item 15): the single-layer block V over
+/// the traction unknowns must be positive definite. Returns the smallest pivot of its
+/// Cholesky factor relative to the largest; an error when the factorisation fails.
+pub fn check_single_layer(sys: &BodySystem, body: &str) -> Result<f64> {
+    let idx: Vec<usize> = (0..sys.n())
+        .filter(|&i| sys.unknowns[i].is_traction())
+        .collect();
+    if idx.is_empty() {
+        return Ok(1.0);
+    }
+    let d: Vec<f64> = idx
+        .iter()
+        .map(|&i| sys.g[(i, i)].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    let v = Mat::<f64>::from_fn(idx.len(), idx.len(), |i, j| {
+        sys.g[(idx[i], idx[j])] / (d[i] * d[j])
+    });
+    let fail = || {
+        Error::numerical(format!(
+            "the single-layer operator of body \"{body}\" is not positive definite: the body's \
+             size meets a degenerate scale of the logarithmic kernel"
+        ))
+    };
+    let llt = v.llt(faer::Side::Lower).map_err(|_| fail())?;
+    let l = llt.L();
+    let (mut lo, mut hi) = (f64::INFINITY, 0.0f64);
+    for i in 0..idx.len() {
+        lo = lo.min(l[(i, i)].abs());
+        hi = hi.max(l[(i, i)].abs());
+    }
+    let ratio = lo / hi;
+    if ratio.is_nan() || ratio < 1e-7 {
+        return Err(fail());
+    }
+    Ok(ratio)
 }
 
 /// The physical segment of element `ei`.

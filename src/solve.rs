@@ -8,7 +8,7 @@
 
 use std::time::Instant;
 
-use crate::assembly::{assemble_body, BodySystem, Unknown};
+use crate::assembly::{assemble_body, check_single_layer, BodySystem, Unknown};
 use crate::condensation::{condense, Condensed};
 use crate::error::Result;
 use crate::interface::{self, Layout, X0Map};
@@ -43,6 +43,7 @@ pub fn prepare(
         progress(&format!("assembling body \"{}\"", body.name));
         let t0 = Instant::now();
         let sys = assemble_body(model, bi, plane, settings, load_factor, scene_file)?;
+        check_single_layer(&sys, &body.name)?;
         ta += t0.elapsed().as_secs_f64();
         progress(&format!("condensing body \"{}\"", body.name));
         let t1 = Instant::now();
