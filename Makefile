@@ -65,7 +65,10 @@ test: setup mesh
 	$(CARGO) build --release
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 
-examples accuracy bench report:
+bench:
+	$(CARGO) bench --bench stages
+
+examples accuracy report:
 	@echo "make $@: not available yet (the solver stages are still to come)"; exit 1
 
 clean:

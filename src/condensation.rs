@@ -90,21 +90,13 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
     }
     // Unscale: A⁻¹[A0 | L̂] = S · sol.
     let ainv = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| s[i] * sol[(i, j)]);
-    let mut d00 = Mat::<f64>::from_fn(nx0, nx0, |i, j| g[(nx + i, nx + j)]);
-    let mut z0: Vec<f64> = (0..nx0).map(|i| sys.load[nx + i]).collect();
-    // D00 −= A0ᵀ A⁻¹ A0; Z̄0 −= A0ᵀ A⁻¹ L̂.
-    for i in 0..nx0 {
-        for k in 0..nx {
-            let a0ki = g[(k, nx + i)];
-            if a0ki == 0.0 {
-                continue;
-            }
-            for j in 0..nx0 {
-                d00[(i, j)] -= a0ki * ainv[(k, j)];
-            }
-            z0[i] -= a0ki * ainv[(k, nx0)];
-        }
-    }
+    // [D00 | Z̄0] = [A00 | L̂0] − A0ᵀ A⁻¹ [A0 | L̂]  (one dense product).
+    let a0t = g.as_ref().submatrix(0, nx, nx, nx0).transpose();
+    let prod = a0t * ainv.as_ref();
+    let mut d00 = Mat::<f64>::from_fn(nx0, nx0, |i, j| g[(nx + i, nx + j)] - prod[(i, j)]);
+    let z0: Vec<f64> = (0..nx0)
+        .map(|i| sys.load[nx + i] - prod[(i, nx0)])
+        .collect();
     let mut max = 0.0f64;
     let mut diff = 0.0f64;
     for i in 0..nx0 {
