@@ -34,3 +34,27 @@ pub struct PairResult {
 pub struct InterfaceResult {
     pub pairs: Vec<PairResult>,
 }
+
+/// One row of the contact history: the state after one iteration of one load step.
+#[derive(Debug, Clone)]
+pub struct HistoryRow {
+    pub load_step: usize,
+    pub load_factor: f64,
+    /// Iteration within the load step (0: the initial status).
+    pub iteration: usize,
+    /// Which solver produced the row: "lcp" (evolutive), "active-set", "lemke", "qp".
+    pub solver: &'static str,
+    /// Per interface, per pair: status, normal traction (tension positive) and normal
+    /// opening (current normal distance, 0 where closed).
+    pub status: Vec<Vec<PairStatus>>,
+    pub normal_traction: Vec<Vec<f64>>,
+    pub normal_opening: Vec<Vec<f64>>,
+    /// Per interface: detached length (elements whose two ends are open).
+    pub detached_length: Vec<f64>,
+}
+
+/// The contact history of a run.
+#[derive(Debug, Clone, Default)]
+pub struct History {
+    pub rows: Vec<HistoryRow>,
+}
