@@ -8,30 +8,36 @@
 //!
 //! * **Boundary stress** (formulation §2.4, "Interior points"): at an element end the traction
 //!   gives `σ_nn = t_n`, `σ_ns = t_s`, and the tangential strain of the P1 displacement gives
-//!   `σ_ss = E'ε_ss + ν'σ_nn`, `ε_ss = du_s/ds` (constant on the element). With the effective
-//!   Poisson ratio ν of [`Material`] (ν̄ = ν/(1+ν) in plane stress) both planes read
-//!   `E' = 2μ/(1−ν)`, `ν' = ν/(1−ν)`: the plane-strain `E/(1−ν²)`, `ν/(1−ν)` and the
-//!   plane-stress `E`, `ν` of the formulation. [`boundary_stress`], [`nodal_boundary_stress`].
+//!   `σ_ss = E'ε_ss + ν'σ_nn`, `ε_ss = du_s/ds`. With the effective Poisson ratio ν of
+//!   [`Material`] (ν̄ = ν/(1+ν) in plane stress) both planes read `E' = 2μ/(1−ν)`,
+//!   `ν' = ν/(1−ν)`: the plane-strain `E/(1−ν²)`, `ν/(1−ν)` and the plane-stress `E`, `ν` of
+//!   the formulation. [`boundary_stress`] uses the element's own (one-sided, first-order)
+//!   strain; [`smoothed_boundary_stress`] and [`nodal_boundary_stress`] use the centred strain
+//!   at smooth nodes and a traction fit at corners (second order).
 //! * **Interior points**: the Somigliana identities [paper eqs. 1a,b] (formulation §2.1),
 //!   `u_i(x) = ∫ U_ik t_k − ∫ T_ik u_k + u^b_i` and `σ_ij(x) = ∫ Σ_ijk t_k − ∫ S_kij u_k + σ^b_ij`,
-//!   with the P1 boundary data and the exact body-force terms of formulation §4.1.
-//!   [`somigliana`], [`interior`].
-//! * **Near the boundary** (formulation §8.5) the identities are replaced by the boundary
-//!   values (linear displacement, recovered stress) along the nearest element, below
-//!   [`NEAR_BOUNDARY_FRACTION`] of its length.
-//! * **Points in a model**: which body contains a point (winding number), then the interior
-//!   field, in parallel: [`evaluate_points`], [`field_at_nodes`], [`section_points`].
+//!   with the P1 boundary data and the exact body-force terms `u^b`, `σ^b` of formulation §4.1.
+//!   [`somigliana`] evaluates them as they are.
+//! * **Near the boundary** (formulation §8.5) the identities with P1 data are only first order
+//!   within about half an element of the boundary, and their error grows like `log(L/d)`
+//!   towards nodes and corners, where the data have kinks (measured in tests/postprocess.rs).
+//!   [`interior`] therefore interpolates across a layer of [`BOUNDARY_LAYER`] element lengths,
+//!   along the ray from the nearest boundary point (or corner) through x, between the boundary
+//!   value and the identities at the far end of the ray, and keeps second order up to the
+//!   boundary.
+//! * **Points in a model**: which body contains a point (winding number), then [`interior`],
+//!   in parallel: [`evaluate_points`], [`field_at_nodes`], [`section_points`].
 //! * **Invariants**: [`out_of_plane_stress`], [`von_mises`], [`principal_stresses`].
 //!
 //! **Scaled coordinates.** The boundary operators of a body are integrated in the scaled
 //! coordinates `x' = (x − c)/L` of [`crate::assembly::scaling`] (formulation §8.4), which
 //! amounts to the single-layer kernel `U + const·I`. The interior identities use the same
-//! coordinates so that interior and boundary results belong to the same discrete solution;
-//! back in physical units the single-layer displacement integrals carry a factor L, the
-//! double layer 1, the stress single layer 1, the stress double layer 1/L, and the body-force
-//! terms `u^b` and `σ^b` the factors L² and L (the kernels are homogeneous of degree
-//! 0 (up to the constant), −1 and −2 in r). For equilibrated data the constant drops out and
-//! the identities are the physical ones.
+//! coordinates, so that interior values belong to the same discrete solution as the boundary
+//! values. Back in physical units the single-layer displacement integrals carry a factor L,
+//! the double layer 1, the stress single layer 1, the stress double layer 1/L, and the
+//! body-force terms `u^b` and `σ^b` the factors L² and L. For data in equilibrium
+//! (`∮t ds + b|Ω| = 0`) the constants of the single layer and of `u^b` cancel and the result
+//! is the physical identity.
 
 // Index loops mirror the component formulas (δ_ik, r̂_i r̂_k, …) and read better than iterators.
 #![allow(clippy::needless_range_loop)]
@@ -48,21 +54,29 @@ use crate::quadrature::QuadratureSettings;
 use crate::scene::Plane;
 use crate::solution::BodyField;
 
-/// Points closer to the boundary than this fraction of the nearest element's length take the
-/// boundary values instead of the Somigliana identities (formulation §8.5).
+/// Thickness of the boundary layer of [`interior`], as a fraction of the nearest element's
+/// length: 0.5.
 ///
-/// Why 1e-3: with exact P1 data of a linear field the identities lose about `ε·(L/d)²` to
-/// rounding in the stress double layer, measured 1e-14 at d = 1e-2·L, 4e-13 at 1e-3·L and
-/// 4e-11 at 1e-4·L (relative to the stress), so down to 1e-3·L the identities are as exact as
-/// far away (tests/postprocess.rs). For a field that P1 does not represent, the identity
-/// error grows only slowly (logarithmically) towards the boundary and is, at d = 1e-3·L, of
-/// the same size as the error of the recovered boundary stress, so the switch does not
-/// introduce a visible jump.
+/// Measured on the Kelvin field of tests/postprocess.rs (8 to 64 elements per side), the raw
+/// identities are still second order at half an element from the boundary and lose it
+/// closer in; layers of 0.5 and 1.0 element lengths gave the same worst errors within 30%,
+/// and the thinner one the smaller at coarse meshes.
+pub const BOUNDARY_LAYER: f64 = 0.5;
+
+/// Fallback only: where no ray of the boundary layer stays clear of the boundary (thin parts,
+/// points outside within [`ON_BOUNDARY_TOLERANCE`]), points closer to the boundary than this
+/// fraction of the nearest element's length take the boundary values instead of the raw
+/// identities.
+///
+/// Why 1e-3: with exact P1 data of a linear field the raw identities lose about `ε·(L/d)²`
+/// to rounding, measured 4e-13 at d = 1e-2·L, 3e-11 at 1e-3·L, 5e-10 at 1e-4·L and 1e-5 at
+/// 1e-6·L (relative to the stress). Down to 1e-3·L the rounding stays far below any
+/// discretisation error.
 pub const NEAR_BOUNDARY_FRACTION: f64 = 1e-3;
 
-/// A point within this fraction of the body's scaling length (the diagonal of its bounding
-/// box) of the boundary is on the boundary: it belongs to the body (in [`locate`]) and takes
-/// the boundary values (in [`interior`]) whatever the element lengths.
+/// A point within this fraction of the body's scaling length ([`scaling`]: twice the largest
+/// distance of a boundary node from their centroid) of the boundary is on the boundary: it
+/// belongs to the body in [`locate`].
 pub const ON_BOUNDARY_TOLERANCE: f64 = 1e-9;
 
 /// Turning angle at a node above which the nodal stress is fitted to the tractions of both
@@ -372,7 +386,11 @@ struct Prepared<'a> {
     segments: Vec<Segment>,
     scaled: Vec<Segment>,
     scaled_area: f64,
+    /// [`smoothed_boundary_stress`] and [`nodal_boundary_stress`].
     ends: Vec<[Mat2; 2]>,
+    nodal: Vec<Mat2>,
+    /// For corner nodes, the shorter length of the two elements meeting there.
+    corner_layer: Vec<Option<f64>>,
 }
 
 impl<'a> Prepared<'a> {
@@ -407,7 +425,17 @@ impl<'a> Prepared<'a> {
             segments,
             scaled,
             scaled_area,
-            ends: boundary_stress(body, material, field),
+            ends: smoothed_boundary_stress(body, material, field),
+            nodal: nodal_boundary_stress(body, material, field),
+            corner_layer: node_kinds(body)
+                .into_iter()
+                .map(|k| match k {
+                    NodeKind::Corner([(e1, _), (e2, _)]) => {
+                        Some(body.elements[e1].length.min(body.elements[e2].length))
+                    }
+                    _ => None,
+                })
+                .collect(),
         }
     }
 
@@ -470,8 +498,8 @@ impl<'a> Prepared<'a> {
         best
     }
 
-    /// Boundary values at parameter ξ of element `ei`: linear displacement, recovered stress
-    /// interpolated between the element ends.
+    /// Boundary values at parameter ξ of element `ei`: linear displacement, smoothed
+    /// recovered stress interpolated between the element ends.
     fn boundary_value(&self, ei: usize, xi: f64) -> (Vec2, Mat2) {
         let nodes = self.body.elements[ei].nodes;
         let u = lerp2(self.field.u[nodes[0]], self.field.u[nodes[1]], xi);
@@ -479,21 +507,74 @@ impl<'a> Prepared<'a> {
         (u, s)
     }
 
-    /// Interior value with the near-boundary switch.
+    /// See [`interior`].
     fn interior(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
         let (ei, d, xi) = self.nearest(x);
-        let band = (NEAR_BOUNDARY_FRACTION * self.body.elements[ei].length)
-            .max(ON_BOUNDARY_TOLERANCE * self.length);
-        if d < band {
+        let le = self.body.elements[ei].length;
+        let layer = BOUNDARY_LAYER;
+        let rho = layer * le;
+        if d >= rho {
+            return self.somigliana(settings, x);
+        }
+        if d == 0.0 {
+            return self.boundary_value(ei, xi);
+        }
+        // Rays from the boundary through x: (value at the base point, distance r of x from
+        // it, layer thickness ρ, base point). The far point of a ray is at distance ρ.
+        let foot = self.segments[ei].point(xi);
+        let mut rays = vec![(self.boundary_value(ei, xi), d, rho, foot)];
+        for a in 0..2 {
+            let node = self.body.elements[ei].nodes[a];
+            if let Some(rho_v) = self.corner_layer[node] {
+                let v = self.body.nodes[node];
+                let r = (x[0] - v[0]).hypot(x[1] - v[1]);
+                if r < layer * rho_v && r > 0.0 {
+                    let base = (self.field.u[node], self.nodal[node]);
+                    rays.push((base, r, layer * rho_v, v));
+                }
+            }
+        }
+        let mut best: Option<(f64, usize, Vec2)> = None;
+        for (k, &(_, r, rho_k, base)) in rays.iter().enumerate() {
+            let x1 = [
+                base[0] + (x[0] - base[0]) * rho_k / r,
+                base[1] + (x[1] - base[1]) * rho_k / r,
+            ];
+            let c = self.clearance(x1);
+            if best.is_none_or(|(cb, _, _)| c > cb) {
+                best = Some((c, k, x1));
+            }
+        }
+        if let Some((c, k, x1)) = best {
+            if c > d {
+                let ((u0, s0), r, rho_k, _) = rays[k];
+                let w = r / rho_k;
+                let (u1, s1) = self.somigliana(settings, x1);
+                return (lerp2(u0, u1, w), lerp_mat(&s0, &s1, w));
+            }
+        }
+        let snap = (NEAR_BOUNDARY_FRACTION * le).max(ON_BOUNDARY_TOLERANCE * self.length);
+        if d < snap {
             self.boundary_value(ei, xi)
         } else {
             self.somigliana(settings, x)
         }
     }
+
+    /// Distance from x to the boundary if x is inside the body, else 0.
+    fn clearance(&self, x: Vec2) -> f64 {
+        if winding_number(self.body, x) == 0 {
+            return 0.0;
+        }
+        self.segments
+            .iter()
+            .map(|seg| seg.distance_to_point(x))
+            .fold(f64::INFINITY, f64::min)
+    }
 }
 
 /// Displacement and stress at x by the Somigliana identities [paper eqs. 1a,b] alone, without
-/// the near-boundary switch of [`interior`]. `scaling` is [`crate::assembly::scaling`] of the
+/// the boundary layer of [`interior`]. `scaling` is [`crate::assembly::scaling`] of the
 /// body, `body_force` the body force already multiplied by the load factor. The point must lie
 /// inside the body and off its boundary; the stress loses about `ε·(L/d)²` to rounding at a
 /// distance d from an element of length L.
@@ -509,12 +590,25 @@ pub fn somigliana(
     Prepared::new(body, material, field, scaling, body_force).somigliana(settings, x)
 }
 
-/// Displacement and stress at a point x of the body (inside it or on its boundary):
-/// the Somigliana identities ([`somigliana`]), except within [`NEAR_BOUNDARY_FRACTION`] of
-/// the nearest element's length (or [`ON_BOUNDARY_TOLERANCE`] of the body size) from the
-/// boundary, where x takes the boundary values at its projection on that element: the linear
-/// displacement and the recovered stress ([`boundary_stress`]) interpolated between the
-/// element ends (formulation §8.5). For a point outside the body the result is meaningless;
+/// Displacement and stress at a point x of the body (inside it or on its boundary).
+///
+/// * At least [`BOUNDARY_LAYER`]·L_e from the boundary (L_e the length of the nearest
+///   element): the Somigliana identities ([`somigliana`]).
+/// * On the boundary: the boundary values at x, i.e. the linear displacement and the
+///   [`smoothed_boundary_stress`] interpolated along the element.
+/// * In between (formulation §8.5): linear interpolation along a ray from the boundary
+///   through x, between the boundary value at its base (the nearest boundary point, or a
+///   corner node within the layer, with the [`nodal_boundary_stress`] there) and the
+///   identities at distance ρ = [`BOUNDARY_LAYER`]·L_e along the ray. Of these rays the one
+///   whose far point is clearest of the boundary is used. Exact for linear fields; second
+///   order up to the boundary for smooth fields (the raw identities are first order there,
+///   with a `log(L_e/d)` growth next to nodes).
+/// * If no ray's far point is farther from the boundary than x itself (thin parts, points
+///   just outside): the raw identities, or the boundary values closer than
+///   [`NEAR_BOUNDARY_FRACTION`]·L_e.
+///
+/// `scaling` is [`crate::assembly::scaling`] of the body, `body_force` the body force already
+/// multiplied by the load factor. For a point outside the body the result is meaningless;
 /// [`evaluate_points`] locates points first.
 pub fn interior(
     body: &Body,
@@ -588,19 +682,22 @@ pub fn boundary_distance(body: &Body, x: Vec2) -> f64 {
         .fold(f64::INFINITY, f64::min)
 }
 
+/// True when x is inside `body` or within [`ON_BOUNDARY_TOLERANCE`]·L of its boundary, with
+/// `(c, L)` its [`scaling`].
+fn contains(body: &Body, (c, l): (Vec2, f64), x: Vec2) -> bool {
+    let tol = ON_BOUNDARY_TOLERANCE * l;
+    // Every boundary node lies within L/2 of c, hence so does the body.
+    if (x[0] - c[0]).hypot(x[1] - c[1]) > 0.5 * l + tol {
+        return false;
+    }
+    winding_number(body, x) != 0 || boundary_distance(body, x) <= tol
+}
+
 /// Index of the first body that contains x: inside by [`winding_number`], or on its boundary
 /// within [`ON_BOUNDARY_TOLERANCE`] of the body size. A point on an interface shared by two
 /// bodies therefore belongs to the one that comes first in `bodies`.
 pub fn locate(bodies: &[&Body], x: Vec2) -> Option<usize> {
-    bodies.iter().position(|b| {
-        let (c, l) = scaling(b);
-        let tol = ON_BOUNDARY_TOLERANCE * l;
-        // Bounding-box rejection: the box is [c − half extents] and the diagonal bounds both.
-        if (x[0] - c[0]).abs() > 0.5 * l + tol || (x[1] - c[1]).abs() > 0.5 * l + tol {
-            return false;
-        }
-        winding_number(b, x) != 0 || boundary_distance(b, x) <= tol
-    })
+    bodies.iter().position(|b| contains(b, scaling(b), x))
 }
 
 /// Displacement and stress at each point, with the index of the body containing it
@@ -612,11 +709,12 @@ pub fn evaluate_points(
     points: &[Vec2],
 ) -> Vec<Option<PointValue>> {
     let prepared: Vec<Prepared> = bodies.iter().map(|b| b.prepare()).collect();
-    let plain: Vec<&Body> = bodies.iter().map(|b| b.body).collect();
     points
         .par_iter()
         .map(|&x| {
-            let bi = locate(&plain, x)?;
+            let bi = prepared
+                .iter()
+                .position(|p| contains(p.body, (p.centre, p.length), x))?;
             let (u, sigma) = prepared[bi].interior(settings, x);
             Some(PointValue { body: bi, u, sigma })
         })
@@ -643,7 +741,7 @@ pub fn field_at_nodes(
     mesh_nodes: &[Vec2],
 ) -> Vec<NodeValue> {
     let prepared = input.prepare();
-    let nodal = nodal_boundary_stress(input.body, input.field, &prepared.ends);
+    let nodal = &prepared.nodal;
     let mut on_boundary: HashMap<usize, usize> = HashMap::new();
     for (n, &mn) in input.body.mesh_nodes.iter().enumerate() {
         on_boundary.entry(mn).or_insert(n);
