@@ -43,6 +43,9 @@ pub struct Layout {
     pub n: usize,
     /// Per body: (index in X0, index in Y, sign).
     pub select: Vec<Vec<(usize, usize, f64)>>,
+    /// Per body: (index in X0, constant) — the initial gap of a closed normal component:
+    /// in contact, `u_B·n = u_A·n − h`, so B's `−U_n` is `Y + h`.
+    pub offset: Vec<Vec<(usize, f64)>>,
 }
 
 /// Lookup table `(iface, pair, comp, traction) → X0 index` for one body.
@@ -80,6 +83,7 @@ impl X0Map {
 pub fn layout(model: &Model, maps: &[X0Map], status: &[Vec<[PairStatus; 2]>]) -> Result<Layout> {
     let mut slots = Vec::with_capacity(model.interfaces.len());
     let mut select: Vec<Vec<(usize, usize, f64)>> = vec![Vec::new(); model.bodies.len()];
+    let mut offset: Vec<Vec<(usize, f64)>> = vec![Vec::new(); model.bodies.len()];
     let mut n = 0;
     for (k, it) in model.interfaces.iter().enumerate() {
         let (ba, bb) = (it.body_a, it.body_b);
@@ -109,6 +113,10 @@ pub fn layout(model: &Model, maps: &[X0Map], status: &[Vec<[PairStatus; 2]>]) ->
                                 s.u = Some(n);
                                 select[ba].push((ua, n, 1.0));
                                 select[bb].push((ub, n, 1.0));
+                                let h = it.pairs[j].gap;
+                                if c == 1 && h != 0.0 {
+                                    offset[bb].push((ub, h));
+                                }
                                 n += 1;
                             }
                             (None, None) => {}
@@ -143,18 +151,36 @@ pub fn layout(model: &Model, maps: &[X0Map], status: &[Vec<[PairStatus; 2]>]) ->
         }
         slots.push(iface_slots);
     }
-    Ok(Layout { slots, n, select })
+    Ok(Layout {
+        slots,
+        n,
+        select,
+        offset,
+    })
 }
 
-/// K(status) and L(status).
+/// K(status) and L(status) (with the gap offsets: `L = Σ S_bᵀ (Z̄0_b + D00_b s_b)`).
 pub fn assemble(layout: &Layout, condensed: &[Condensed]) -> (Mat<f64>, Vec<f64>) {
+    assemble_scaled(layout, condensed, 1.0)
+}
+
+/// [`assemble`] with the loads Z̄0 multiplied by `factor` (the gap offsets are not loads).
+pub fn assemble_scaled(
+    layout: &Layout,
+    condensed: &[Condensed],
+    factor: f64,
+) -> (Mat<f64>, Vec<f64>) {
     let n = layout.n;
     let mut k = Mat::<f64>::zeros(n, n);
     let mut l = vec![0.0; n];
     for (b, sel) in layout.select.iter().enumerate() {
         let c = &condensed[b];
         for &(xi, yi, si) in sel {
-            l[yi] += si * c.z0[xi];
+            let shift: f64 = layout.offset[b]
+                .iter()
+                .map(|&(xo, h)| c.d00[(xi, xo)] * h)
+                .sum();
+            l[yi] += si * (factor * c.z0[xi] + shift);
             for &(xj, yj, sj) in sel {
                 k[(yi, yj)] += si * sj * c.d00[(xi, xj)];
             }
@@ -212,6 +238,9 @@ pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
     let mut x0 = vec![0.0; n_x0];
     for &(xi, yi, si) in &layout.select[b] {
         x0[xi] = si * y[yi];
+    }
+    for &(xi, h) in &layout.offset[b] {
+        x0[xi] += h;
     }
     x0
 }

@@ -8,6 +8,7 @@
 
 pub mod assembly;
 pub mod condensation;
+pub mod contact;
 pub mod error;
 pub mod expr;
 pub mod galerkin;

@@ -97,14 +97,186 @@ impl Timings {
     }
 }
 
+/// Everything a run computed, for the writers.
+pub struct RunResult {
+    pub status: String,
+    pub load_factor: f64,
+    pub fields: Vec<crate::solution::BodyField>,
+    pub interfaces: Vec<crate::solution::InterfaceResult>,
+    pub history: crate::solution::History,
+    pub states: Vec<crate::contact::RecordedState>,
+    pub contact: serde_json::Value,
+    pub qp: Option<serde_json::Value>,
+    pub notes: Vec<String>,
+    pub failure: Option<Error>,
+}
+
+/// The solve stages: assembly and condensation once, then the contact problem (or one
+/// linear solve) for each load step, each step starting from the previous state.
+pub fn solve_loaded(
+    loaded: &Loaded,
+    settings: &crate::quadrature::QuadratureSettings,
+    timings: &mut Timings,
+) -> Result<(crate::solve::Prepared, RunResult)> {
+    use crate::contact::{initial_cohesion, initial_status, solve_contact, Iteration};
+    use crate::plan::ContactProblem;
+    use crate::scene::Method;
+    use crate::solve::{prepare, solve_status_scaled};
+    use std::time::Instant;
+
+    let Loaded {
+        scene, model, plan, ..
+    } = loaded;
+    let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|_| {})?;
+    timings.add("assemble", prepared.assemble_seconds);
+    timings.add("condense", prepared.condense_seconds);
+    let factors = &scene.solve.load_factors;
+    let last = factors.len() - 1;
+    let mut notes = Vec::new();
+    let mut history = crate::solution::History::default();
+    let mut states = Vec::new();
+    let mut status = initial_status(model);
+    let mut cohesion = initial_cohesion(model);
+    let method = scene.solve.method;
+    let tol = scene.solve.tolerance;
+    let maxit = scene.solve.max_iterations;
+
+    if plan.problem == ContactProblem::None {
+        let t = Instant::now();
+        let sol = solve_status_scaled(model, &prepared, &status, factors[last])?;
+        timings.add("solve", t.elapsed().as_secs_f64());
+        let result = RunResult {
+            status: "solved".into(),
+            load_factor: factors[last],
+            fields: sol.fields,
+            interfaces: sol.interfaces,
+            history,
+            states,
+            contact: serde_json::json!({"solver": "linear (no unilateral interface)"}),
+            qp: None,
+            notes,
+            failure: None,
+        };
+        return Ok((prepared, result));
+    }
+
+    let run_lcp = matches!(method, Method::Lcp | Method::Both);
+    let mut iterations = 0;
+    let mut converged = true;
+    let mut failure = None;
+    let mut final_sol = None;
+    let mut residual = 0.0f64;
+    let mut solver = "lcp";
+    let mut active = Vec::new();
+    for (step, &f) in factors.iter().enumerate() {
+        if run_lcp {
+            let t = Instant::now();
+            let r = solve_contact(
+                model,
+                &prepared,
+                status.clone(),
+                cohesion.clone(),
+                Iteration::Evolutive,
+                tol,
+                maxit,
+                step,
+                f,
+                true,
+            )?;
+            timings.add("contact_lcp", t.elapsed().as_secs_f64());
+            // Cross-check: the active-set iteration from the same starting state.
+            let t = Instant::now();
+            let a = solve_contact(
+                model,
+                &prepared,
+                status.clone(),
+                cohesion.clone(),
+                Iteration::ActiveSet,
+                tol,
+                maxit,
+                step,
+                f,
+                false,
+            )?;
+            timings.add("contact_active_set", t.elapsed().as_secs_f64());
+            let differing: usize = a
+                .status
+                .iter()
+                .zip(&r.status)
+                .map(|(x, y)| x.iter().zip(y).filter(|(p, q)| p[1] != q[1]).count())
+                .sum();
+            active.push(serde_json::json!({
+                "load_step": step, "iterations": a.iterations, "converged": a.converged,
+                "differing_pairs": differing, "solver": a.solver,
+            }));
+            iterations += r.iterations;
+            residual = residual.max(r.residual);
+            notes.extend(r.notes.iter().cloned());
+            history.rows.extend(r.rows);
+            states.extend(r.states);
+            solver = r.solver;
+            if !r.converged {
+                converged = false;
+                failure = Some(crate::contact::not_converged(&ContactView {
+                    iterations: r.iterations,
+                    residual: r.residual,
+                    notes: &r.notes,
+                }));
+                final_sol = Some((f, r.solution));
+                break;
+            }
+            status = r.status;
+            cohesion = r.cohesion;
+            final_sol = Some((f, r.solution));
+        }
+    }
+    let contact = serde_json::json!({
+        "solver": solver,
+        "iterations": iterations,
+        "converged": converged,
+        "complementarity_residual": residual,
+        "load_steps": factors.len(),
+        "active_set": active,
+    });
+    let (load_factor, sol) = match final_sol {
+        Some(x) => x,
+        None => {
+            let f = factors[last];
+            (f, solve_status_scaled(model, &prepared, &status, f)?)
+        }
+    };
+    let result = RunResult {
+        status: if converged {
+            "converged".into()
+        } else {
+            "not converged".into()
+        },
+        load_factor,
+        fields: sol.fields,
+        interfaces: sol.interfaces,
+        history,
+        states,
+        contact,
+        qp: None,
+        notes,
+        failure,
+    };
+    Ok((prepared, result))
+}
+
+/// What [`crate::contact::not_converged`] needs.
+pub struct ContactView<'a> {
+    pub iterations: usize,
+    pub residual: f64,
+    pub notes: &'a [String],
+}
+
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::assembly::material;
     use crate::output::{csv, summary, write_atomic};
     use crate::postprocess::{evaluate_points, field_at_nodes, section_points, BodyInput};
     use crate::quadrature::QuadratureSettings;
-    use crate::scene::{InitialState, InterfaceModel};
-    use crate::solve::{all_closed, prepare, solve_status};
     use std::time::Instant;
 
     let mut timings = Timings::default();
@@ -117,48 +289,22 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         loaded.scene.output.directory = o.clone();
     }
     timings.add("read", t0.elapsed().as_secs_f64());
+    let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
+        .unwrap_or_else(QuadratureSettings::standard);
+    let (prepared, result) = solve_loaded(&loaded, &settings, &mut timings)?;
     let Loaded {
         scene, model, plan, ..
     } = &loaded;
     let out_dir = scene.output.directory.clone();
-    let mut notes = Vec::new();
-
-    for it in &model.interfaces {
-        if it.spec.model == InterfaceModel::Unilateral {
-            if it.spec.initial == InitialState::Open {
-                return Err(Error::io(
-                    &scene.path,
-                    format!(
-                        "interface \"{}\" starts open: the contact solver is not available in \
-                         this build",
-                        it.spec.name
-                    ),
-                ));
-            }
-            notes.push(format!(
-                "interface \"{}\" is unilateral but solved as bonded: the contact solver is not \
-                 available in this build",
-                it.spec.name
-            ));
-        }
-    }
-    let settings = QuadratureSettings::from_name(scene.solve.quadrature.name())
-        .unwrap_or_else(QuadratureSettings::standard);
-    let factor = scene.solve.load_factors.last().copied().unwrap_or(1.0);
-
-    let prepared = prepare(model, scene.plane, &settings, factor, &scene.path, &|_| {})?;
-    timings.add("assemble", prepared.assemble_seconds);
-    timings.add("condense", prepared.condense_seconds);
-    let t1 = Instant::now();
-    let sol = solve_status(model, &prepared, &all_closed(model))?;
-    timings.add("solve", t1.elapsed().as_secs_f64());
+    let factor = result.load_factor;
+    let mut notes = result.notes.clone();
 
     // Post-processing.
     let t2 = Instant::now();
     let inputs: Vec<BodyInput> = model
         .bodies
         .iter()
-        .zip(&sol.fields)
+        .zip(&result.fields)
         .map(|(b, f)| BodyInput {
             body: b,
             material: material(b, scene.plane),
@@ -201,7 +347,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 
     // Outputs.
     let t3 = Instant::now();
-    for (it, r) in model.interfaces.iter().zip(&sol.interfaces) {
+    for (it, r) in model.interfaces.iter().zip(&result.interfaces) {
         write_atomic(
             &out_dir
                 .join("interfaces")
@@ -227,11 +373,12 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         .iter()
         .map(|c| c.pivot_ratio)
         .fold(1.0, f64::min);
-    let summary = serde_json::json!({
+    let mut summary = serde_json::json!({
         "title": scene.title,
-        "status": "solved",
-        "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { "bonded (contact solver not available)" },
+        "status": result.status,
+        "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { scene.solve.method.name() },
         "effects": plan.effects,
+        "problem": format!("{:?}", plan.problem).to_lowercase(),
         "plane": match scene.plane { crate::scene::Plane::Strain => "strain", crate::scene::Plane::Stress => "stress" },
         "thickness": scene.thickness,
         "units": {"length": scene.units.length, "force": scene.units.force},
@@ -244,18 +391,24 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             "dofs": dofs,
             "field_nodes": field_nodes,
         },
-        "interfaces": summary::interfaces(&model.interfaces, &sol.interfaces, scene.thickness),
+        "interfaces": summary::interfaces(&model.interfaces, &result.interfaces, scene.thickness),
+        "contact": result.contact,
         "diagnostics": {
             "d00_asymmetry": asym,
             "min_pivot_ratio": pivot,
-            "interface_residual": sol.residual,
         },
         "notes": notes,
         "timings": timings.json(),
     });
+    if let Some(qp) = &result.qp {
+        summary["qp"] = qp.clone();
+    }
     let text = serde_json::to_string_pretty(&summary)
         .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
     write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    if let Some(f) = result.failure {
+        return Err(f);
+    }
     Ok(RunReport {
         out_dir,
         summary,

@@ -79,21 +79,33 @@ pub fn all_closed(model: &Model) -> Vec<Vec<[PairStatus; 2]>> {
         .collect()
 }
 
-/// Solves the interface system for `status` and recovers every body.
+/// Solves the interface system for `status` and recovers every body, for the loads of
+/// [`prepare`] (one load case).
 pub fn solve_status(
     model: &Model,
     prepared: &Prepared,
     status: &[Vec<[PairStatus; 2]>],
 ) -> Result<StatusSolution> {
+    solve_status_scaled(model, prepared, status, 1.0)
+}
+
+/// [`solve_status`] with every load of [`prepare`] multiplied by `factor` (the problem is
+/// linear in the loads for a fixed status; gaps are not loads and stay as they are).
+pub fn solve_status_scaled(
+    model: &Model,
+    prepared: &Prepared,
+    status: &[Vec<[PairStatus; 2]>],
+    factor: f64,
+) -> Result<StatusSolution> {
     let layout = interface::layout(model, &prepared.maps, status)?;
-    let (k, l) = interface::assemble(&layout, &prepared.condensed);
+    let (k, l) = interface::assemble_scaled(&layout, &prepared.condensed, factor);
     let (y, residual) = interface::solve(&k, &l, "interface")?;
     let mut fields = Vec::with_capacity(model.bodies.len());
     let mut x0s = Vec::with_capacity(model.bodies.len());
     for (b, sys) in prepared.systems.iter().enumerate() {
         let x0 = interface::body_x0(&layout, b, sys.n_x0(), &y);
-        let x = prepared.condensed[b].recover_x(&x0);
-        fields.push(body_field(model, b, sys, &x, &x0));
+        let x = prepared.condensed[b].recover_x_scaled(&x0, factor);
+        fields.push(body_field(model, b, sys, &x, &x0, factor));
         x0s.push(x0);
     }
     let interfaces = model
@@ -145,10 +157,25 @@ pub fn solve_status(
 }
 
 /// Nodal displacements and element-end tractions of a body from its unknowns.
-pub fn body_field(model: &Model, b: usize, sys: &BodySystem, x: &[f64], x0: &[f64]) -> BodyField {
+pub fn body_field(
+    model: &Model,
+    b: usize,
+    sys: &BodySystem,
+    x: &[f64],
+    x0: &[f64],
+    factor: f64,
+) -> BodyField {
     let body = &model.bodies[b];
-    let mut u = sys.known_u.clone();
-    let mut t = sys.known_t.clone();
+    let mut u: Vec<[f64; 2]> = sys
+        .known_u
+        .iter()
+        .map(|v| [factor * v[0], factor * v[1]])
+        .collect();
+    let mut t: Vec<[[f64; 2]; 2]> = sys
+        .known_t
+        .iter()
+        .map(|e| e.map(|v| [factor * v[0], factor * v[1]]))
+        .collect();
     let value = |i: usize| if i < sys.n_x { x[i] } else { x0[i - sys.n_x] };
     for (i, unk) in sys.unknowns.iter().enumerate() {
         let v = value(i);
