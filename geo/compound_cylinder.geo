@@ -1,7 +1,8 @@
 // Compound cylinder, quarter model: an inner ring 0.5 < r < 0.75 bonded to an outer ring
 // 0.75 < r < 1 along the arc r = c ("ring"), first quadrant (plane strain). The bore r = a
 // carries the internal pressure, the mantle r = b the exact radial displacement, the
-// straight edges lie on the symmetry axes.
+// straight edges lie on the symmetry axes (one Physical Curve per ring, so that a scene can
+// also load them with the exact tractions instead).
 // Elements per unit length on every curve:  gmsh -2 -setnumber n 32 ...
 DefineConstant[
   n = {16, Name "Parameters/elements per unit length"}
@@ -39,5 +40,6 @@ Physical Surface("inner") = {1};
 Physical Surface("outer") = {2};
 Physical Curve("bore") = {6};
 Physical Curve("mantle") = {3};
-Physical Curve("symmetry") = {1, 2, 4, 5};
+Physical Curve("symmetry_inner") = {1, 5};
+Physical Curve("symmetry_outer") = {2, 4};
 Physical Curve("ring") = {7};

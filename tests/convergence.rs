@@ -32,13 +32,46 @@ use sgbem::scene::{Condition, Frame};
 /// One refinement study.
 struct Study {
     exact: Box<dyn Exact>,
+    /// Boundaries of the pipeline's scene replaced in this study: (name, TOML table body).
+    overrides: &'static [(&'static str, &'static str)],
     /// Values of the geo parameter `n` (elements per unit length); h = 1/n.
     levels: &'static [u32],
     /// Points at least this far from every curve form the interior set.
     interior: f64,
-    /// Error ceilings at the finest level: interior u, interior σ, all u, all σ.
+    /// Theory's rate per set: interior u, interior σ, all u, all σ.
+    rates: [Rate; 4],
+    /// Error ceilings at the finest level, same order.
     ceilings: [f64; 4],
 }
+
+/// What theory says of a fitted rate; asserted with a tolerance of 0.3.
+#[derive(Debug, Clone, Copy)]
+enum Rate {
+    /// The error behaves as h^r.
+    Exactly(f64),
+    /// The error decreases at least as h^r (it may converge faster).
+    AtLeast(f64),
+}
+
+impl Rate {
+    fn admits(self, rate: f64) -> bool {
+        match self {
+            Rate::Exactly(r) => (rate - r).abs() <= 0.3,
+            Rate::AtLeast(r) => rate >= r - 0.3,
+        }
+    }
+}
+
+/// Formulation §7 item 14 for P1 elements: interior displacements and stresses O(h²)
+/// (geometry and boundary-data interpolation are O(h²) too, so no faster in general);
+/// near the boundary, displacements tend to the boundary displacement, O(h²) or better, and
+/// stresses to the boundary traction, O(h) to O(h^1.5), so only lower bounds there.
+const P1: [Rate; 4] = [
+    Rate::Exactly(2.0),
+    Rate::Exactly(2.0),
+    Rate::AtLeast(2.0),
+    Rate::AtLeast(1.0),
+];
 
 /// Section values at one point.
 #[derive(Debug, Clone, Copy)]
@@ -48,9 +81,10 @@ struct Sample {
     s: S3,
 }
 
-/// Relative errors of one level: interior u, interior σ, all u, all σ.
+/// Relative errors of one level (interior u, interior σ, all u, all σ), and where the
+/// largest stress error of all the points is.
 #[derive(Debug, Clone, Copy)]
-struct Errors([f64; 4]);
+struct Errors([f64; 4], P2);
 
 const SETS: [&str; 4] = ["interior u", "interior σ", "all u", "all σ"];
 
@@ -60,12 +94,24 @@ fn scene_path(name: &str) -> PathBuf {
         .join(format!("{name}.toml"))
 }
 
-/// The pipeline's scene without its mesh and output directory (given on the command line)
-/// and with only the outputs the study reads.
-fn trimmed_scene(name: &str, dir: &Path) -> (PathBuf, Vec<String>) {
+/// The pipeline's scene without its mesh and output directory (given on the command line),
+/// with only the outputs the study reads and the boundaries in `overrides` replaced.
+fn trimmed_scene(name: &str, dir: &Path, overrides: &[(&str, &str)]) -> (PathBuf, Vec<String>) {
     let text = std::fs::read_to_string(scene_path(name)).expect("read scene");
     let mut table: toml::Table = text.parse().expect("scene is TOML");
     table.remove("mesh");
+    for (boundary, body) in overrides {
+        let boundaries = table
+            .get_mut("boundary")
+            .and_then(|b| b.as_table_mut())
+            .expect("scene has boundaries");
+        assert!(
+            boundaries.contains_key(*boundary),
+            "{name}: no boundary {boundary}"
+        );
+        let replacement: toml::Table = body.parse().expect("override is TOML");
+        boundaries.insert(boundary.to_string(), replacement.into());
+    }
     let output = table
         .get_mut("output")
         .and_then(|o| o.as_table_mut())
@@ -138,6 +184,7 @@ fn errors(exact: &dyn Exact, samples: &[Sample], interior: f64) -> Errors {
         }
     }
     let mut e = [0.0f64; 4];
+    let mut worst = [f64::NAN; 2];
     for q in samples {
         let u = exact.displacement(q.p);
         let s = exact.stress(q.p);
@@ -150,13 +197,16 @@ fn errors(exact: &dyn Exact, samples: &[Sample], interior: f64) -> Errors {
             q.p
         );
         e[2] = e[2].max(eu);
-        e[3] = e[3].max(es);
+        if es > e[3] {
+            e[3] = es;
+            worst = q.p;
+        }
         if exact.distance_to_boundary(q.p) >= interior {
             e[0] = e[0].max(eu);
             e[1] = e[1].max(es);
         }
     }
-    Errors(e)
+    Errors(e, worst)
 }
 
 /// Least-squares slope of ln e against ln h.
@@ -225,12 +275,19 @@ fn headline(exact: &dyn Exact, sections: &BTreeMap<String, Vec<Sample>>) -> Stri
 
 fn run_study(study: &Study) {
     let name = study.exact.name();
-    let dir = support::tmpdir(&format!("convergence-{name}"));
-    let (scene, section_names) = trimmed_scene(name, &dir);
+    let tag = if study.overrides.is_empty() {
+        name.to_string()
+    } else {
+        format!("{name}-variant")
+    };
+    let dir = support::tmpdir(&format!("convergence-{tag}"));
+    let (scene, section_names) = trimmed_scene(name, &dir, study.overrides);
+    check_scene(study.exact.as_ref(), &scene);
     let geo = support::root().join("geo").join(format!("{name}.geo"));
     let mut hs = Vec::new();
     let mut errs: Vec<Errors> = Vec::new();
-    println!("{name}: {}", SETS.join(" | "));
+    // One report per study, printed at the end so that parallel studies do not interleave.
+    let mut report = format!("{tag}: {}\n", SETS.join(" | "));
     for &n in study.levels {
         let level = dir.join(format!("n{n}"));
         std::fs::create_dir_all(&level).unwrap();
@@ -268,12 +325,13 @@ fn run_study(study: &Study) {
             sections.insert(s.clone(), rows);
         }
         let e = errors(study.exact.as_ref(), &samples, study.interior);
-        println!(
-            "  n {n:4} ({elements} boundary elements, {seconds:.2} s): {:.3e} | {:.3e} | {:.3e} | {:.3e}   {}",
+        report += &format!(
+            "  n {n:4} ({elements} boundary elements, {seconds:.2} s): {:.3e} | {:.3e} | {:.3e} | {:.3e} (at {:.3?})   {}\n",
             e.0[0],
             e.0[1],
             e.0[2],
             e.0[3],
+            e.1,
             headline(study.exact.as_ref(), &sections)
         );
         hs.push(1.0 / n as f64);
@@ -286,22 +344,17 @@ fn run_study(study: &Study) {
         let pairwise: Vec<String> = (1..e.len())
             .map(|i| format!("{:.2}", (e[i - 1] / e[i]).ln() / (hs[i - 1] / hs[i]).ln()))
             .collect();
-        println!(
-            "  {set:10}: fitted rate {rate:.2} (pairwise {}), finest {:.3e} (ceiling {:.1e})",
+        report += &format!(
+            "  {set:10}: fitted rate {rate:.2} (pairwise {}), finest {:.3e} (ceiling {:.1e})\n",
             pairwise.join(", "),
             e[e.len() - 1],
             study.ceilings[k]
         );
-        // Theory (formulation §7 item 14): interior u and σ O(h²); near-boundary u O(h²)
-        // (the boundary displacement's rate), near-boundary σ between the boundary
-        // traction's O(h) and O(h²).
-        let (lo, hi) = match k {
-            0 | 1 => (1.7, 2.3),
-            2 => (1.7, f64::INFINITY),
-            _ => (0.7, f64::INFINITY),
-        };
-        if !(rate >= lo && rate <= hi) {
-            failures.push(format!("{set}: rate {rate:.2} outside [{lo}, {hi}]"));
+        if !study.rates[k].admits(rate) {
+            failures.push(format!(
+                "{set}: rate {rate:.2} does not fit theory ({:?} ± 0.3)",
+                study.rates[k]
+            ));
         }
         if e[e.len() - 1] > study.ceilings[k] {
             failures.push(format!(
@@ -311,61 +364,122 @@ fn run_study(study: &Study) {
             ));
         }
     }
-    assert!(failures.is_empty(), "{name}: {}", failures.join("; "));
+    print!("{report}");
+    assert!(failures.is_empty(), "{tag}: {}", failures.join("; "));
 }
 
+// Ceilings: the finest level's measured error (in the comment) times about 1.5.
+
 #[test]
-#[ignore = "needs `sgbem run` (the solver is still to come)"]
 fn lame_cylinder_converges() {
     run_study(&Study {
         exact: Box::new(exact::Lame::default()),
+        overrides: &[],
         levels: &[8, 16, 32, 64],
         interior: 0.1,
-        ceilings: [1.0, 1.0, 1.0, 1.0],
+        rates: P1,
+        // Measured at n = 64 (215 elements): 7.9e-5, 8.1e-5, 9.9e-5, 1.44e-4; fitted rates
+        // 2.01, 1.94, 2.25, 3.04.
+        ceilings: [1.2e-4, 1.2e-4, 1.5e-4, 2.2e-4],
     });
 }
 
 #[test]
-#[ignore = "needs `sgbem run` (the solver is still to come)"]
+#[ignore = "sgbem run refuses the pipeline as it stands (exit 2): at the ends of the curved \
+            interface, on the symmetry lines, the prescribed u_n is oblique to the chord frame \
+            of the interface pair (src/assembly.rs); compound_cylinder_traction_edges_converges \
+            runs the same benchmark without that conflict"]
 fn compound_cylinder_converges() {
     run_study(&Study {
         exact: Box::new(exact::Compound::default()),
-        levels: &[8, 16, 32, 64],
+        overrides: &[],
+        levels: &[16, 32, 64, 128],
         interior: 0.05,
-        ceilings: [1.0, 1.0, 1.0, 1.0],
+        rates: P1,
+        // Not measured (see the ignore reason): the ceilings of the traction-edge variant.
+        ceilings: COMPOUND_CEILINGS,
     });
 }
 
+/// The compound cylinder with the exact tractions (t_n = σ_θθ of each ring, t_t = 0) on the
+/// straight edges instead of the symmetry conditions: the same exact field, held by the
+/// mantle alone, with no displacement condition at the ends of the interface.
 #[test]
-#[ignore = "needs `sgbem run` (the solver is still to come)"]
+fn compound_cylinder_traction_edges_converges() {
+    run_study(&Study {
+        exact: Box::new(exact::Compound::default()),
+        overrides: &[
+            (
+                "symmetry_inner",
+                "tn = \"-5/23 + 225/92/(x^2+y^2)\"\ntt = 0.0",
+            ),
+            (
+                "symmetry_outer",
+                "tn = \"135/23*(1 + 1/(x^2+y^2))\"\ntt = 0.0",
+            ),
+        ],
+        levels: &[16, 32, 64, 128],
+        interior: 0.05,
+        rates: P1,
+        ceilings: COMPOUND_CEILINGS,
+    });
+}
+
+/// Measured on the traction-edge variant at n = 128 (732 elements, 316 in the inner ring):
+/// 2.17e-5, 1.48e-5, 3.17e-5, 1.33e-4; fitted rates 1.99, 2.03, 2.16, 2.14. (At n = 32 the
+/// near-boundary stress error is 7.6e-3, at r = 0.76, 0.0094 off the interface: a point
+/// closer than a third of an element.)
+const COMPOUND_CEILINGS: [f64; 4] = [3.3e-5, 2.2e-5, 4.8e-5, 2.0e-4];
+
+#[test]
 fn kirsch_plate_converges() {
     run_study(&Study {
         exact: Box::new(exact::Kirsch::default()),
+        overrides: &[],
         levels: &[6, 12, 24, 48],
         interior: 0.1,
-        ceilings: [1.0, 1.0, 1.0, 1.0],
+        rates: P1,
+        // Measured at n = 48 (298 elements): 1.83e-5, 8.5e-6, 3.41e-5, 1.22e-4; fitted rates
+        // 1.95, 1.95, 2.13, 2.37.
+        ceilings: [2.7e-5, 1.3e-5, 5.1e-5, 1.8e-4],
     });
 }
 
 #[test]
-#[ignore = "needs `sgbem run` (the solver is still to come)"]
 fn timoshenko_cantilever_converges() {
     run_study(&Study {
         exact: Box::new(exact::Cantilever::default()),
-        levels: &[10, 20, 40, 80],
+        // The beam is thin (depth 0.2): n = 20 puts 4 elements across it.
+        overrides: &[],
+        levels: &[20, 40, 80, 160],
         interior: 0.05,
-        ceilings: [1.0, 1.0, 1.0, 1.0],
+        rates: P1,
+        // Measured at n = 160 (384 elements): 9.2e-4, 5.4e-4, 9.8e-4, 9.8e-4; fitted rates
+        // 2.01, 2.01, 2.00, 2.02.
+        ceilings: [1.4e-3, 8.2e-4, 1.5e-3, 1.5e-3],
     });
 }
 
 #[test]
-#[ignore = "needs `sgbem run` (the solver is still to come)"]
 fn self_weight_column_converges() {
     run_study(&Study {
         exact: Box::new(exact::Column::default()),
+        overrides: &[],
         levels: &[8, 16, 32, 64],
         interior: 0.1,
-        ceilings: [1.0, 1.0, 1.0, 1.0],
+        // Interior stresses converge faster than O(h²) here (measured pairwise rates 3.41,
+        // 2.80, 2.74, and 2.73 to n = 128): the only data error, the P1 interpolation of
+        // u_y = … + 0.00195·x² on equal base elements, is to leading order a uniform shift,
+        // which carries no stress. Theory's O(h²) is then a lower bound.
+        rates: [
+            Rate::Exactly(2.0),
+            Rate::AtLeast(2.0),
+            Rate::AtLeast(2.0),
+            Rate::AtLeast(1.0),
+        ],
+        // Measured at n = 64 (192 elements): 1.82e-5, 4.5e-7, 1.86e-5, 7.0e-5; fitted rates
+        // 2.03, 2.97, 2.36, 1.59.
+        ceilings: [2.7e-5, 6.8e-7, 2.8e-5, 1.1e-4],
     });
 }
 
@@ -490,10 +604,17 @@ fn exact_compound_cylinder_is_continuous_at_the_interface() {
 #[test]
 fn scenes_pose_the_exact_problems() {
     for ex in exact::all() {
-        let ex = ex.as_ref();
+        check_scene(ex.as_ref(), &scene_path(ex.name()));
+    }
+}
+
+/// Checks that a scene poses the benchmark: plane, materials, body forces, and boundary
+/// data equal to the exact field on every curve (traction-free where the scene is silent).
+fn check_scene(ex: &dyn Exact, path: &Path) {
+    {
         let name = ex.name();
-        let scene = sgbem::scene::read_scene(&scene_path(name))
-            .unwrap_or_else(|e| panic!("{name}: scene does not read: {e}"));
+        let scene = sgbem::scene::read_scene(path)
+            .unwrap_or_else(|e| panic!("{name}: {} does not read: {e}", path.display()));
         let plane = match scene.plane {
             sgbem::scene::Plane::Strain => Plane::Strain,
             sgbem::scene::Plane::Stress => Plane::Stress,
@@ -561,8 +682,15 @@ fn scenes_pose_the_exact_problems() {
             for c in &pt.curves {
                 for k in 0..=40 {
                     let (p, n) = c.at(k as f64 / 40.0);
-                    // Evaluate the exact field a hair inside, off corners and curves.
-                    let q = [p[0] - 1e-12 * n[0], p[1] - 1e-12 * n[1]];
+                    // Evaluate the exact field a hair inside and towards the middle of the
+                    // curve, so that at a corner it is the field of this curve's body.
+                    let m = c.at(0.5).0;
+                    let (dx, dy) = (m[0] - p[0], m[1] - p[1]);
+                    let d = dx.hypot(dy).max(1e-300);
+                    let q = [
+                        p[0] - 1e-12 * n[0] + 1e-12 * dx / d,
+                        p[1] - 1e-12 * n[1] + 1e-12 * dy / d,
+                    ];
                     let u = ex.displacement(q);
                     let t = ex.traction(q, n);
                     let Some(spec) = spec else {
@@ -603,7 +731,10 @@ fn scenes_pose_the_exact_problems() {
                 b.name
             );
         }
-        println!("{name}: scene data = exact field (u scale {u_ref:.3e}, σ scale {s_ref:.3e})");
+        println!(
+            "{name}: {} data = exact field (u scale {u_ref:.3e}, σ scale {s_ref:.3e})",
+            path.display()
+        );
     }
 }
 
@@ -612,7 +743,7 @@ fn section_points_lie_inside_and_off_the_curves() {
     for ex in exact::all() {
         let ex = ex.as_ref();
         let dir = support::tmpdir(&format!("sections-{}", ex.name()));
-        let (path, names) = trimmed_scene(ex.name(), &dir);
+        let (path, names) = trimmed_scene(ex.name(), &dir, &[]);
         let scene = sgbem::scene::read_scene(&path).expect("trimmed scene reads");
         assert_eq!(scene.output.sections.len(), names.len());
         let mut near = f64::INFINITY;

@@ -357,12 +357,17 @@ impl Exact for Compound {
             part("bore", vec![Curve::Arc([0.0; 2], a, FRAC_PI_2, 0.0)]),
             part("mantle", vec![Curve::Arc([0.0; 2], b, 0.0, FRAC_PI_2)]),
             part(
-                "symmetry",
+                "symmetry_inner",
                 vec![
                     Curve::Segment([a, 0.0], [c, 0.0]),
+                    Curve::Segment([0.0, c], [0.0, a]),
+                ],
+            ),
+            part(
+                "symmetry_outer",
+                vec![
                     Curve::Segment([c, 0.0], [b, 0.0]),
                     Curve::Segment([0.0, b], [0.0, c]),
-                    Curve::Segment([0.0, c], [0.0, a]),
                 ],
             ),
             // Oriented for the inner ring, the first body of the interface.
