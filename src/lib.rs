@@ -20,6 +20,7 @@ pub mod output;
 pub mod pipeline;
 pub mod plan;
 pub mod postprocess;
+pub mod qp;
 pub mod quadrature;
 pub mod report;
 pub mod scene;
