@@ -61,6 +61,17 @@ pub enum Unknown {
         comp: usize,
         dir: [f64; 2],
     },
+    /// Amplitude of a traction distributed as a rigid motion over a whole loop (one mode
+    /// `[a, b, ω]`: `(a − ω(y−y_c)/L, b + ω(x−x_c)/L)`). Added where a loop's rigid motions
+    /// are not fixed by known or interface displacements (a hole with tractions only): the
+    /// hypersingular rows cannot see such a motion, so the displacement equation tested with
+    /// the mode is added with it. Its amplitude vanishes with the discretisation error.
+    LoopMode {
+        loop_index: usize,
+        mode: [f64; 3],
+        centre: [f64; 2],
+        length: f64,
+    },
     /// Displacement component of node `node` along `dir`; on an interface, its pair and
     /// local component.
     Displacement {
@@ -74,6 +85,92 @@ impl Unknown {
     pub fn is_traction(&self) -> bool {
         !matches!(self, Unknown::Displacement { .. })
     }
+
+    /// The value at x of a [`Unknown::LoopMode`] distribution ([0, 0] for other unknowns).
+    pub fn loop_mode_value(&self, x: [f64; 2]) -> [f64; 2] {
+        match *self {
+            Unknown::LoopMode {
+                mode,
+                centre,
+                length,
+                ..
+            } => [
+                mode[0] - mode[2] * (x[1] - centre[1]) / length,
+                mode[1] + mode[2] * (x[0] - centre[0]) / length,
+            ],
+            _ => [0.0, 0.0],
+        }
+    }
+}
+
+/// The rigid modes of each loop that its known and interface displacements leave free.
+fn loop_modes(body: &Body) -> Vec<Unknown> {
+    let mut out = Vec::new();
+    for (li, l) in body.loops.iter().enumerate() {
+        let nodes: Vec<usize> = l
+            .elements
+            .iter()
+            .map(|&e| body.elements[e].nodes[0])
+            .collect();
+        let n = nodes.len().max(1) as f64;
+        let centre = [
+            nodes.iter().map(|&k| body.nodes[k][0]).sum::<f64>() / n,
+            nodes.iter().map(|&k| body.nodes[k][1]).sum::<f64>() / n,
+        ];
+        let length = 2.0
+            * nodes
+                .iter()
+                .map(|&k| (body.nodes[k][0] - centre[0]).hypot(body.nodes[k][1] - centre[1]))
+                .fold(0.0, f64::max);
+        let mut basis: Vec<[f64; 3]> = Vec::new();
+        let add = |v: [f64; 3], basis: &mut Vec<[f64; 3]>| -> Option<[f64; 3]> {
+            let mut r = v;
+            for q in basis.iter() {
+                let p = r[0] * q[0] + r[1] * q[1] + r[2] * q[2];
+                for i in 0..3 {
+                    r[i] -= p * q[i];
+                }
+            }
+            let len = (r[0] * r[0] + r[1] * r[1] + r[2] * r[2]).sqrt();
+            if len > 1e-6 {
+                let u = [r[0] / len, r[1] / len, r[2] / len];
+                basis.push(u);
+                Some(u)
+            } else {
+                None
+            }
+        };
+        for &k in &nodes {
+            let d = body.dofs[k];
+            let x = body.nodes[k];
+            for c in 0..2 {
+                if d.class[c] == DofClass::Free {
+                    continue;
+                }
+                let dir = d.frame[c];
+                let row = [
+                    dir[0],
+                    dir[1],
+                    (-(x[1] - centre[1]) * dir[0] + (x[0] - centre[0]) * dir[1]) / length,
+                ];
+                add(row, &mut basis);
+            }
+        }
+        for e in [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]] {
+            if basis.len() == 3 {
+                break;
+            }
+            if let Some(mode) = add(e, &mut basis) {
+                out.push(Unknown::LoopMode {
+                    loop_index: li,
+                    mode,
+                    centre,
+                    length,
+                });
+            }
+        }
+    }
+    out
 }
 
 /// One unknown's shape function on one element: the end whose shape function it uses and
@@ -275,6 +372,7 @@ pub fn assemble_body_scaled(
             }
         }
     }
+    unknowns.extend(loop_modes(body));
     let n_x = unknowns.len();
     // F0: interface traction hats, both local components at every pair node of this body.
     let mut pairs_here: Vec<(usize, usize, usize)> = node_pair
@@ -305,6 +403,19 @@ pub fn assemble_body_scaled(
     }
     for (index, u) in unknowns.iter().enumerate() {
         match *u {
+            Unknown::LoopMode { loop_index, .. } => {
+                for &ei in &body.loops[loop_index].elements {
+                    for end in 0..2 {
+                        let dir = u.loop_mode_value(body.nodes[body.elements[ei].nodes[end]]);
+                        entries[ei].push(Entry {
+                            index,
+                            end,
+                            dir,
+                            traction: true,
+                        });
+                    }
+                }
+            }
             Unknown::Traction1 { elem, end, dir } => entries[elem].push(Entry {
                 index,
                 end,

@@ -185,6 +185,15 @@ pub fn body_field(
                 u[node][0] -= v * dir[0];
                 u[node][1] -= v * dir[1];
             }
+            Unknown::LoopMode { loop_index, .. } => {
+                for &ei in &body.loops[loop_index].elements {
+                    for end in 0..2 {
+                        let dir = unk.loop_mode_value(body.nodes[body.elements[ei].nodes[end]]);
+                        t[ei][end][0] += v * dir[0];
+                        t[ei][end][1] += v * dir[1];
+                    }
+                }
+            }
             Unknown::Traction1 { elem, end, dir } => {
                 t[elem][end][0] += v * dir[0];
                 t[elem][end][1] += v * dir[1];
