@@ -650,6 +650,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     for body in bodies.iter_mut() {
         body.dofs = node_dofs(body, &parts);
     }
+    align_pair_frames(&bodies, &mut interfaces);
     check_values(&bodies, &parts, sfile)?;
     check_held(&bodies, &interfaces, sfile, scale)?;
     let sizes = size_stats(&bodies);
@@ -1454,6 +1455,34 @@ fn node_dofs(body: &Body, parts: &[Part]) -> Vec<NodeDofs> {
         out.push(dofs);
     }
     out
+}
+
+/// Where an interface ends on a displacement condition that fixes one direction (a symmetry
+/// plane crossing a curved joint), the pair frame is turned onto that direction: the averaged
+/// normal of a chord differs from the plane's by half an element's angle, and the frame of a
+/// pair must contain the prescribed direction. Turns larger than 30° are left to the
+/// assembly, which reports an oblique condition.
+fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
+    let limit = 30f64.to_radians().cos();
+    for it in interfaces.iter_mut() {
+        let a = &bodies[it.body_a];
+        for p in it.pairs.iter_mut() {
+            let d = a.dofs[p.node_a];
+            let one_known = d.class[1] == DofClass::Known && d.class[0] != DofClass::Known;
+            if !one_known {
+                continue;
+            }
+            let k = d.frame[1];
+            let (cn, ct) = (dot(k, p.normal), dot(k, p.tangent));
+            if cn.abs() >= ct.abs() && cn.abs() >= limit {
+                p.normal = [k[0] * cn.signum(), k[1] * cn.signum()];
+                p.tangent = [-p.normal[1], p.normal[0]];
+            } else if ct.abs() > cn.abs() && ct.abs() >= limit {
+                p.tangent = [k[0] * ct.signum(), k[1] * ct.signum()];
+                p.normal = [p.tangent[1], -p.tangent[0]];
+            }
+        }
+    }
 }
 
 /// Prescribed values must be finite at every node of their part.
