@@ -5,7 +5,6 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use sgbem::error::Error;
 use sgbem::scene::Method;
 use sgbem::{pipeline, report};
 
@@ -107,14 +106,14 @@ fn main() -> ExitCode {
                 }
             })
         }
-        Command::Inspect { archive } => Err(Error::io(
-            &archive,
-            "this build of sgbem does not read archives yet",
-        )),
-        Command::Export { archive, vtk: _ } => Err(Error::io(
-            &archive,
-            "this build of sgbem does not read archives yet",
-        )),
+        Command::Inspect { archive } => {
+            sgbem::output::archive::inspect(&archive).map(|text| print!("{text}"))
+        }
+        Command::Export { archive, vtk } => {
+            sgbem::output::vtk::export(&archive, &vtk).map(|files| {
+                println!("{} VTK files written to {}", files.len(), vtk.display());
+            })
+        }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

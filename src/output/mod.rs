@@ -2,8 +2,12 @@
 //! pipeline. Every file is written under a temporary name and renamed when complete, so an
 //! interrupted run never leaves a file that looks finished.
 
+pub mod archive;
 pub mod csv;
+pub mod progress;
+pub mod record;
 pub mod summary;
+pub mod vtk;
 
 use std::io::Write;
 use std::path::Path;

@@ -1,0 +1,345 @@
+"""Open every output of a run folder with independent readers and check that they agree.
+
+Readers: h5py (archive.h5), meshio and pyvista (vtk/*.vtu), xml.etree (vtk/history.pvd),
+csv (interfaces/*.csv, sections/*.csv), json (summary.json). Checks:
+  archive    root attributes (format, version, units, scene, mesh digest); shapes and index
+             ranges of /mesh, /bodies, /interfaces, /states, /solution, /history; operator
+             shapes (D00 symmetric); every dataset has description and units;
+  summary    title, status, counts and per-interface figures (detached and closed lengths,
+             open pairs, resultants, extreme tractions) recomputed from /solution; timings;
+  history    detached lengths recomputed from each row's statuses;
+  csv        interface tables agree with /solution; section tables have their columns;
+  vtk        history.pvd lists existing files, one boundary file per archived state, times
+             increasing; each file read by meshio and pyvista with the point data of SPEC.md
+             and values equal to the archive's.
+Usage: check_outputs.py RUN_DIR      (exit 1 with one line per disagreement)
+"""
+import csv
+import json
+import pathlib
+import sys
+import xml.etree.ElementTree as ET
+
+import h5py
+import meshio
+import numpy as np
+import pyvista
+
+BOUNDARY_DATA = {"displacement": 3, "traction": 3, "normal": 3, "contact_status": 1,
+                 "normal_traction": 1, "normal_opening": 1, "body": 1}
+FIELD_DATA = {"displacement": 3, "stress": 3, "von_mises": 1, "principal_stress": 3, "body": 1}
+REL = 1e-9
+
+
+class Checker:
+    def __init__(self, run):
+        self.run = run
+        self.failures = []
+        self.checked = 0
+
+    def ok(self, cond, message):
+        self.checked += 1
+        if not cond:
+            self.failures.append(message)
+        return cond
+
+    def close(self, a, b, message, scale=1.0):
+        a, b = np.asarray(a, dtype=float), np.asarray(b, dtype=float)
+        if a.shape != b.shape:
+            return self.ok(False, f"{message}: shapes {a.shape} and {b.shape}")
+        tol = REL * max(scale, float(np.max(np.abs(b), initial=0.0)), 1e-300)
+        err = float(np.max(np.abs(a - b), initial=0.0))
+        return self.ok(err <= tol, f"{message}: differ by {err:.3e} (tolerance {tol:.3e})")
+
+
+def text(v):
+    return v.decode() if isinstance(v, bytes) else str(v)
+
+
+def names(group):
+    return [text(n) for n in group.attrs["order"]]
+
+
+def segment_lengths(x, elements):
+    return np.hypot(*(x[elements[:, 1]] - x[elements[:, 0]]).T) if len(elements) else np.zeros(0)
+
+
+def check_archive(c, h5, summary):
+    a = h5.attrs
+    c.ok(text(a.get("format", "")) == "sgbem-archive", "archive: root attribute format is not sgbem-archive")
+    for key in ["format_version", "tool_version", "created", "scene", "mesh_sha256", "units"]:
+        c.ok(key in a, f"archive: root attribute {key} missing")
+    digest = text(a.get("mesh_sha256", ""))
+    c.ok(digest == "" or (len(digest) == 64 and all(ch in "0123456789abcdef" for ch in digest)),
+         f"archive: mesh_sha256 {digest!r} is not a SHA-256 digest")
+    units = json.loads(text(a.get("units", "{}")))
+    c.ok({"length", "force"} <= set(units), f"archive: units {units} lacks length or force")
+    if "title" in summary:
+        c.ok(text(a.get("title", "")) == summary["title"], "archive title differs from summary.json")
+    if "status" in summary:
+        c.ok(text(a.get("status", "")) == summary["status"],
+             f"archive status {text(a.get('status', ''))!r} differs from summary.json {summary['status']!r}")
+
+    missing = []
+    h5.visititems(lambda name, obj: missing.append(name) if isinstance(obj, h5py.Dataset)
+                  and not {"description", "units"} <= set(obj.attrs) else None)
+    c.ok(not missing, f"archive: datasets without description/units: {missing[:5]}")
+
+    mesh = h5["mesh"]
+    nn = mesh["nodes"].shape[0]
+    c.ok(mesh["nodes"].shape == (nn, 2), "/mesh/nodes is not N x 2")
+    nl = mesh["lines"].shape[0]
+    c.ok(mesh["lines"].shape == (nl, 2), "/mesh/lines is not L x 2")
+    c.ok(mesh["line_group"].shape == (nl,), "/mesh/line_group does not match /mesh/lines")
+    c.ok(nl == 0 or mesh["lines"][()].max() < nn, "/mesh/lines refers beyond /mesh/nodes")
+    c.ok(nl == 0 or mesh["line_group"][()].max() < mesh["group_names"].shape[0],
+         "/mesh/line_group refers beyond /mesh/group_names")
+
+    bodies = [h5["bodies"][n] for n in names(h5["bodies"])]
+    counts = summary.get("counts", {})
+    if "bodies" in counts:
+        c.ok(len(bodies) == counts["bodies"], f"{len(bodies)} bodies in the archive, {counts['bodies']} in summary.json")
+    ne = sum(b["elements"].shape[0] for b in bodies)
+    if "boundary_elements" in counts:
+        c.ok(ne == counts["boundary_elements"], f"{ne} boundary elements in the archive, {counts['boundary_elements']} in summary.json")
+    dofs = 0
+    for b in bodies:
+        n, m = b["nodes"].shape[0], b["elements"].shape[0]
+        c.ok(b["nodes"].shape == (n, 2), f"{b.name}/nodes is not n x 2")
+        c.ok(b["elements"].shape == (m, 2), f"{b.name}/elements is not m x 2")
+        c.ok(m == 0 or b["elements"][()].max() < n, f"{b.name}/elements refers beyond its nodes")
+        c.ok(n == 0 or b["mesh_nodes"][()].max() < nn, f"{b.name}/mesh_nodes refers beyond /mesh/nodes")
+        c.ok(np.array_equal(b["nodes"][()], mesh["nodes"][()][b["mesh_nodes"][()]]),
+             f"{b.name}/nodes differ from the mesh nodes they name")
+        if "D00" in b:
+            nu = b["unknowns"].shape[0]
+            nx = int(b.attrs["n_x"])
+            dofs += nu
+            for key, shape in [("A", (nx, nx)), ("A0", (nx, nu - nx)), ("A00", (nu - nx, nu - nx)),
+                               ("D00", (nu - nx, nu - nx)), ("Z0", (nu - nx,)), ("load", (nu,))]:
+                c.ok(b[key].shape == shape, f"{b.name}/{key} has shape {b[key].shape}, expected {shape}")
+            d = b["D00"][()]
+            if d.size:
+                c.ok(np.max(np.abs(d - d.T)) <= 1e-10 * np.max(np.abs(d)), f"{b.name}/D00 is not symmetric")
+    if dofs and "dofs" in counts:
+        c.ok(dofs == counts["dofs"], f"{dofs} unknowns in the archived operators, {counts['dofs']} dofs in summary.json")
+
+    ifaces = [h5["interfaces"][n] for n in names(h5["interfaces"])]
+    np_total = sum(i["x"].shape[0] for i in ifaces)
+    if "interface_pairs" in counts:
+        c.ok(np_total == counts["interface_pairs"], f"{np_total} interface pairs in the archive, {counts['interface_pairs']} in summary.json")
+    for i in ifaces:
+        p = i["x"].shape[0]
+        for key in ["normal", "tangent"]:
+            c.ok(i[key].shape == (p, 2), f"{i.name}/{key} is not pairs x 2")
+        for key in ["gap", "cohesion", "s", "node_a", "node_b"]:
+            c.ok(i[key].shape == (p,), f"{i.name}/{key} does not have one value per pair")
+    return bodies, ifaces
+
+
+def check_solution(c, h5, summary, bodies, ifaces):
+    states = h5["states"]
+    count = int(states.attrs["count"])
+    c.ok(len(states) == count, f"/states holds {len(states)} groups, its count says {count}")
+    if count == 0:
+        return count
+    sol = h5["solution"]
+    last = states[f"{count - 1:04d}"]
+    c.ok(sol.attrs["iteration"] == last.attrs["iteration"], "/solution is not the last state")
+    thickness = float(h5.attrs.get("thickness", 1.0))
+    for b in bodies:
+        name = text(b.attrs["name"])
+        g = sol["bodies"][b.name.split("/")[-1]]
+        c.ok(g["u"].shape == b["nodes"].shape, f"/solution u of {name} does not match its nodes")
+        c.ok(g["t"].shape == (b["elements"].shape[0], 2, 2), f"/solution t of {name} is not elements x 2 x 2")
+    figures = summary.get("interfaces", {})
+    for i in ifaces:
+        name = text(i.attrs["name"])
+        r = sol["interfaces"][i.name.split("/")[-1]]
+        status, traction = r["status"][()], r["traction"][()]
+        x, elements = i["x"][()], i["elements"][()]
+        c.ok(status.shape == (x.shape[0],), f"/solution status of {name} does not have one value per pair")
+        if name not in figures:
+            c.ok(False, f"summary.json has no figures for interface {name}")
+            continue
+        s = figures[name]
+        lengths = segment_lengths(x, elements)
+        open_ = status == 0
+        both_open = open_[elements[:, 0]] & open_[elements[:, 1]] if len(elements) else np.zeros(0, bool)
+        both_closed = ~open_[elements[:, 0]] & ~open_[elements[:, 1]] if len(elements) else np.zeros(0, bool)
+        scale = float(lengths.sum()) or 1.0
+        expect = {
+            "detached_length": lengths[both_open].sum(),
+            "closed_length": lengths[both_closed].sum(),
+            "open_pairs": int(open_.sum()),
+            "pairs": x.shape[0],
+        }
+        if len(elements):
+            tn = traction[:, 1]
+            expect["normal_resultant"] = thickness * float(np.sum(0.5 * lengths * (tn[elements[:, 0]] + tn[elements[:, 1]])))
+            expect["max_normal_traction"] = float(tn.max())
+            expect["min_normal_traction"] = float(tn.min())
+        tscale = float(np.max(np.abs(traction), initial=0.0)) or 1.0
+        for key, want in expect.items():
+            if key not in s:
+                continue
+            sc = scale if "length" in key else tscale * scale * thickness if key == "normal_resultant" else tscale
+            c.close(s[key], want, f"interface {name}: summary {key} vs the archive's final state", sc)
+    if "field_nodes" in summary.get("counts", {}) and "interior" in sol:
+        k = sum(g["mesh_nodes"].shape[0] for g in sol["interior"].values())
+        c.ok(k == summary["counts"]["field_nodes"], f"{k} interior points archived, {summary['counts']['field_nodes']} field nodes in summary.json")
+    return count
+
+
+def check_history(c, h5, ifaces):
+    h = h5["history"]
+    nr = h["load_factor"].shape[0]
+    for key in ["load_step", "iteration", "solver"]:
+        c.ok(h[key].shape == (nr,), f"/history/{key} does not have one value per row")
+    dl = h["detached_length"][()]
+    c.ok(dl.shape == (nr, len(ifaces)), f"/history/detached_length has shape {dl.shape}, expected {(nr, len(ifaces))}")
+    for k, i in enumerate(ifaces):
+        name = text(i.attrs["name"])
+        g = h["interfaces"][i.name.split("/")[-1]]
+        st = g["status"][()]
+        p = i["x"].shape[0]
+        c.ok(st.shape == (nr, p), f"/history status of {name} is not rows x pairs")
+        if st.shape != (nr, p) or dl.shape != (nr, len(ifaces)):
+            continue
+        lengths = segment_lengths(i["x"][()], i["elements"][()])
+        e = i["elements"][()]
+        for r in range(nr):
+            if len(e) == 0:
+                break
+            both = (st[r, e[:, 0]] == 0) & (st[r, e[:, 1]] == 0)
+            c.close(dl[r, k], lengths[both].sum(), f"/history row {r}: detached length of {name} vs its statuses",
+                    float(lengths.sum()) or 1.0)
+
+
+def check_timings(c, h5, summary):
+    t = summary.get("timings", {})
+    for stage in names(h5["timings"]):
+        if not c.ok(stage in t, f"timing stage {stage} is in the archive but not in summary.json"):
+            continue
+        if stage not in ("write", "total"):
+            c.close(h5["timings"][stage][()], t[stage], f"timing of stage {stage}: archive vs summary.json", 1e-6)
+
+
+def check_csv(c, run, h5, ifaces):
+    for i in ifaces:
+        name = text(i.attrs["name"])
+        path = run / "interfaces" / f"{name}.csv"
+        if not c.ok(path.exists(), f"{path} is missing"):
+            continue
+        rows = list(csv.DictReader(path.open()))
+        r = h5["solution"]["interfaces"][i.name.split("/")[-1]]
+        if not c.ok(len(rows) == i["x"].shape[0], f"{path}: {len(rows)} rows for {i['x'].shape[0]} pairs"):
+            continue
+        x = np.array([[float(row["x"]), float(row["y"])] for row in rows])
+        c.close(x, i["x"][()], f"{path}: x, y vs the archive's pair coordinates")
+        status = np.array([1 if row["status"] == "closed" else 0 for row in rows])
+        c.ok(np.array_equal(status, r["status"][()]), f"{path}: status differs from the archive's")
+        tn = np.array([float(row["normal_traction"]) for row in rows])
+        c.close(tn, r["traction"][()][:, 1], f"{path}: normal_traction vs the archive's")
+        op = np.array([float(row["normal_opening"]) for row in rows])
+        c.close(op, r["normal_opening"][()], f"{path}: normal_opening vs the archive's")
+    for path in sorted((run / "sections").glob("*.csv")):
+        with path.open() as f:
+            head = f.readline().strip()
+        c.ok(head == "x,y,ux,uy,sxx,syy,sxy", f"{path}: header {head!r}")
+
+
+def read_vtu(c, path, expect_names):
+    m = meshio.read(path)
+    p = pyvista.read(path)
+    c.ok(p.n_points == len(m.points), f"{path}: pyvista reads {p.n_points} points, meshio {len(m.points)}")
+    for key, ncomp in expect_names.items():
+        if not c.ok(key in m.point_data, f"{path}: point data {key} missing"):
+            continue
+        d = m.point_data[key]
+        got = 1 if d.ndim == 1 else d.shape[1]
+        c.ok(got == ncomp, f"{path}: {key} has {got} components, expected {ncomp}")
+        c.ok(key in p.point_data, f"{path}: pyvista does not see {key}")
+    return m
+
+
+def check_vtk(c, run, h5, bodies, count):
+    vtk = run / "vtk"
+    pvd = vtk / "history.pvd"
+    if not pvd.exists():
+        print(f"check_outputs: {vtk} has no history.pvd (output.vtk = false?): VTK checks skipped")
+        return
+    entries = ET.parse(pvd).getroot().find("Collection").findall("DataSet")
+    times = {}
+    for e in entries:
+        f = vtk / e.get("file")
+        c.ok(f.exists(), f"{pvd} lists {f.name}, which does not exist")
+        times.setdefault(e.get("file").split("_")[0], []).append(float(e.get("timestep")))
+    bt = times.get("boundary", [])
+    c.ok(len(bt) == count, f"{pvd}: {len(bt)} boundary files for {count} archived states")
+    c.ok(all(a < b for a, b in zip(bt, bt[1:])), f"{pvd}: boundary times do not increase: {bt}")
+    states = h5["states"]
+    for k in range(count):
+        st = states[f"{k:04d}"]
+        c.ok(float(st.attrs["iteration"]) == (bt[k] if k < len(bt) else -1),
+             f"{pvd}: time of state {k} is not its iteration {st.attrs['iteration']}")
+        path = vtk / f"boundary_{k:04d}.vtu"
+        if not c.ok(path.exists(), f"{path} is missing"):
+            continue
+        m = read_vtu(c, path, BOUNDARY_DATA)
+        n = sum(b["nodes"].shape[0] for b in bodies)
+        ne = sum(b["elements"].shape[0] for b in bodies)
+        c.ok(len(m.points) == n, f"{path}: {len(m.points)} points for {n} body nodes")
+        lines = sum(len(cb.data) for cb in m.cells if cb.type == "line")
+        c.ok(lines == ne, f"{path}: {lines} lines for {ne} boundary elements")
+        if len(m.points) == n and "displacement" in m.point_data:
+            u = np.vstack([st["bodies"][b.name.split("/")[-1]]["u"][()] for b in bodies])
+            xy = np.vstack([b["nodes"][()] for b in bodies])
+            c.close(m.points[:, :2], xy, f"{path}: points vs the archive's body nodes")
+            c.close(m.point_data["displacement"][:, :2], u, f"{path}: displacement vs the archive's state {k}")
+            c.ok(np.all(m.point_data["displacement"][:, 2] == 0), f"{path}: displacement z is not 0")
+            cs = m.point_data["contact_status"]
+            pairs = sum(i["x"].shape[0] for i in h5["interfaces"].values())
+            c.ok(set(np.unique(cs)) <= {-1, 0, 1}, f"{path}: contact_status outside -1, 0, 1")
+            c.ok(int(np.sum(cs != -1)) <= 2 * pairs, f"{path}: more interface nodes than 2 x pairs")
+        fpath = vtk / f"field_{k:04d}.vtu"
+        if "interior" in st:
+            if not c.ok(fpath.exists(), f"{fpath} is missing though state {k} has interior values"):
+                continue
+            m = read_vtu(c, fpath, FIELD_DATA)
+            tri = sum(len(cb.data) for cb in m.cells if cb.type == "triangle")
+            nt = sum(b["triangles"].shape[0] for b in bodies)
+            c.ok(tri == nt, f"{fpath}: {tri} triangles for {nt} body triangles")
+            u = np.vstack([g["u"][()] for g in (st["interior"][b.name.split("/")[-1]] for b in bodies)])
+            if c.ok(len(m.points) == len(u), f"{fpath}: {len(m.points)} points for {len(u)} interior values"):
+                c.close(m.point_data["displacement"][:, :2], u, f"{fpath}: displacement vs the archive's")
+        else:
+            c.ok(not fpath.exists(), f"{fpath} exists though state {k} has no interior values")
+
+
+def main():
+    if len(sys.argv) != 2:
+        sys.exit("usage: check_outputs.py RUN_DIR")
+    run = pathlib.Path(sys.argv[1])
+    c = Checker(run)
+    for f in ["summary.json", "archive.h5"]:
+        if not (run / f).exists():
+            sys.exit(f"check_outputs: {run / f} is missing: run `sgbem run SCENE --out {run}` first")
+    summary = json.loads((run / "summary.json").read_text())
+    with h5py.File(run / "archive.h5", "r") as h5:
+        bodies, ifaces = check_archive(c, h5, summary)
+        count = check_solution(c, h5, summary, bodies, ifaces)
+        check_history(c, h5, ifaces)
+        check_timings(c, h5, summary)
+        if count:
+            check_csv(c, run, h5, ifaces)
+        check_vtk(c, run, h5, bodies, count)
+    if c.failures:
+        for f in c.failures:
+            print(f"check_outputs: {run}: {f}", file=sys.stderr)
+        sys.exit(1)
+    print(f"check_outputs: {run}: {c.checked} checks passed")
+
+
+if __name__ == "__main__":
+    main()

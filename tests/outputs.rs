@@ -1,0 +1,977 @@
+//! Output writers on small fabricated records: the archive layout (groups, shapes,
+//! attributes, read back with hdf5-metno), archive → read → export giving byte-identical VTK
+//! files, atomic writes, and errors (never panics) on damaged archives.
+
+mod support;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use hdf5_metno as h5;
+use sgbem::output::archive::{read_archive, write_archive, FORMAT};
+use sgbem::output::record::{
+    Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord, RunRecord,
+    StateRecord, FORMAT_VERSION,
+};
+use sgbem::output::vtk::{export, write_vtk};
+use sgbem::scene::{Plane, Units};
+use sgbem::solution::{BodyField, HistoryRow, InterfaceResult, PairResult, PairStatus};
+use support::{sgbem, stacked_blocks, tmpdir, STACKED_SCENE};
+
+/// A deterministic "random" value in [-1, 1).
+fn val(k: usize) -> f64 {
+    let x = (k as u64 + 1).wrapping_mul(0x9E37_79B9_7F4A_7C15) >> 11;
+    2.0 * (x as f64 / (1u64 << 53) as f64) - 1.0
+}
+
+fn matrix(rows: usize, cols: usize, seed: usize) -> Array {
+    Array::matrix(
+        rows,
+        cols,
+        (0..rows * cols).map(|k| val(seed * 7919 + k)).collect(),
+    )
+}
+
+/// Two unit squares stacked along y (lower [0,1]², upper [0,1]×[1,2]) with one interface
+/// `joint`, a centre node in each, three states (the last with interior values), three
+/// history rows, operators and timings.
+fn fabricated(big_operator: usize) -> RunRecord {
+    let mut r = RunRecord::empty("Two blocks, fabricated", Plane::Strain);
+    r.scene_text = "title = \"Two blocks\"\n[body.lower]\nyoung = 1.0\n".into();
+    r.mesh_sha256 = "ab".repeat(32);
+    r.units = Units {
+        length: "cm".into(),
+        force: "daN".into(),
+    };
+    r.thickness = 2.5;
+    r.created = "2025-01-31T12:00:00Z".into();
+    let nodes = vec![
+        [0.0, 0.0],
+        [1.0, 0.0],
+        [1.0, 1.0],
+        [0.0, 1.0],
+        [1.0, 2.0],
+        [0.0, 2.0],
+        [0.5, 0.5],
+        [0.5, 1.5],
+    ];
+    r.mesh = MeshRecord {
+        node_tags: (1..=nodes.len()).collect(),
+        nodes,
+        lines: vec![[0, 1], [1, 2], [2, 3], [3, 0], [2, 4], [4, 5], [5, 3]],
+        line_group: vec![
+            Some(0),
+            Some(1),
+            Some(2),
+            Some(1),
+            Some(1),
+            Some(3),
+            Some(1),
+        ],
+        triangles: vec![
+            [0, 1, 6],
+            [1, 2, 6],
+            [2, 3, 6],
+            [3, 0, 6],
+            [3, 2, 7],
+            [2, 4, 7],
+            [4, 5, 7],
+            [5, 3, 7],
+        ],
+        triangle_group: vec![
+            Some(4),
+            Some(4),
+            Some(4),
+            Some(4),
+            None,
+            Some(5),
+            Some(5),
+            Some(5),
+        ],
+        group_names: ["base", "sides", "joint", "top", "lower", "upper"]
+            .map(String::from)
+            .to_vec(),
+        group_dims: vec![1, 1, 1, 1, 2, 2],
+    };
+    let square = |y0: f64| vec![[0.0, y0], [1.0, y0], [1.0, y0 + 1.0], [0.0, y0 + 1.0]];
+    let elements = vec![[0, 1], [1, 2], [2, 3], [3, 0]];
+    let n0 = big_operator.max(3);
+    r.bodies = vec![
+        BodyRecord {
+            name: "lower".into(),
+            young: 5000.0,
+            poisson: 0.2,
+            body_force: Some([0.0, -0.0018]),
+            nodes: square(0.0),
+            mesh_nodes: vec![0, 1, 2, 3],
+            elements: elements.clone(),
+            triangles: r.mesh.triangles[..4].to_vec(),
+            operators: Some(BodyOperators {
+                unknowns: (0..5 + n0).map(|i| format!("unknown {i}")).collect(),
+                n_x: 5,
+                a: matrix(5, 5, 1),
+                a0: matrix(5, n0, 2),
+                a00: matrix(n0, n0, 3),
+                load: (0..5 + n0).map(|k| val(100 + k)).collect(),
+                d00: matrix(n0, n0, 4),
+                z0: (0..n0).map(|k| val(200 + k)).collect(),
+            }),
+        },
+        BodyRecord {
+            name: "upper/part".into(),
+            young: 1e4,
+            poisson: 0.3,
+            body_force: None,
+            nodes: square(1.0),
+            mesh_nodes: vec![3, 2, 4, 5],
+            elements,
+            triangles: r.mesh.triangles[4..].to_vec(),
+            operators: None,
+        },
+    ];
+    r.interfaces = vec![InterfaceRecord {
+        name: "joint".into(),
+        body_a: 0,
+        body_b: 1,
+        model: "unilateral".into(),
+        initial: "closed".into(),
+        tangential: "stick".into(),
+        node_a: vec![3, 2],
+        node_b: vec![0, 1],
+        x: vec![[0.0, 1.0], [1.0, 1.0]],
+        normal: vec![[0.0, 1.0]; 2],
+        tangent: vec![[-1.0, 0.0]; 2],
+        s: vec![0.0, 1.0],
+        gap: vec![0.0, 0.01],
+        cohesion: vec![0.5, 0.5],
+        elements: vec![[1, 0]],
+    }];
+    let statuses = [
+        [PairStatus::Closed, PairStatus::Closed],
+        [PairStatus::Closed, PairStatus::Open],
+        [PairStatus::Open, PairStatus::Open],
+    ];
+    for (k, st) in statuses.iter().enumerate() {
+        let seed = 1000 * (k + 1);
+        let fields = (0..2)
+            .map(|b| BodyField {
+                u: (0..4)
+                    .map(|i| [val(seed + 10 * b + 2 * i), val(seed + 10 * b + 2 * i + 1)])
+                    .collect(),
+                t: (0..4)
+                    .map(|e| {
+                        let s = seed + 100 + 20 * b + 4 * e;
+                        [[val(s), val(s + 1)], [val(s + 2), val(s + 3)]]
+                    })
+                    .collect(),
+            })
+            .collect();
+        let pairs = (0..2)
+            .map(|j| PairResult {
+                status: st[j],
+                traction: [val(seed + 500 + j), val(seed + 510 + j)],
+                jump: [val(seed + 520 + j), val(seed + 530 + j)],
+            })
+            .collect();
+        let mut state = StateRecord::new(k, 0, 1.0, fields, vec![InterfaceResult { pairs }]);
+        if k == 2 {
+            state.interior = (0..2)
+                .map(|b| {
+                    let ids: Vec<usize> = if b == 0 {
+                        vec![0, 1, 2, 3, 6]
+                    } else {
+                        vec![2, 3, 4, 5, 7]
+                    };
+                    InteriorRecord {
+                        u: ids.iter().map(|&m| [val(m), val(m + 50)]).collect(),
+                        sigma: ids
+                            .iter()
+                            .map(|&m| [val(m + 60), val(m + 70), val(m + 80)])
+                            .collect(),
+                        mesh_nodes: ids,
+                    }
+                })
+                .collect();
+        }
+        r.states.push(state);
+        r.history.rows.push(HistoryRow {
+            load_step: 0,
+            load_factor: 1.0,
+            iteration: k,
+            solver: "lcp",
+            status: vec![st.to_vec()],
+            normal_traction: vec![vec![val(seed + 600), val(seed + 601)]],
+            normal_opening: vec![vec![0.0, val(seed + 602).abs()]],
+            detached_length: vec![[0.0, 0.0, 1.0][k]],
+        });
+    }
+    r.contact_operators = Some(vec![
+        ("K00".into(), matrix(4, 4, 9)),
+        ("Ktilde_urur".into(), matrix(2, 2, 10)),
+        ("L".into(), Array::vector(vec![1.0, 2.0, 3.0, 4.0])),
+    ]);
+    r.status = "converged".into();
+    r.timings = vec![
+        ("read".into(), 0.001),
+        ("assemble".into(), 0.5),
+        ("write".into(), 0.02),
+    ];
+    r.summary_json = "{\"title\": \"Two blocks, fabricated\", \"status\": \"converged\"}".into();
+    r
+}
+
+fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    std::fs::read_dir(dir)
+        .expect("read dir")
+        .map(|e| {
+            let p = e.expect("entry").path();
+            (
+                p.file_name().unwrap().to_string_lossy().into_owned(),
+                std::fs::read(&p).expect("read"),
+            )
+        })
+        .collect()
+}
+
+fn attr_string(loc: &h5::Location, name: &str) -> String {
+    let v: h5::types::VarLenUnicode = loc.attr(name).unwrap().read_scalar().unwrap();
+    v.as_str().to_string()
+}
+
+#[test]
+fn archive_layout_attributes_and_shapes() {
+    let dir = tmpdir("outputs-layout");
+    let path = dir.join("archive.h5");
+    let rec = fabricated(3);
+    write_archive(&path, &rec).expect("write");
+    let f = h5::File::open(&path).expect("open");
+    assert_eq!(attr_string(&f, "format"), FORMAT);
+    let v: i64 = f.attr("format_version").unwrap().read_scalar().unwrap();
+    assert_eq!(v, FORMAT_VERSION);
+    assert_eq!(attr_string(&f, "tool_version"), env!("CARGO_PKG_VERSION"));
+    assert_eq!(attr_string(&f, "created"), "2025-01-31T12:00:00Z");
+    assert_eq!(attr_string(&f, "scene"), rec.scene_text);
+    assert_eq!(attr_string(&f, "mesh_sha256"), rec.mesh_sha256);
+    let units: serde_json::Value = serde_json::from_str(&attr_string(&f, "units")).unwrap();
+    assert_eq!(units["length"], "cm");
+    assert_eq!(units["force"], "daN");
+
+    let shape = |p: &str| f.dataset(p).unwrap_or_else(|_| panic!("{p}")).shape();
+    assert_eq!(shape("mesh/nodes"), [8, 2]);
+    assert_eq!(shape("mesh/lines"), [7, 2]);
+    assert_eq!(shape("mesh/line_group"), [7]);
+    assert_eq!(shape("mesh/group_names"), [6]);
+    assert_eq!(shape("mesh/triangles"), [8, 3]);
+    assert_eq!(shape("bodies/lower/nodes"), [4, 2]);
+    assert_eq!(shape("bodies/lower/elements"), [4, 2]);
+    assert_eq!(shape("bodies/lower/A"), [5, 5]);
+    assert_eq!(shape("bodies/lower/A0"), [5, 3]);
+    assert_eq!(shape("bodies/lower/D00"), [3, 3]);
+    assert_eq!(shape("bodies/lower/Z0"), [3]);
+    // A name with a slash becomes a group with the slash replaced; its name is kept.
+    let upper = f.group("bodies/upper_part").unwrap();
+    assert_eq!(attr_string(&upper, "name"), "upper/part");
+    assert!(
+        !upper.link_exists("D00"),
+        "no operators were given for upper"
+    );
+    let young: f64 = f
+        .group("bodies/lower")
+        .unwrap()
+        .attr("young")
+        .unwrap()
+        .read_scalar()
+        .unwrap();
+    assert_eq!(young, 5000.0);
+    assert_eq!(shape("interfaces/joint/x"), [2, 2]);
+    assert_eq!(shape("interfaces/joint/normal"), [2, 2]);
+    assert_eq!(shape("interfaces/joint/gap"), [2]);
+    assert_eq!(shape("interfaces/joint/cohesion"), [2]);
+    assert_eq!(
+        attr_string(&f.group("interfaces/joint").unwrap(), "body_b"),
+        "upper/part"
+    );
+    assert_eq!(shape("contact/operators/K00"), [4, 4]);
+    assert_eq!(shape("contact/operators/L"), [4]);
+    assert_eq!(shape("history/load_factor"), [3]);
+    assert_eq!(shape("history/detached_length"), [3, 1]);
+    assert_eq!(shape("history/interfaces/joint/status"), [3, 2]);
+    assert_eq!(shape("history/interfaces/joint/normal_traction"), [3, 2]);
+    assert_eq!(shape("solution/bodies/lower/u"), [4, 2]);
+    assert_eq!(shape("solution/bodies/lower/t"), [4, 2, 2]);
+    assert_eq!(shape("solution/interfaces/joint/traction"), [2, 2]);
+    assert_eq!(shape("solution/interior/upper_part/sigma"), [5, 3]);
+    assert_eq!(shape("states/0000/bodies/lower/u"), [4, 2]);
+    assert!(!f.link_exists("states/0000/interior"));
+    assert_eq!(shape("timings/assemble"), Vec::<usize>::new());
+
+    // /solution is the final state.
+    let u: Vec<f64> = f
+        .dataset("solution/bodies/upper_part/u")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    let want: Vec<f64> = rec.states[2].fields[1]
+        .u
+        .iter()
+        .flatten()
+        .copied()
+        .collect();
+    assert_eq!(u, want);
+    let st: Vec<i8> = f
+        .dataset("history/interfaces/joint/status")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    assert_eq!(st, [1, 1, 1, 0, 0, 0]);
+    let dl: Vec<f64> = f
+        .dataset("history/detached_length")
+        .unwrap()
+        .read_raw()
+        .unwrap();
+    assert_eq!(dl, [0.0, 0.0, 1.0]);
+
+    // Every dataset has a description and units.
+    let mut checked = 0;
+    let mut stack = vec![f.group("/").unwrap()];
+    while let Some(g) = stack.pop() {
+        for name in g.member_names().unwrap() {
+            if let Ok(ds) = g.dataset(&name) {
+                for a in ["description", "units"] {
+                    assert!(ds.attr(a).is_ok(), "{}/{name} lacks {a}", g.name());
+                }
+                checked += 1;
+            } else if let Ok(sub) = g.group(&name) {
+                stack.push(sub);
+            }
+        }
+    }
+    assert!(checked > 60, "only {checked} datasets found");
+    // Only the archive in the folder: the temporary file was renamed.
+    assert_eq!(files(&dir).into_keys().collect::<Vec<_>>(), ["archive.h5"]);
+}
+
+#[test]
+fn large_datasets_are_chunked_and_compressed() {
+    let dir = tmpdir("outputs-chunks");
+    let path = dir.join("archive.h5");
+    write_archive(&path, &fabricated(80)).expect("write");
+    let f = h5::File::open(&path).unwrap();
+    let big = f.dataset("bodies/lower/A00").unwrap();
+    assert_eq!(big.shape(), [80, 80]);
+    let small = f.dataset("bodies/lower/A").unwrap();
+    assert!(!small.is_chunked());
+    if h5::filters::deflate_available() {
+        assert!(big.is_chunked());
+        assert!(!big.filters().is_empty());
+    }
+    // Close the file first: HDF5 refuses to open one file twice with different locking.
+    drop((big, small, f));
+    let back = read_archive(&path).unwrap();
+    let op = back.bodies[0].operators.as_ref().unwrap();
+    assert_eq!(op.a00, matrix(80, 80, 3));
+}
+
+#[test]
+fn archive_round_trip_is_exact() {
+    let dir = tmpdir("outputs-roundtrip");
+    let path = dir.join("archive.h5");
+    let rec = fabricated(3);
+    write_archive(&path, &rec).expect("write");
+    let back = read_archive(&path).expect("read");
+    assert_eq!(back.title, rec.title);
+    assert_eq!(back.scene_text, rec.scene_text);
+    assert_eq!(back.mesh_sha256, rec.mesh_sha256);
+    assert_eq!(back.units.length, "cm");
+    assert_eq!(back.units.force, "daN");
+    assert_eq!(back.plane, Plane::Strain);
+    assert_eq!(back.thickness, 2.5);
+    assert_eq!(back.created, rec.created);
+    assert_eq!(back.status, "converged");
+    assert_eq!(back.summary_json, rec.summary_json);
+    assert_eq!(back.timings, rec.timings);
+    assert_eq!(back.mesh.nodes, rec.mesh.nodes);
+    assert_eq!(back.mesh.node_tags, rec.mesh.node_tags);
+    assert_eq!(back.mesh.lines, rec.mesh.lines);
+    assert_eq!(back.mesh.line_group, rec.mesh.line_group);
+    assert_eq!(back.mesh.triangle_group, rec.mesh.triangle_group);
+    assert_eq!(back.mesh.group_names, rec.mesh.group_names);
+    assert_eq!(back.mesh.group_dims, rec.mesh.group_dims);
+    assert_eq!(back.bodies.len(), 2);
+    for (a, b) in back.bodies.iter().zip(&rec.bodies) {
+        assert_eq!(a.name, b.name);
+        assert_eq!(
+            (a.young, a.poisson, a.body_force),
+            (b.young, b.poisson, b.body_force)
+        );
+        assert_eq!(a.nodes, b.nodes);
+        assert_eq!(a.mesh_nodes, b.mesh_nodes);
+        assert_eq!(a.elements, b.elements);
+        assert_eq!(a.triangles, b.triangles);
+        assert_eq!(a.operators.is_some(), b.operators.is_some());
+        if let (Some(p), Some(q)) = (&a.operators, &b.operators) {
+            assert_eq!(p.unknowns, q.unknowns);
+            assert_eq!(p.n_x, q.n_x);
+            assert_eq!((&p.a, &p.a0, &p.a00, &p.d00), (&q.a, &q.a0, &q.a00, &q.d00));
+            assert_eq!((&p.load, &p.z0), (&q.load, &q.z0));
+        }
+    }
+    let (i, j) = (&back.interfaces[0], &rec.interfaces[0]);
+    assert_eq!((&i.name, i.body_a, i.body_b), (&j.name, j.body_a, j.body_b));
+    assert_eq!(
+        (&i.model, &i.initial, &i.tangential),
+        (&j.model, &j.initial, &j.tangential)
+    );
+    assert_eq!(
+        (&i.node_a, &i.node_b, &i.elements),
+        (&j.node_a, &j.node_b, &j.elements)
+    );
+    assert_eq!((&i.x, &i.normal, &i.tangent), (&j.x, &j.normal, &j.tangent));
+    assert_eq!((&i.s, &i.gap, &i.cohesion), (&j.s, &j.gap, &j.cohesion));
+    assert_eq!(back.contact_operators, rec.contact_operators);
+    assert_eq!(back.states.len(), 3);
+    for (s, t) in back.states.iter().zip(&rec.states) {
+        assert_eq!(
+            (s.iteration, s.load_step, s.load_factor),
+            (t.iteration, t.load_step, t.load_factor)
+        );
+        for (f, g) in s.fields.iter().zip(&t.fields) {
+            assert_eq!((&f.u, &f.t), (&g.u, &g.t));
+        }
+        for (p, q) in s.interfaces[0].pairs.iter().zip(&t.interfaces[0].pairs) {
+            assert_eq!(
+                (p.status, p.traction, p.jump),
+                (q.status, q.traction, q.jump)
+            );
+        }
+        assert_eq!(s.interior.len(), t.interior.len());
+        for (p, q) in s.interior.iter().zip(&t.interior) {
+            assert_eq!(
+                (&p.mesh_nodes, &p.u, &p.sigma),
+                (&q.mesh_nodes, &q.u, &q.sigma)
+            );
+        }
+    }
+    assert_eq!(back.history.rows.len(), 3);
+    for (a, b) in back.history.rows.iter().zip(&rec.history.rows) {
+        assert_eq!(
+            (a.load_step, a.load_factor, a.iteration, a.solver),
+            (b.load_step, b.load_factor, b.iteration, b.solver)
+        );
+        assert_eq!(a.status, b.status);
+        assert_eq!(a.normal_traction, b.normal_traction);
+        assert_eq!(a.normal_opening, b.normal_opening);
+        assert_eq!(a.detached_length, b.detached_length);
+    }
+}
+
+#[test]
+fn export_rebuilds_identical_vtk_files() {
+    let dir = tmpdir("outputs-export");
+    let rec = fabricated(3);
+    let run_vtk = dir.join("run").join("vtk");
+    let written = write_vtk(&run_vtk, &rec).expect("vtk");
+    let names: Vec<String> = written
+        .iter()
+        .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+        .collect();
+    assert_eq!(
+        names,
+        [
+            "boundary_0000.vtu",
+            "boundary_0001.vtu",
+            "boundary_0002.vtu",
+            "field_0002.vtu",
+            "history.pvd"
+        ]
+    );
+    let archive = dir.join("run").join("archive.h5");
+    write_archive(&archive, &rec).expect("archive");
+    let again = dir.join("again");
+    export(&archive, &again).expect("export");
+    let (a, b) = (files(&run_vtk), files(&again));
+    assert_eq!(a.keys().collect::<Vec<_>>(), b.keys().collect::<Vec<_>>());
+    for (name, bytes) in &a {
+        assert!(b[name] == *bytes, "{name} differs after export");
+    }
+    // The command line does the same.
+    let cli = dir.join("cli");
+    let (code, out, err) = sgbem(&[
+        "export",
+        archive.to_str().unwrap(),
+        "--vtk",
+        cli.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("5 VTK files"), "{out}");
+    assert_eq!(files(&cli), a);
+}
+
+#[test]
+fn vtk_content() {
+    let dir = tmpdir("outputs-vtk");
+    let rec = fabricated(3);
+    write_vtk(&dir, &rec).expect("vtk");
+    let b = std::fs::read_to_string(dir.join("boundary_0001.vtu")).unwrap();
+    assert!(b.contains("type=\"UnstructuredGrid\""), "{b}");
+    assert!(b.contains("byte_order=\"LittleEndian\""));
+    assert!(
+        b.contains("NumberOfPoints=\"8\" NumberOfCells=\"8\""),
+        "{b}"
+    );
+    for name in [
+        "displacement",
+        "traction",
+        "normal",
+        "contact_status",
+        "normal_traction",
+        "normal_opening",
+        "body",
+    ] {
+        assert!(b.contains(&format!("Name=\"{name}\"")), "{name} missing");
+    }
+    // contact_status: four interface nodes (1 closed and 1 open pair on both sides), four
+    // other nodes at -1.
+    let cs = b.split("Name=\"contact_status\"").nth(1).unwrap();
+    assert!(cs.contains("RangeMin=\"-1\" RangeMax=\"1\""), "{cs}");
+    let fld = std::fs::read_to_string(dir.join("field_0002.vtu")).unwrap();
+    assert!(
+        fld.contains("NumberOfPoints=\"10\" NumberOfCells=\"8\""),
+        "{fld}"
+    );
+    for name in [
+        "displacement",
+        "stress",
+        "von_mises",
+        "principal_stress",
+        "body",
+    ] {
+        assert!(fld.contains(&format!("Name=\"{name}\"")), "{name} missing");
+    }
+    let pvd = std::fs::read_to_string(dir.join("history.pvd")).unwrap();
+    for (t, f) in [
+        (0, "boundary_0000"),
+        (1, "boundary_0001"),
+        (2, "boundary_0002"),
+        (2, "field_0002"),
+    ] {
+        assert!(
+            pvd.contains(&format!("timestep=\"{t}\"")) && pvd.contains(f),
+            "{pvd}"
+        );
+    }
+    // A second write leaves no temporary files behind.
+    write_vtk(&dir, &rec).expect("vtk");
+    assert!(files(&dir).keys().all(|n| !n.starts_with('.')));
+}
+
+#[test]
+fn states_must_advance() {
+    let dir = tmpdir("outputs-order");
+    let mut rec = fabricated(3);
+    rec.states[2].iteration = 1;
+    let e = write_vtk(&dir, &rec).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+    assert!(e.to_string().contains("iterations must increase"), "{e}");
+}
+
+#[test]
+fn failed_writes_leave_no_finished_file() {
+    let dir = tmpdir("outputs-atomic");
+    // The final name is taken by a folder: the rename fails, the temporary file goes.
+    let path = dir.join("archive.h5");
+    std::fs::create_dir(&path).unwrap();
+    let e = write_archive(&path, &fabricated(3)).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+    assert!(path.is_dir());
+    let left: Vec<_> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert_eq!(left, ["archive.h5"], "a temporary file was left");
+    // A folder that cannot be created (a file is in the way).
+    let blocker = dir.join("blocker");
+    std::fs::write(&blocker, "x").unwrap();
+    let e = write_archive(&blocker.join("archive.h5"), &fabricated(3)).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+    let e = write_vtk(&blocker.join("vtk"), &fabricated(3)).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+    // An inconsistent record writes nothing.
+    let mut rec = fabricated(3);
+    rec.bodies[0].elements[0] = [0, 99];
+    let ok = dir.join("ok.h5");
+    let e = write_archive(&ok, &rec).unwrap_err();
+    assert!(e.to_string().contains("index 99"), "{e}");
+    assert!(!ok.exists());
+    // Writing over an older archive replaces it only when complete.
+    write_archive(&ok, &fabricated(3)).unwrap();
+    let before = std::fs::read(&ok).unwrap();
+    assert!(write_archive(&ok, &rec).is_err());
+    assert_eq!(std::fs::read(&ok).unwrap(), before);
+}
+
+/// Runs `sgbem inspect` and asserts exit status 1, one message, no panic.
+fn inspect_fails(path: &Path, needle: &str) {
+    let (code, _, err) = sgbem(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert!(err.starts_with("sgbem: "), "{err}");
+    assert!(err.contains(needle), "expected {needle:?} in: {err}");
+    let e = read_archive(path).unwrap_err();
+    assert_eq!(e.exit_code(), 1);
+}
+
+fn damaged_copy(src: &Path, dir: &Path, name: &str, edit: impl FnOnce(&h5::File)) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::copy(src, &p).unwrap();
+    let f = h5::File::open_rw(&p).unwrap();
+    edit(&f);
+    f.close().unwrap();
+    p
+}
+
+#[test]
+fn damaged_archives_are_errors() {
+    let dir = tmpdir("outputs-damaged");
+    let good = dir.join("good.h5");
+    write_archive(&good, &fabricated(3)).unwrap();
+    let bytes = std::fs::read(&good).unwrap();
+
+    inspect_fails(&dir.join("missing.h5"), "no such archive");
+    let garbage = dir.join("garbage.h5");
+    std::fs::write(&garbage, b"this is not HDF5 at all").unwrap();
+    inspect_fails(&garbage, "not an HDF5 file");
+    for cut in [16, 512, bytes.len() / 2, bytes.len() - 200] {
+        let p = dir.join(format!("cut{cut}.h5"));
+        std::fs::write(&p, &bytes[..cut]).unwrap();
+        let (code, _, err) = sgbem(&["inspect", p.to_str().unwrap()]);
+        assert_eq!(code, 1, "cut at {cut}: {err}");
+        assert!(!err.contains("panicked"), "{err}");
+    }
+    let other = dir.join("other.h5");
+    h5::File::create(&other).unwrap().create_group("x").unwrap();
+    inspect_fails(&other, "not an sgbem archive");
+
+    let p = damaged_copy(&good, &dir, "nodes.h5", |f| {
+        f.unlink("bodies/lower/nodes").unwrap();
+    });
+    inspect_fails(&p, "bodies/lower/nodes");
+    let p = damaged_copy(&good, &dir, "shape.h5", |f| {
+        let g = f.group("bodies/lower").unwrap();
+        g.unlink("nodes").unwrap();
+        g.new_dataset_builder()
+            .with_data(&ndarray::arr2(&[[0.0, 1.0, 2.0]]))
+            .create("nodes")
+            .unwrap();
+    });
+    inspect_fails(&p, "expected");
+    let p = damaged_copy(&good, &dir, "index.h5", |f| {
+        let g = f.group("bodies/lower").unwrap();
+        g.unlink("elements").unwrap();
+        g.new_dataset_builder()
+            .with_data(&ndarray::arr2(&[[0i64, 1], [1, 2], [2, 3], [3, 40]]))
+            .create("elements")
+            .unwrap();
+    });
+    inspect_fails(&p, "index 40");
+    let p = damaged_copy(&good, &dir, "negative.h5", |f| {
+        let g = f.group("interfaces/joint").unwrap();
+        g.unlink("node_a").unwrap();
+        g.new_dataset_builder()
+            .with_data(&ndarray::arr1(&[3i64, -2]))
+            .create("node_a")
+            .unwrap();
+    });
+    inspect_fails(&p, "negative");
+    let p = damaged_copy(&good, &dir, "state.h5", |f| {
+        f.unlink("states/0001").unwrap();
+    });
+    inspect_fails(&p, "states/0001");
+    let p = damaged_copy(&good, &dir, "type.h5", |f| {
+        let g = f.group("mesh").unwrap();
+        g.unlink("nodes").unwrap();
+        let s: Vec<h5::types::VarLenUnicode> = (0..16).map(|_| "x".parse().unwrap()).collect();
+        g.new_dataset_builder()
+            .with_data(&ndarray::Array2::from_shape_vec((8, 2), s).unwrap())
+            .create("nodes")
+            .unwrap();
+    });
+    inspect_fails(&p, "mesh/nodes");
+    let (code, _, err) = sgbem(&[
+        "export",
+        p.to_str().unwrap(),
+        "--vtk",
+        dir.join("vtk").to_str().unwrap(),
+    ]);
+    assert_eq!(code, 1, "{err}");
+    assert!(!dir.join("vtk").join("history.pvd").exists());
+}
+
+#[test]
+fn inspect_prints_what_the_archive_holds() {
+    let dir = tmpdir("outputs-inspect");
+    let path = dir.join("archive.h5");
+    write_archive(&path, &fabricated(3)).unwrap();
+    let (code, out, err) = sgbem(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for needle in [
+        "Two blocks, fabricated",
+        "converged",
+        "bodies (2)",
+        "lower",
+        "upper/part",
+        "E = 5000",
+        "interfaces (1)",
+        "joint",
+        "lower | upper/part, unilateral, starts closed, stick; 2 pairs, length 1",
+        "states (3): iterations 0 to 2; interior field in 1",
+        "detached length 1, 2 of 2 pairs open",
+        "iterations (3)",
+        "joint detached",
+        "timings (s)",
+        "assemble",
+    ] {
+        assert!(out.contains(needle), "{needle:?} missing from:\n{out}");
+    }
+    // One row per iteration with its detached length.
+    let rows: Vec<&str> = out
+        .lines()
+        .skip_while(|l| !l.starts_with("iterations"))
+        .skip(2)
+        .take(3)
+        .collect();
+    let last: Vec<&str> = rows
+        .iter()
+        .map(|r| r.split_whitespace().last().unwrap())
+        .collect();
+    assert_eq!(last, ["0", "0", "1"], "{out}");
+}
+
+#[test]
+fn record_from_a_model() {
+    let dir = tmpdir("outputs-model");
+    let msh = stacked_blocks(3).save(&dir, "m.msh");
+    let scene = support::write(
+        &dir,
+        "s.toml",
+        &format!(
+            "title = \"stacked\"\nunits = {{ length = \"m\", force = \"N\" }}\n{STACKED_SCENE}"
+        ),
+    );
+    let loaded = sgbem::pipeline::load(&scene, Some(&msh)).expect("load");
+    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model).unwrap();
+    assert_eq!(
+        rec.mesh_sha256,
+        sgbem::output::record::sha256_hex(&std::fs::read(&msh).unwrap())
+    );
+    assert_eq!(rec.mesh_sha256.len(), 64);
+    assert_eq!(rec.bodies.len(), 2);
+    assert_eq!(rec.interfaces.len(), 1);
+    assert_eq!(rec.interfaces[0].node_a.len(), 4);
+    assert_eq!(rec.units.length, "m");
+    assert!(rec.mesh.group_names.contains(&"joint".to_string()));
+    assert!(rec.mesh.line_group.iter().all(|g| g.is_some()));
+    // Zero fields of the right sizes.
+    let fields = rec
+        .bodies
+        .iter()
+        .map(|b| BodyField {
+            u: vec![[0.0; 2]; b.nodes.len()],
+            t: vec![[[0.0; 2]; 2]; b.elements.len()],
+        })
+        .collect();
+    let pairs = vec![
+        PairResult {
+            status: PairStatus::Closed,
+            traction: [0.0; 2],
+            jump: [0.0; 2],
+        };
+        4
+    ];
+    rec.states.push(StateRecord::new(
+        0,
+        0,
+        1.0,
+        fields,
+        vec![InterfaceResult { pairs }],
+    ));
+    rec.validate().expect("consistent");
+    write_archive(&dir.join("archive.h5"), &rec).unwrap();
+    let back = read_archive(&dir.join("archive.h5")).unwrap();
+    assert_eq!(back.mesh.nodes, loaded.mesh.nodes);
+    assert_eq!(back.scene_text, loaded.scene.text);
+    let files = write_vtk(&dir.join("vtk"), &back).unwrap();
+    assert_eq!(files.len(), 2);
+}
+
+/// A complete run folder (summary.json, CSV tables, archive, VTK files) from a real model
+/// with fabricated values, for `pipelines/check_outputs.py`.
+fn fabricated_run(dir: &Path) -> PathBuf {
+    let msh = stacked_blocks(3).save(dir, "m.msh");
+    let scene = support::write(
+        dir,
+        "s.toml",
+        &format!("title = \"stacked\"\n{STACKED_SCENE}"),
+    );
+    let loaded = sgbem::pipeline::load(&scene, Some(&msh)).expect("load");
+    let model = &loaded.model;
+    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, model).unwrap();
+    // Fan triangles from a centre node of each body, to have an interior grid.
+    for (b, centre) in [[0.5, 0.5], [0.5, 1.5]].into_iter().enumerate() {
+        let c = rec.mesh.nodes.len();
+        rec.mesh.nodes.push(centre);
+        rec.mesh.node_tags.push(1000 + b);
+        let body = &mut rec.bodies[b];
+        body.triangles = body
+            .elements
+            .iter()
+            .map(|e| [body.mesh_nodes[e[0]], body.mesh_nodes[e[1]], c])
+            .collect();
+        rec.mesh.triangles.extend(body.triangles.clone());
+        rec.mesh
+            .triangle_group
+            .extend(vec![None; body.triangles.len()]);
+    }
+    let pattern = [
+        vec![PairStatus::Closed; 4],
+        vec![
+            PairStatus::Closed,
+            PairStatus::Open,
+            PairStatus::Open,
+            PairStatus::Closed,
+        ],
+        vec![
+            PairStatus::Open,
+            PairStatus::Open,
+            PairStatus::Open,
+            PairStatus::Closed,
+        ],
+    ];
+    for (k, st) in pattern.iter().enumerate() {
+        let seed = 5000 * (k + 1);
+        let fields = rec
+            .bodies
+            .iter()
+            .enumerate()
+            .map(|(b, body)| BodyField {
+                u: (0..body.nodes.len())
+                    .map(|i| [val(seed + 97 * b + 2 * i), val(seed + 97 * b + 2 * i + 1)])
+                    .collect(),
+                t: (0..body.elements.len())
+                    .map(|e| {
+                        let s = seed + 1000 + 97 * b + 4 * e;
+                        [[val(s), val(s + 1)], [val(s + 2), val(s + 3)]]
+                    })
+                    .collect(),
+            })
+            .collect();
+        let pairs: Vec<PairResult> = (0..4)
+            .map(|j| PairResult {
+                status: st[j],
+                traction: [val(seed + 3000 + j), val(seed + 3100 + j)],
+                jump: [val(seed + 3200 + j), val(seed + 3300 + j).abs()],
+            })
+            .collect();
+        let result = InterfaceResult { pairs };
+        let it = &rec.interfaces[0];
+        rec.history.rows.push(HistoryRow {
+            load_step: 0,
+            load_factor: 1.0,
+            iteration: k,
+            solver: "lcp",
+            status: vec![st.clone()],
+            normal_traction: vec![result.pairs.iter().map(|p| p.traction[1]).collect()],
+            normal_opening: vec![(0..4).map(|j| it.opening(&result, j)).collect()],
+            detached_length: vec![it.detached_length(&result)],
+        });
+        let mut state = StateRecord::new(k, 0, 1.0, fields, vec![result]);
+        if k == 2 {
+            state.interior = rec
+                .bodies
+                .iter()
+                .map(|b| {
+                    let mut ids: Vec<usize> = b.triangles.iter().flatten().copied().collect();
+                    ids.sort_unstable();
+                    ids.dedup();
+                    InteriorRecord {
+                        u: ids.iter().map(|&m| [val(m + 7), val(m + 8)]).collect(),
+                        sigma: ids
+                            .iter()
+                            .map(|&m| [val(m), val(m + 1), val(m + 2)])
+                            .collect(),
+                        mesh_nodes: ids,
+                    }
+                })
+                .collect();
+        }
+        rec.states.push(state);
+    }
+    rec.status = "converged".into();
+    rec.timings = vec![("read".into(), 0.25), ("write".into(), 0.5)];
+    let last = rec.states.last().unwrap();
+    let summary = serde_json::json!({
+        "title": "stacked",
+        "status": "converged",
+        "counts": {
+            "bodies": 2,
+            "boundary_elements": model.element_count(),
+            "interface_pairs": model.pair_count(),
+            "field_nodes": last.interior.iter().map(|i| i.mesh_nodes.len()).sum::<usize>(),
+        },
+        "interfaces": sgbem::output::summary::interfaces(&model.interfaces, &last.interfaces, 1.0),
+        "timings": {"read": 0.25, "write": 0.5, "total": 0.75},
+    });
+    rec.summary_json = summary.to_string();
+    let run = dir.join("run");
+    std::fs::create_dir_all(run.join("interfaces")).unwrap();
+    std::fs::write(run.join("summary.json"), rec.summary_json.as_bytes()).unwrap();
+    std::fs::write(
+        run.join("interfaces").join("joint.csv"),
+        sgbem::output::csv::interface_table(&model.interfaces[0], &last.interfaces[0]),
+    )
+    .unwrap();
+    write_archive(&run.join("archive.h5"), &rec).unwrap();
+    write_vtk(&run.join("vtk"), &rec).unwrap();
+    run
+}
+
+#[test]
+fn python_checks_agree_with_the_writers() {
+    let python = support::root().join(".venv/bin/python");
+    if !python.exists() {
+        eprintln!("skipped: no .venv (make setup installs h5py, meshio and pyvista)");
+        return;
+    }
+    let dir = tmpdir("outputs-python");
+    let run = fabricated_run(&dir);
+    let script = support::root().join("pipelines/check_outputs.py");
+    let check = |run: &Path| {
+        let o = std::process::Command::new(&python)
+            .arg(&script)
+            .arg(run)
+            .output()
+            .expect("run python");
+        (
+            o.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr),
+        )
+    };
+    let (code, out) = check(&run);
+    assert_eq!(code, 0, "{out}");
+    assert!(out.contains("checks passed"), "{out}");
+    // A summary that disagrees with the archive is caught, with the figure named.
+    let path = run.join("summary.json");
+    let mut s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    s["interfaces"]["joint"]["detached_length"] = serde_json::json!(123.0);
+    std::fs::write(&path, s.to_string()).unwrap();
+    let (code, out) = check(&run);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("detached_length"), "{out}");
+    // So is a missing VTK file.
+    let run2 = fabricated_run(&tmpdir("outputs-python2"));
+    std::fs::remove_file(run2.join("vtk").join("field_0002.vtu")).unwrap();
+    let (code, out) = check(&run2);
+    assert_eq!(code, 1, "{out}");
+    assert!(out.contains("field_0002.vtu"), "{out}");
+}
