@@ -975,3 +975,18 @@ fn python_checks_agree_with_the_writers() {
     assert_eq!(code, 1, "{out}");
     assert!(out.contains("field_0002.vtu"), "{out}");
 }
+
+#[test]
+fn progress_is_hidden_when_quiet() {
+    use sgbem::output::progress::Progress;
+    let p = Progress::new(true);
+    assert!(!p.enabled());
+    let bar = p.bar("assemble", 10);
+    bar.inc(3);
+    bar.set_message("body A");
+    assert_eq!(bar.position(), 3);
+    bar.finish();
+    let spin = Progress::hidden().spinner("contact");
+    spin.inc(1);
+    spin.finish();
+}

@@ -502,7 +502,7 @@ fn write_operators(g: &Group, op: &BodyOperators) -> R<()> {
         &op.unknowns,
         "unknowns: X = [F1; -U2] (the first n_x), then X0 = [F0; -U0] in the pair frames",
     )?;
-    let mixed = "mixed: V blocks length^2/stress... in the units of their unknowns";
+    let mixed = "mixed: each block in the units of its rows and columns (see unknowns)";
     put_array(
         g,
         "A",
