@@ -36,6 +36,10 @@ use crate::scene::{InterfaceModel, Tangential};
 use crate::solution::{HistoryRow, PairStatus};
 use crate::solve::{solve_status_scaled, Prepared, StatusSolution};
 
+/// Largest relative violation accepted when the iteration cycles between states that differ
+/// at the contact edge only (see [`solve_contact`]).
+pub const CYCLE_ACCEPT: f64 = 1e-3;
+
 /// Statuses `[k][j][c]` of every interface pair component (c = 0 tangential, 1 normal).
 pub type Status = Vec<Vec<[PairStatus; 2]>>;
 
@@ -302,7 +306,46 @@ pub fn solve_contact(
             interfaces: sol.interfaces.clone(),
         })
     };
-    let mut sol = solve(&status)?;
+    let mut sol = match solve(&status) {
+        Ok(s) => s,
+        Err(e) if e.exit_code() == 3 => {
+            // Bodies held only by open interfaces float: start from first contact instead,
+            // closing the pairs of smallest gap (then, if that is not enough, every pair).
+            let open: Vec<(usize, usize, f64)> = model
+                .interfaces
+                .iter()
+                .enumerate()
+                .filter(|(_, it)| it.spec.model == InterfaceModel::Unilateral)
+                .flat_map(|(k, it)| it.pairs.iter().enumerate().map(move |(j, p)| (k, j, p.gap)))
+                .filter(|&(k, j, _)| status[k][j][1] == PairStatus::Open)
+                .collect();
+            let hmin = open.iter().map(|o| o.2).fold(f64::INFINITY, f64::min);
+            let hmax = open.iter().map(|o| o.2).fold(0.0, f64::max);
+            for &(k, j, h) in &open {
+                if h <= hmin + 1e-9 * hmax.max(f64::MIN_POSITIVE) {
+                    switch(model, &mut status, &mut cohesion, k, j);
+                }
+            }
+            notes.push(
+                "the initial status leaves a body held by open interfaces only; the iteration \
+                 started from first contact (the pairs of smallest gap closed)"
+                    .into(),
+            );
+            match solve(&status) {
+                Ok(s) => s,
+                Err(e2) if e2.exit_code() == 3 => {
+                    for &(k, j, _) in &open {
+                        if status[k][j][1] == PairStatus::Open {
+                            switch(model, &mut status, &mut cohesion, k, j);
+                        }
+                    }
+                    solve(&status).map_err(|_| e)?
+                }
+                Err(e2) => return Err(e2),
+            }
+        }
+        Err(e) => return Err(e),
+    };
     if record {
         rows.push(history_row(
             model,
@@ -318,11 +361,18 @@ pub fn solve_contact(
     seen.insert(key(&status));
     let mut count = 0;
     let mut converged = false;
+    // The state of smallest largest-violation met so far: where the iteration cycles (a pair
+    // at the contact edge that carries tension when closed and overlaps slightly when open,
+    // formulation §6.4), it is the answer if its violation is small enough.
+    let mut best: Option<(f64, Status)> = None;
     while count < max_iterations {
         let v = violations(model, &sol, &status, &cohesion, tol);
         if v.is_empty() {
             converged = true;
             break;
+        }
+        if best.as_ref().is_none_or(|b| v[0].2 < b.0) {
+            best = Some((v[0].2, status.clone()));
         }
         match mode {
             Iteration::Evolutive => {
@@ -348,11 +398,33 @@ pub fn solve_contact(
                     seen.insert(key(&status));
                 }
                 Iteration::Evolutive => {
-                    notes.push(format!(
-                        "the evolutive iteration returned to an earlier status after {count} \
-                         iterations (a cycle)"
-                    ));
+                    let (worst, best_status) =
+                        best.take().unwrap_or((f64::INFINITY, status.clone()));
+                    status = best_status;
                     sol = solve(&status)?;
+                    converged = worst <= CYCLE_ACCEPT;
+                    notes.push(format!(
+                        "the status iteration returned to an earlier status after {count} \
+                         iterations (pairs at the contact edge switch back and forth); kept the \
+                         state of smallest violation, {worst:.1e} of its scale{}",
+                        if converged {
+                            " (above solve.tolerance, below the 1e-3 accepted for such cycles)"
+                        } else {
+                            ": too large, not converged"
+                        }
+                    ));
+                    if record {
+                        rows.push(history_row(
+                            model,
+                            &sol,
+                            &status,
+                            load_step,
+                            load_factor,
+                            count,
+                            mode.name(),
+                        ));
+                        keep(&sol, count, &mut states);
+                    }
                     break;
                 }
             }

@@ -223,6 +223,7 @@ pub fn solve_loaded(
                     notes: &r.notes,
                 }));
                 final_sol = Some((f, r.solution));
+                status = r.status;
                 break;
             }
             status = r.status;

@@ -187,10 +187,11 @@ pub fn body_field(
             }
             Unknown::LoopMode { loop_index, .. } => {
                 for &ei in &body.loops[loop_index].elements {
-                    for end in 0..2 {
-                        let dir = unk.loop_mode_value(body.nodes[body.elements[ei].nodes[end]]);
-                        t[ei][end][0] += v * dir[0];
-                        t[ei][end][1] += v * dir[1];
+                    let nodes = body.elements[ei].nodes;
+                    for (te, node) in t[ei].iter_mut().zip(nodes) {
+                        let dir = unk.loop_mode_value(body.nodes[node]);
+                        te[0] += v * dir[0];
+                        te[1] += v * dir[1];
                     }
                 }
             }

@@ -1,0 +1,315 @@
+//! Contact and detachment (formulation §6, §7 items 12 and 16): trivial cases, the paper's
+//! example 2, agreement of the solvers, independence of the initial status, and operators
+//! that never change during the iterations.
+
+mod support;
+
+use sgbem::contact::{initial_cohesion, solve_contact, Iteration, Status};
+use sgbem::pipeline::{load, solve_loaded, Loaded, Timings};
+use sgbem::quadrature::QuadratureSettings;
+use sgbem::solution::PairStatus;
+use support::*;
+
+fn loaded(dir: &std::path::Path, scene: &str, mesh: &std::path::Path) -> Loaded {
+    let sc = write(dir, "s.toml", scene);
+    load(&sc, Some(mesh)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// Stacked blocks with rollers on the base and on the left sides: a uniform stress state.
+fn rollers_scene(top: &str, joint: &str) -> String {
+    format!(
+        "plane = \"strain\"\n[body.lower]\nyoung = 1.0\npoisson = 0.3\n[body.upper]\nyoung = 3.0\n\
+         poisson = 0.2\n[boundary.base]\nuy = 0.0\n[boundary.left]\nux = 0.0\n[boundary.top]\n{top}\n\
+         [interface.joint]\nmodel = \"unilateral\"\n{joint}\n[solve]\nmethod = \"both\"\n"
+    )
+}
+
+fn rollers_mesh(n: usize) -> Msh {
+    let mut m = Msh::default();
+    m.line(1, [0.0, 0.0], [1.0, 0.0], n, &[1]);
+    m.line(2, [1.0, 0.0], [1.0, 1.0], n, &[2]);
+    m.line(3, [1.0, 1.0], [0.0, 1.0], n, &[3]);
+    m.line(4, [0.0, 1.0], [0.0, 0.0], n, &[5]);
+    m.line(5, [1.0, 1.0], [1.0, 2.0], n, &[2]);
+    m.line(6, [1.0, 2.0], [0.0, 2.0], n, &[4]);
+    m.line(7, [0.0, 2.0], [0.0, 1.0], n, &[5]);
+    m.surface(1, &[1, 2, 3, 4], &[1]);
+    m.surface(2, &[-3, 5, 6, 7], &[2]);
+    for (t, name) in [
+        (1, "base"),
+        (2, "right"),
+        (3, "joint"),
+        (4, "top"),
+        (5, "left"),
+    ] {
+        m.name(1, t, name);
+    }
+    m.name(2, 1, "lower");
+    m.name(2, 2, "upper");
+    m
+}
+
+fn run(l: &Loaded) -> sgbem::pipeline::RunResult {
+    let q = QuadratureSettings::standard();
+    let mut t = Timings::default();
+    solve_loaded(l, &q, &mut t)
+        .unwrap_or_else(|e| panic!("{e}"))
+        .1
+}
+
+#[test]
+fn uniform_compression_closes_everything_with_uniform_pressure() {
+    let dir = tmpdir("compression");
+    let msh = rollers_mesh(6).save(&dir, "m.msh");
+    // Different materials: frictionless, so that their different lateral expansions do
+    // not load the joint in shear.
+    for initial in ["initial = \"closed\"", "initial = \"open\""] {
+        let joint = format!("{initial}\ntangential = \"slide\"");
+        let l = loaded(&dir, &rollers_scene("ty = -2.5", &joint), &msh);
+        let r = run(&l);
+        assert_eq!(r.status, "converged");
+        for p in &r.interfaces[0].pairs {
+            assert_eq!(p.status, PairStatus::Closed, "{initial}");
+            assert!(
+                (p.traction[1] + 2.5).abs() < 1e-8 * 2.5,
+                "pressure {}",
+                p.traction[1]
+            );
+            assert!(p.traction[0].abs() < 1e-8, "shear {}", p.traction[0]);
+        }
+        let qp = r.qp.expect("qp ran");
+        assert_eq!(qp["differing_pairs_from_lcp"], 0);
+    }
+}
+
+#[test]
+fn uniform_tension_opens_everything_with_zero_forces() {
+    let dir = tmpdir("tension");
+    let msh = rollers_mesh(6).save(&dir, "m.msh");
+    // The upper block is pulled up by a displacement on its top: it lifts off rigidly.
+    let l = loaded(
+        &dir,
+        &rollers_scene("uy = 0.01\nux = 0.0", "initial = \"closed\""),
+        &msh,
+    );
+    let r = run(&l);
+    assert_eq!(r.status, "converged");
+    for p in &r.interfaces[0].pairs {
+        assert_eq!(p.status, PairStatus::Open);
+        assert!(p.traction[0] == 0.0 && p.traction[1] == 0.0);
+        assert!((p.jump[1] - 0.01).abs() < 1e-9, "opening {}", p.jump[1]);
+    }
+    let mut worst = 0.0f64;
+    for f in &r.fields {
+        for t in f.t.iter().flatten() {
+            worst = worst.max(t[0].abs()).max(t[1].abs());
+        }
+    }
+    assert!(worst < 1e-9, "largest traction {worst:e}");
+}
+
+#[test]
+fn an_open_gap_under_no_load_stays_open() {
+    let dir = tmpdir("gap");
+    let msh = rollers_mesh(6).save(&dir, "m.msh");
+    // The upper block is held by its top (an open interface holds nothing).
+    let gap = "initial = \"open\"\ngap = \"0.01 + 0.02*x\"";
+    let l = loaded(&dir, &rollers_scene("uy = 0.0", gap), &msh);
+    let r = run(&l);
+    for (p, pair) in r.interfaces[0]
+        .pairs
+        .iter()
+        .zip(&l.model.interfaces[0].pairs)
+    {
+        assert_eq!(p.status, PairStatus::Open);
+        assert!((p.jump[1]).abs() < 1e-12 && pair.gap > 0.009);
+    }
+    // Pushed down by less than the smallest gap: still open everywhere, the opening reduced
+    // by the push.
+    let l = loaded(&dir, &rollers_scene("uy = -0.005", gap), &msh);
+    let r = run(&l);
+    for (p, pair) in r.interfaces[0]
+        .pairs
+        .iter()
+        .zip(&l.model.interfaces[0].pairs)
+    {
+        assert_eq!(p.status, PairStatus::Open);
+        assert!((pair.gap + p.jump[1] - (pair.gap - 0.005)).abs() < 1e-9);
+    }
+}
+
+fn beam() -> Loaded {
+    let dir = tmpdir("beam");
+    let msh = gmsh(
+        &root().join("geo/clamped_beam_joint.geo"),
+        &dir,
+        "beam.msh",
+        false,
+        &[],
+    );
+    load(
+        &root().join("pipelines/clamped_beam_joint.toml"),
+        Some(&msh),
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
+/// The paper's example 2: 33.85 cm detached (88 of the 104 joint elements), the closed zone
+/// at the top; the evolutive path opens one pair at a time, monotonically; the active set
+/// and the polished QP reach the same statuses.
+#[test]
+fn example_2_detachment() {
+    let l = beam();
+    let r = run(&l);
+    let joint = &l.model.interfaces[0];
+    let el = 40.0 / 104.0;
+    let det = sgbem::output::summary::interface_figures(joint, &r.interfaces[0], 1.0);
+    let d = det["detached_length"].as_f64().unwrap();
+    println!(
+        "example 2: detached {d:.4} cm, closed {}",
+        det["closed_length"]
+    );
+    assert!((d - 33.85).abs() <= el + 1e-9, "detached length {d}");
+    // The closed pairs are the top ones (largest y), contiguous.
+    let closed: Vec<f64> = joint
+        .pairs
+        .iter()
+        .zip(&r.interfaces[0].pairs)
+        .filter(|(_, q)| q.status == PairStatus::Closed)
+        .map(|(p, _)| p.x[1])
+        .collect();
+    assert!(
+        closed.iter().all(|&y| y > 33.0),
+        "closed pairs at {closed:?}"
+    );
+    // Monotone path: the detached length never decreases.
+    let lengths: Vec<f64> = r
+        .history
+        .rows
+        .iter()
+        .map(|row| row.detached_length[0])
+        .collect();
+    assert!(
+        lengths.windows(2).all(|w| w[1] >= w[0] - 1e-12),
+        "{lengths:?}"
+    );
+    assert_eq!(r.contact["active_set"][0]["differing_pairs"], 0);
+    assert_eq!(r.qp.as_ref().unwrap()["differing_pairs_from_lcp"], 0);
+    assert!(r.contact["complementarity_residual"].as_f64().unwrap() <= 1e-10);
+}
+
+/// Along the evolutive path of example 2, σx at the bottom fibre of section a-a (x = 100)
+/// changes sign when the detached length passes about 16.92 cm (the paper's Fig. 6).
+#[test]
+fn example_2_bottom_fibre_changes_sign_along_the_path() {
+    use sgbem::assembly::material;
+    use sgbem::postprocess::{evaluate_points, BodyInput};
+    let l = beam();
+    let r = run(&l);
+    let q = QuadratureSettings::standard();
+    let mut previous: Option<(f64, f64)> = None;
+    let mut crossing = None;
+    for (state, row) in r.states.iter().zip(&r.history.rows) {
+        let inputs: Vec<BodyInput> = l
+            .model
+            .bodies
+            .iter()
+            .zip(&state.fields)
+            .map(|(b, f)| BodyInput {
+                body: b,
+                material: material(b, l.scene.plane),
+                field: f,
+                body_force: None,
+            })
+            .collect();
+        let v = evaluate_points(&inputs, &q, &[[100.0, 0.0]]);
+        let sx = v[0].as_ref().expect("point in body A").sigma[0][0];
+        let d = row.detached_length[0];
+        if let Some((d0, s0)) = previous {
+            if s0 > 0.0 && sx <= 0.0 && crossing.is_none() {
+                crossing = Some((d0, d));
+            }
+        }
+        previous = Some((d, sx));
+    }
+    let (d0, d1) = crossing.expect("σx changes sign along the path");
+    println!("example 2: σx at (100, 0) changes sign between d = {d0:.2} and {d1:.2} cm");
+    assert!(
+        d0 <= 16.92 + 2.0 && d1 >= 16.92 - 2.0,
+        "sign change at {d0}..{d1}"
+    );
+}
+
+/// The same physical state is reached from different initial statuses, and the per-body
+/// operators are the same bits before and after the iterations (no integral recomputed).
+#[test]
+fn final_state_does_not_depend_on_the_initial_status() {
+    let l = beam();
+    let q = QuadratureSettings::standard();
+    let prep =
+        sgbem::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {}).unwrap();
+    let hash = |p: &sgbem::solve::Prepared| -> Vec<u64> {
+        p.condensed
+            .iter()
+            .map(|c| {
+                let mut h: u64 = 1469598103934665603;
+                for i in 0..c.d00.nrows() {
+                    for j in 0..c.d00.ncols() {
+                        h = (h ^ c.d00[(i, j)].to_bits()).wrapping_mul(1099511628211);
+                    }
+                }
+                h
+            })
+            .collect()
+    };
+    let before = hash(&prep);
+    let n = l.model.interfaces[0].pairs.len();
+    let starts: Vec<Status> = vec![
+        vec![vec![[PairStatus::Closed; 2]; n]],
+        vec![vec![[PairStatus::Open; 2]; n]],
+        vec![(0..n)
+            .map(|j| {
+                if j % 3 == 0 {
+                    [PairStatus::Open; 2]
+                } else {
+                    [PairStatus::Closed; 2]
+                }
+            })
+            .collect()],
+    ];
+    let mut finals = Vec::new();
+    for (i, s) in starts.into_iter().enumerate() {
+        for it in [Iteration::Evolutive, Iteration::ActiveSet] {
+            let r = solve_contact(
+                &l.model,
+                &prep,
+                s.clone(),
+                initial_cohesion(&l.model),
+                it,
+                1e-10,
+                1000,
+                0,
+                1.0,
+                false,
+            )
+            .unwrap();
+            assert!(r.converged, "start {i} {it:?}: {:?}", r.notes);
+            finals.push((
+                r.status.clone(),
+                r.solution.interfaces[0]
+                    .pairs
+                    .iter()
+                    .map(|p| p.traction[1])
+                    .collect::<Vec<f64>>(),
+            ));
+        }
+    }
+    for (s, t) in &finals[1..] {
+        assert_eq!(s, &finals[0].0);
+        let scale = finals[0].1.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        for (a, b) in t.iter().zip(&finals[0].1) {
+            assert!((a - b).abs() <= 1e-9 * scale);
+        }
+    }
+    assert_eq!(hash(&prep), before, "D00 changed during the iterations");
+}
