@@ -18,6 +18,8 @@ PY_PACKAGES  := meshio pyvista h5py matplotlib
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
+SCENES := $(wildcard pipelines/*.toml)
+RESULTS := $(patsubst pipelines/%.toml,out/%/summary.json,$(SCENES))
 
 help:
 	@echo "sgbem — make targets"
@@ -57,18 +59,28 @@ out/mesh/%.msh: geo/%.geo
 
 demo: setup build mesh
 	$(SGBEM) check pipelines/clamped_beam_joint.toml
+	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/clamped_beam_joint
 	@echo
-	@echo "demo: the model and plan above come from pipelines/clamped_beam_joint.toml on out/mesh/clamped_beam_joint.msh"
+	@echo "demo: results of the paper's example 2 in out/clamped_beam_joint/:"
+	@echo "  summary.json, archive.h5 (sgbem inspect), interfaces/joint.csv, sections/a-a.csv,"
+	@echo "  vtk/history.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
 
 test: setup mesh
 	$(CARGO) test --release
 	$(CARGO) build --release
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
+	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
+	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
+
+examples: build mesh $(RESULTS)
+
+out/%/summary.json: pipelines/%.toml $(MESHES)
+	$(SGBEM) run $< --out out/$* --quiet
 
 bench:
 	$(CARGO) bench --bench stages
 
-examples accuracy report:
+accuracy report:
 	@echo "make $@: not available yet (the solver stages are still to come)"; exit 1
 
 clean:

@@ -244,3 +244,68 @@ pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
     }
     x0
 }
+
+/// The paper's reduced interface operators of a status ([paper eqs. 21–27]), for the
+/// archive: `K` and `L` of the whole interface system, then with the shared displacements of
+/// the closed pairs eliminated, `K00 = [[K_fvfv, K_fvur], [K_urfv, K_urur]]` over
+/// (−U of open pairs, F of closed pairs) with its load `L00`, and the diagonalised
+/// `Ktilde_urur = K_urur − K_urfv K_fvfv⁻¹ K_fvur`, `Ktilde_fvfv = K_fvfv − K_fvur K_urur⁻¹ K_urfv`.
+pub fn reduced_operators(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Vec<(String, Mat<f64>)> {
+    let mut f = Vec::new(); // F of closed pairs (ur)
+    let mut ur = Vec::new(); // shared −U of closed pairs (eliminated)
+    let mut fv = Vec::new(); // −U of open pairs
+    for iface in &layout.slots {
+        for pair in iface {
+            for s in pair {
+                f.extend(s.f);
+                ur.extend(s.u);
+                fv.extend(s.u_a);
+                fv.extend(s.u_b);
+            }
+        }
+    }
+    let sub =
+        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| k[(r[i], c[j])]);
+    let vec_of = |r: &[usize]| Mat::<f64>::from_fn(r.len(), 1, |i, _| l[r[i]]);
+    let t: Vec<usize> = fv.iter().chain(f.iter()).copied().collect();
+    let (htt, htr, hrr) = (sub(&t, &t), sub(&t, &ur), sub(&ur, &ur));
+    let (gt, gr) = (vec_of(&t), vec_of(&ur));
+    let (k00, l00) = if ur.is_empty() {
+        (htt, gt)
+    } else {
+        let lu = hrr.partial_piv_lu();
+        let x = lu.solve(htr.transpose().to_owned());
+        let y = lu.solve(&gr);
+        (&htt - &htr * &x, &gt - &htr * &y)
+    };
+    let nv = fv.len();
+    let nr = f.len();
+    let block = |m: &Mat<f64>, r0: usize, nr_: usize, c0: usize, nc: usize| {
+        Mat::<f64>::from_fn(nr_, nc, |i, j| m[(r0 + i, c0 + j)])
+    };
+    let kvv = block(&k00, 0, nv, 0, nv);
+    let kvr = block(&k00, 0, nv, nv, nr);
+    let krr = block(&k00, nv, nr, nv, nr);
+    let mut out = vec![
+        ("K".to_string(), k.clone()),
+        (
+            "L".to_string(),
+            Mat::<f64>::from_fn(l.len(), 1, |i, _| l[i]),
+        ),
+        ("K00".to_string(), k00.clone()),
+        ("L00".to_string(), l00.clone()),
+        ("K_fvfv".to_string(), kvv.clone()),
+        ("K_urur".to_string(), krr.clone()),
+    ];
+    if nv > 0 && nr > 0 {
+        let kt_rr = &krr - kvr.transpose() * kvv.partial_piv_lu().solve(&kvr);
+        let kt_vv = &kvv - &kvr * krr.partial_piv_lu().solve(kvr.transpose().to_owned());
+        out.push(("Ktilde_urur".to_string(), kt_rr));
+        out.push(("Ktilde_fvfv".to_string(), kt_vv));
+    } else if nr > 0 {
+        out.push(("Ktilde_urur".to_string(), krr));
+    } else if nv > 0 {
+        out.push(("Ktilde_fvfv".to_string(), kvv));
+    }
+    out
+}

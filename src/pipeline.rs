@@ -118,6 +118,21 @@ pub fn solve_loaded(
     settings: &crate::quadrature::QuadratureSettings,
     timings: &mut Timings,
 ) -> Result<(crate::solve::Prepared, RunResult)> {
+    solve_loaded_with(
+        loaded,
+        settings,
+        timings,
+        &crate::output::progress::Progress::hidden(),
+    )
+}
+
+/// [`solve_loaded`] showing progress on a terminal.
+pub fn solve_loaded_with(
+    loaded: &Loaded,
+    settings: &crate::quadrature::QuadratureSettings,
+    timings: &mut Timings,
+    progress: &crate::output::progress::Progress,
+) -> Result<(crate::solve::Prepared, RunResult)> {
     use crate::contact::{initial_cohesion, initial_status, solve_contact, Iteration};
     use crate::plan::ContactProblem;
     use crate::scene::Method;
@@ -127,7 +142,11 @@ pub fn solve_loaded(
     let Loaded {
         scene, model, plan, ..
     } = loaded;
-    let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|_| {})?;
+    let stage = progress.spinner("assemble");
+    let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
+        stage.set_message(m.to_string())
+    })?;
+    stage.finish();
     timings.add("assemble", prepared.assemble_seconds);
     timings.add("condense", prepared.condense_seconds);
     let factors = &scene.solve.load_factors;
@@ -168,7 +187,13 @@ pub fn solve_loaded(
     let mut residual = 0.0f64;
     let mut solver = "lcp";
     let mut active = Vec::new();
+    let lcp_stage = if run_lcp {
+        progress.spinner("contact (evolutive LCP)")
+    } else {
+        crate::output::progress::Stage::hidden()
+    };
     for (step, &f) in factors.iter().enumerate() {
+        lcp_stage.set_message(format!("load step {} of {}", step + 1, factors.len()));
         if run_lcp {
             let t = Instant::now();
             let r = solve_contact(
@@ -231,6 +256,7 @@ pub fn solve_loaded(
             final_sol = Some((f, r.solution));
         }
     }
+    lcp_stage.finish();
     // The QP (paper §3.2): one stationary problem at the final load factor.
     let mut qp_block = None;
     let mut qp_final = None;
@@ -323,6 +349,29 @@ pub fn solve_loaded(
     Ok((prepared, result))
 }
 
+/// The status of the final state (closed where the interface result says so).
+fn final_status(model: &Model, result: &RunResult) -> crate::contact::Status {
+    use crate::solution::PairStatus;
+    model
+        .interfaces
+        .iter()
+        .zip(&result.interfaces)
+        .map(|(it, r)| {
+            r.pairs
+                .iter()
+                .map(|p| {
+                    let slide = it.spec.tangential == crate::scene::Tangential::Slide
+                        && it.spec.model == crate::scene::InterfaceModel::Unilateral;
+                    match p.status {
+                        PairStatus::Closed if slide => [PairStatus::Open, PairStatus::Closed],
+                        s => [s, s],
+                    }
+                })
+                .collect()
+        })
+        .collect()
+}
+
 /// What [`crate::contact::not_converged`] needs.
 pub struct ContactView<'a> {
     pub iterations: usize,
@@ -350,7 +399,8 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     timings.add("read", t0.elapsed().as_secs_f64());
     let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
         .unwrap_or_else(QuadratureSettings::standard);
-    let (prepared, result) = solve_loaded(&loaded, &settings, &mut timings)?;
+    let progress = crate::output::progress::Progress::new(opts.quiet);
+    let (prepared, result) = solve_loaded_with(&loaded, &settings, &mut timings, &progress)?;
     let Loaded {
         scene, model, plan, ..
     } = &loaded;
@@ -397,10 +447,15 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         sections.push((s.name.clone(), rows));
     }
     let mut field_nodes = 0usize;
+    let mut interior = Vec::new();
     if scene.output.field {
+        let stage = progress.spinner("interior field");
         for input in &inputs {
-            field_nodes += field_at_nodes(input, &settings, &loaded.mesh.nodes).len();
+            let values = field_at_nodes(input, &settings, &loaded.mesh.nodes);
+            field_nodes += values.len();
+            interior.push(crate::output::record::InteriorRecord::from_values(&values));
         }
+        stage.finish();
     }
     timings.add("postprocess", t2.elapsed().as_secs_f64());
 
@@ -462,6 +517,61 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
     }
+    let text = serde_json::to_string_pretty(&summary)
+        .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
+    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+
+    // Archive and VTK files.
+    let t4 = Instant::now();
+    let stage = progress.spinner("archive and VTK");
+    let mut rec = crate::output::record::RunRecord::from_model(scene, &loaded.mesh, model)?;
+    if scene.output.operators {
+        rec.set_operators(&prepared.systems, &prepared.condensed);
+        let final_status = final_status(model, &result);
+        let layout = crate::interface::layout(model, &prepared.maps, &final_status)?;
+        let (k, l) =
+            crate::interface::assemble_scaled(&layout, &prepared.condensed, result.load_factor);
+        rec.contact_operators = Some(
+            crate::interface::reduced_operators(&layout, &k, &l)
+                .into_iter()
+                .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
+                .collect(),
+        );
+    }
+    let mut states: Vec<crate::output::record::StateRecord> = Vec::new();
+    if scene.output.history == crate::scene::History::Full {
+        let recorded = result.states.len().saturating_sub(1);
+        for st in &result.states[..recorded] {
+            states.push(crate::output::record::StateRecord::new(
+                states.len(),
+                st.load_step,
+                st.load_factor,
+                st.fields.clone(),
+                st.interfaces.clone(),
+            ));
+        }
+    }
+    let mut last = crate::output::record::StateRecord::new(
+        states.len(),
+        scene.solve.load_factors.len() - 1,
+        result.load_factor,
+        result.fields.clone(),
+        result.interfaces.clone(),
+    );
+    last.interior = interior;
+    states.push(last);
+    rec.states = states;
+    rec.history = result.history.clone();
+    rec.status = result.status.clone();
+    rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
+    rec.summary_json = text.clone();
+    crate::output::archive::write_archive(&out_dir.join("archive.h5"), &rec)?;
+    if scene.output.vtk {
+        crate::output::vtk::write_vtk(&out_dir.join("vtk"), &rec)?;
+    }
+    stage.finish();
+    timings.add("write", t4.elapsed().as_secs_f64());
+    summary["timings"] = timings.json();
     let text = serde_json::to_string_pretty(&summary)
         .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
     write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;

@@ -23,7 +23,6 @@
 //! whose contact zone is known", [paper §3.2]) and, for comparison, polished by the active-set
 //! iteration. Lengths are scaled to O(1) by Jacobi scaling of K̃ before Clarabel sees it.
 
-
 // Index loops mirror the block formulas.
 #![allow(clippy::needless_range_loop)]
 use clarabel::algebra::CscMatrix;
