@@ -246,7 +246,16 @@ def check_csv(c, run, h5, ifaces):
     for path in sorted((run / "sections").glob("*.csv")):
         with path.open() as f:
             head = f.readline().strip()
-        c.ok(head == "x,y,ux,uy,sxx,syy,sxy", f"{path}: header {head!r}")
+        if path.name.endswith("_path.csv"):
+            # The section at every recorded iteration: one block of points per state.
+            c.ok(head == "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy",
+                 f"{path}: header {head!r}")
+            with path.open() as f:
+                its = {int(row["iteration"]) for row in csv.DictReader(f)}
+            c.ok(len(its) == len(h5["history"]["iteration"][()]) if "history" in h5 else True,
+                 f"{path}: {len(its)} iterations, the archive's history has another count")
+        else:
+            c.ok(head == "x,y,ux,uy,sxx,syy,sxy", f"{path}: header {head!r}")
 
 
 def read_vtu(c, path, expect_names):

@@ -446,6 +446,48 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         }
         sections.push((s.name.clone(), rows));
     }
+    // Sections along the contact path (history = "full"): the same points at every
+    // recorded iteration, for plots like the paper's Fig. 6.
+    let mut section_paths = Vec::new();
+    if scene.output.history == crate::scene::History::Full && !result.states.is_empty() {
+        for s in &scene.output.sections {
+            let pts = section_points(s.from, s.to, s.points);
+            let mut text = String::from(
+                "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
+            );
+            for (st, row) in result.states.iter().zip(&result.history.rows) {
+                let inputs: Vec<BodyInput> = model
+                    .bodies
+                    .iter()
+                    .zip(&st.fields)
+                    .map(|(b, f)| BodyInput {
+                        body: b,
+                        material: material(b, scene.plane),
+                        field: f,
+                        body_force: b
+                            .body_force
+                            .filter(|v| *v != [0.0, 0.0])
+                            .map(|v| [st.load_factor * v[0], st.load_factor * v[1]]),
+                    })
+                    .collect();
+                let detached: f64 = row.detached_length.iter().sum();
+                for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
+                    let vals = match v {
+                        Some(p) => format!(
+                            "{:e},{:e},{:e},{:e},{:e}",
+                            p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
+                        ),
+                        None => "nan,nan,nan,nan,nan".into(),
+                    };
+                    text += &format!(
+                        "{},{},{:e},{:e},{:e},{:e},{vals}\n",
+                        st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
+                    );
+                }
+            }
+            section_paths.push((s.name.clone(), text));
+        }
+    }
     let mut field_nodes = 0usize;
     let mut interior = Vec::new();
     if scene.output.field {
@@ -473,6 +515,12 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         write_atomic(
             &out_dir.join("sections").join(format!("{name}.csv")),
             csv::section_table(rows).as_bytes(),
+        )?;
+    }
+    for (name, text) in &section_paths {
+        write_atomic(
+            &out_dir.join("sections").join(format!("{name}_path.csv")),
+            text.as_bytes(),
         )?;
     }
     timings.add("write", t3.elapsed().as_secs_f64());
