@@ -470,7 +470,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                             .map(|v| [st.load_factor * v[0], st.load_factor * v[1]]),
                     })
                     .collect();
-                let detached: f64 = row.detached_length.iter().sum();
+                let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
                 for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
                     let vals = match v {
                         Some(p) => format!(
