@@ -79,6 +79,7 @@ out/%/summary.json: pipelines/%.toml $(MESHES)
 
 bench:
 	$(CARGO) bench --bench stages
+	$(CARGO) bench --bench contact
 
 accuracy report:
 	@echo "make $@: not available yet (the solver stages are still to come)"; exit 1
