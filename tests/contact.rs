@@ -313,3 +313,93 @@ fn final_state_does_not_depend_on_the_initial_status() {
     }
     assert_eq!(hash(&prep), before, "D00 changed during the iterations");
 }
+
+fn beam_with(joint_extra: &str, solve_extra: &str) -> Loaded {
+    let dir = tmpdir("beam-variant");
+    let msh = gmsh(
+        &root().join("geo/clamped_beam_joint.geo"),
+        &dir,
+        "beam.msh",
+        false,
+        &["-setnumber", "n_joint", "52"],
+    );
+    let text = std::fs::read_to_string(root().join("pipelines/clamped_beam_joint.toml"))
+        .unwrap()
+        .replace("cohesion = 0.0\n", joint_extra)
+        .replace("[solve]\n", &format!("[solve]\n{solve_extra}"));
+    loaded(&dir, &text, &msh)
+}
+
+/// Brittle cohesion: a strong joint stays closed, a weaker one detaches less than a joint
+/// without cohesion, and the detached length never grows with the cohesion.
+#[test]
+fn cohesion_delays_detachment() {
+    let mut lengths = Vec::new();
+    for c in [1000.0, 200.0, 100.0, 0.0] {
+        let l = beam_with(&format!("cohesion = {c}\n"), "");
+        let r = run(&l);
+        assert_eq!(r.status, "converged", "c = {c}");
+        let d = sgbem::output::summary::interface_figures(
+            &l.model.interfaces[0],
+            &r.interfaces[0],
+            1.0,
+        )["detached_length"]
+            .as_f64()
+            .unwrap();
+        // Closed pairs respect t_n <= c.
+        for p in &r.interfaces[0].pairs {
+            if p.status == PairStatus::Closed {
+                assert!(
+                    p.traction[1] <= c * (1.0 + 1e-9) + 1e-9,
+                    "c = {c}: t_n {}",
+                    p.traction[1]
+                );
+            }
+        }
+        lengths.push((c, d));
+    }
+    println!("cohesion sweep (c, detached): {lengths:?}");
+    assert_eq!(lengths[0].1, 0.0, "c = 1000 keeps the joint closed");
+    assert!(lengths.windows(2).all(|w| w[1].1 >= w[0].1), "{lengths:?}");
+    assert!(lengths[3].1 > lengths[1].1, "{lengths:?}");
+}
+
+/// A quasi-static load history ending at the same load reaches the same state when there
+/// is no cohesion (the frictionless-like problem has one solution); every step is recorded.
+#[test]
+fn load_history_reaches_the_same_final_state() {
+    let one = run(&beam_with("cohesion = 0.0\n", ""));
+    let steps = run(&beam_with(
+        "cohesion = 0.0\n",
+        "load_factors = [0.25, 0.5, 0.75, 1.0]\n",
+    ));
+    let st = |r: &sgbem::pipeline::RunResult| {
+        r.interfaces[0]
+            .pairs
+            .iter()
+            .map(|p| p.status)
+            .collect::<Vec<_>>()
+    };
+    assert_eq!(st(&one), st(&steps));
+    let steps_seen: std::collections::BTreeSet<usize> =
+        steps.history.rows.iter().map(|r| r.load_step).collect();
+    assert_eq!(steps_seen.len(), 4);
+    // The detached length of a linear problem's contact zone does not depend on the load
+    // level: each step ends where the first did.
+    let finals: Vec<f64> = (0..4)
+        .map(|s| {
+            steps
+                .history
+                .rows
+                .iter()
+                .filter(|r| r.load_step == s)
+                .last()
+                .unwrap()
+                .detached_length[0]
+        })
+        .collect();
+    assert!(
+        finals.windows(2).all(|w| (w[0] - w[1]).abs() < 1e-12),
+        "{finals:?}"
+    );
+}
