@@ -263,7 +263,14 @@ pub fn solve_loaded_with(
     if matches!(method, Method::Qp | Method::Both) {
         let f = factors[last];
         let t = Instant::now();
-        let q = crate::qp::solve_qp(model, &prepared, f, &initial_cohesion(model), tol)?;
+        let q = crate::qp::solve_qp(
+            model,
+            &prepared,
+            f,
+            &initial_cohesion(model),
+            tol,
+            &initial_status(model),
+        )?;
         let qsol = solve_status_scaled(model, &prepared, &q.status, f)?;
         let polished = solve_contact(
             model,
@@ -287,7 +294,7 @@ pub fn solve_loaded_with(
         let psol = solve_status_scaled(model, &prepared, &polished.status, f)?;
         let vs_lcp = final_sol.as_ref().map(|_| diff(&polished.status, &status));
         qp_block = Some(serde_json::json!({
-            "form": "force QP (paper eq. 32b) with the gaps built in, active set polished by the mixed system",
+            "form": q.form,
             "interfaces": crate::output::summary::interfaces(&model.interfaces, &psol.interfaces, scene.thickness),
             "iterations": q.iterations,
             "solver_status": q.solver_status,

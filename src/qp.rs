@@ -1,30 +1,37 @@
-//! Contact and detachment as one convex quadratic programme ([paper §3.2, eq. 32b]), solved
+//! Contact and detachment as one convex quadratic programme ([paper §3.2, eqs. 30–33]), solved
 //! with Clarabel. The only module that touches Clarabel.
 //!
-//! Place in the flow: `solve` (per-body operators) → **`qp`** → results. Every unilateral
-//! pair is put in the closed (real) state — with its initial gap built in, so that "closed"
-//! means the gap has closed — and every displacement unknown of the interface system
-//! `K Y + L = 0` is eliminated:
+//! Place in the flow: `solve` (per-body operators) → **`qp`** → results. The statuses of the
+//! scene (`initial`) are the pre-partition: closed pairs carry forces F (real), open pairs
+//! the displacements x = −U of both sides (virtual). With the shared displacements of the
+//! closed pairs eliminated, the interface functional is [paper eq. 31]
 //!
 //! ```text
-//!   K̃ = K_FF − K_FU K_UU⁻¹ K_UF,   L̃ = L_F − K_FU K_UU⁻¹ L_U      (K̃ SPD: flexibility)
-//!   min ½ Fᵀ K̃ F + Fᵀ L̃   subject to   F_n,j ≤ c_j on every unilateral pair
+//!   Π(F, x) = ½FᵀK_rr F + FᵀK_rv x + ½xᵀK_vv x + FᵀL_r + xᵀL_v      (K_vv negative definite)
+//!   min over F, max over x   subject to   F_n ≤ c (closed pairs),  n·(U_A − U_B) ≤ h (open)
 //! ```
 //!
-//! The multiplier of an active constraint is the weighted normal opening of that pair, so the
-//! pairs whose constraint is active are the detached ones (formulation §6.2–§6.3). This force
-//! form covers detachment (zones that start closed) and contact (zones that start open with a
-//! gap) alike: an open zone is one whose contact force would be tensile.
+//! Dualising the gap constraints `B x ≤ H` with ν ≥ 0 and eliminating x (Q = −K_vv⁻¹ SPD)
+//! gives one jointly convex QP in (F, ν) (formulation §6.3):
 //!
-//! With `tangential = "stick"` the tangential force of every pair stays a free variable, so a
-//! detached pair remains tangentially bonded in the QP: this is the paper's QPP and the reason
-//! its detached lengths differ slightly from the iterative LCP (formulation §5.4). The QP's
-//! zones are then re-analysed with the mixed system ("a classical analysis on two bodies
-//! whose contact zone is known", [paper §3.2]) and, for comparison, polished by the active-set
-//! iteration. Lengths are scaled to O(1) by Jacobi scaling of K̃ before Clarabel sees it.
+//! ```text
+//!   P = [[K_rr + K_rv Q K_vr, −K_rv Q Bᵀ], [−B Q K_vr, B Q Bᵀ]]
+//!   q = [L_r + K_rv Q L_v ; H − B Q L_v],   N F ≤ C,  ν ≥ 0
+//! ```
+//!
+//! With every unilateral pair closed this is the detachment QP [paper eq. 32b] (min over F);
+//! with every one open, the contact QP [paper eq. 32a] (max over x, through its dual). An
+//! active force constraint marks a pair that opens, a positive ν one that closes. As the
+//! paper says, the QP gives the zones, not the path; the zones are then re-analysed with the
+//! mixed system and polished by the active-set iteration (formulation §6.5: the QPs are
+//! consistent predictors, the mixed system the reference). With `tangential = "stick"` a
+//! closed pair's tangential force is a free variable, so a pair the QP opens stays
+//! tangentially bonded in the QP — the paper's QPP, and one reason its lengths differ
+//! slightly from the LCP's (formulation §5.4). Variables are Jacobi-scaled to O(1).
 
 // Index loops mirror the block formulas.
 #![allow(clippy::needless_range_loop)]
+
 use clarabel::algebra::CscMatrix;
 use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
@@ -36,7 +43,7 @@ use crate::contact::Status;
 use crate::error::{Error, Result};
 use crate::interface;
 use crate::model::Model;
-use crate::scene::{InterfaceModel, Tangential};
+use crate::scene::InterfaceModel;
 use crate::solution::PairStatus;
 use crate::solve::Prepared;
 
@@ -44,6 +51,8 @@ use crate::solve::Prepared;
 pub struct QpResult {
     /// Statuses from the active constraints.
     pub status: Status,
+    /// Which of the paper's forms the partition gave: "32b", "32a" or "30".
+    pub form: &'static str,
     /// Clarabel's iterations and status.
     pub iterations: u32,
     pub solver_status: String,
@@ -53,120 +62,167 @@ pub struct QpResult {
     pub constraints: usize,
 }
 
-/// The all-closed status of the QP (tangential components open with "slide").
-pub fn qp_status(model: &Model) -> Status {
-    model
-        .interfaces
-        .iter()
-        .map(|it| {
-            let t = match (it.spec.model, it.spec.tangential) {
-                (InterfaceModel::Unilateral, Tangential::Slide) => PairStatus::Open,
-                _ => PairStatus::Closed,
-            };
-            vec![[t, PairStatus::Closed]; it.pairs.len()]
-        })
-        .collect()
-}
-
-/// Solves the force QP for the loads times `factor` and cohesions `cohesion[k][j]`.
+/// Solves the QP for the loads times `factor`, the cohesions `cohesion[k][j]` and the
+/// pre-partition `partition` (usually the initial statuses).
 pub fn solve_qp(
     model: &Model,
     prepared: &Prepared,
     factor: f64,
     cohesion: &[Vec<f64>],
     tolerance: f64,
+    partition: &Status,
 ) -> Result<QpResult> {
-    let status = qp_status(model);
-    let layout = interface::layout(model, &prepared.maps, &status)?;
+    let layout = interface::layout(model, &prepared.maps, partition)?;
     let (k, l) = interface::assemble_scaled(&layout, &prepared.condensed, factor);
-    // Partition Y into forces F and displacements U.
-    let mut is_f = vec![false; layout.n];
+    // Index sets of Y: closed forces (r), closed shared displacements (eliminated), open
+    // displacements (v).
+    let (mut fr, mut ur, mut xv) = (Vec::new(), Vec::new(), Vec::new());
     for iface in &layout.slots {
         for pair in iface {
-            for slot in pair {
-                if let Some(i) = slot.f {
-                    is_f[i] = true;
-                }
+            for sl in pair {
+                fr.extend(sl.f);
+                ur.extend(sl.u);
+                xv.extend(sl.u_a);
+                xv.extend(sl.u_b);
             }
         }
     }
-    let fi: Vec<usize> = (0..layout.n).filter(|&i| is_f[i]).collect();
-    let ui: Vec<usize> = (0..layout.n).filter(|&i| !is_f[i]).collect();
-    let (nf, nu) = (fi.len(), ui.len());
-    let sub = |rows: &[usize], cols: &[usize]| {
-        Mat::<f64>::from_fn(rows.len(), cols.len(), |i, j| k[(rows[i], cols[j])])
-    };
-    let kff = sub(&fi, &fi);
-    let kfu = sub(&fi, &ui);
-    let kuu = sub(&ui, &ui);
-    // [K_UU⁻¹ K_UF | K_UU⁻¹ L_U]
-    let rhs = Mat::<f64>::from_fn(nu, nf + 1, |i, j| {
-        if j < nf {
-            k[(ui[i], fi[j])]
-        } else {
-            l[ui[i]]
-        }
-    });
-    let sol = if nu > 0 {
-        kuu.partial_piv_lu().solve(&rhs)
-    } else {
-        Mat::<f64>::zeros(0, nf + 1)
-    };
-    let prod = &kfu * &sol;
-    let mut kt = Mat::<f64>::from_fn(nf, nf, |i, j| kff[(i, j)] - prod[(i, j)]);
-    for i in 0..nf {
-        for j in 0..i {
-            let m = 0.5 * (kt[(i, j)] + kt[(j, i)]);
-            kt[(i, j)] = m;
-            kt[(j, i)] = m;
-        }
+    let sub =
+        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| k[(r[i], c[j])]);
+    let col = |r: &[usize]| Mat::<f64>::from_fn(r.len(), 1, |i, _| l[r[i]]);
+    // Eliminate the shared displacements: K00 over t = [v; r].
+    let t: Vec<usize> = xv.iter().chain(fr.iter()).copied().collect();
+    let (nv, nr) = (xv.len(), fr.len());
+    let (mut k00, mut l00) = (sub(&t, &t), col(&t));
+    if !ur.is_empty() {
+        let lu = sub(&ur, &ur).partial_piv_lu();
+        let htr = sub(&t, &ur);
+        let x = lu.solve(htr.transpose().to_owned());
+        let y = lu.solve(col(&ur));
+        k00 = &k00 - &htr * &x;
+        l00 = &l00 - &htr * &y;
     }
-    let lt: Vec<f64> = (0..nf).map(|i| l[fi[i]] - prod[(i, nf)]).collect();
+    let blk = |r0: usize, nrow: usize, c0: usize, ncol: usize| {
+        Mat::<f64>::from_fn(nrow, ncol, |i, j| k00[(r0 + i, c0 + j)])
+    };
+    let kvv = blk(0, nv, 0, nv);
+    let kvr = blk(0, nv, nv, nr);
+    let krr = blk(nv, nr, nv, nr);
+    let lv = Mat::<f64>::from_fn(nv, 1, |i, _| l00[(i, 0)]);
+    let lr = Mat::<f64>::from_fn(nr, 1, |i, _| l00[(nv + i, 0)]);
 
-    // Constraints F_n ≤ c on unilateral pairs.
-    let mut rows: Vec<(usize, f64, usize, usize)> = Vec::new(); // (var, c, k, j)
+    // Gap constraints of the open unilateral pairs: n·(U_A − U_B) = x_B − x_A ≤ h.
+    let pos_v = |y: usize| xv.iter().position(|&q| q == y);
+    let pos_r = |y: usize| fr.iter().position(|&q| q == y);
+    let mut gaps: Vec<(usize, usize, f64, usize, usize)> = Vec::new(); // (a, b, h, k, j)
+    let mut forces: Vec<(usize, f64, usize, usize)> = Vec::new(); // (r, c, k, j)
     for (kk, it) in model.interfaces.iter().enumerate() {
         if it.spec.model != InterfaceModel::Unilateral {
             continue;
         }
         for j in 0..it.pairs.len() {
-            if let Some(y) = layout.slots[kk][j][1].f {
-                if let Some(v) = fi.iter().position(|&q| q == y) {
-                    rows.push((v, cohesion[kk][j], kk, j));
+            let sl = layout.slots[kk][j][1];
+            match partition[kk][j][1] {
+                PairStatus::Closed => {
+                    if let Some(r) = sl.f.and_then(pos_r) {
+                        forces.push((r, cohesion[kk][j], kk, j));
+                    }
                 }
+                PairStatus::Open => match (sl.u_a.and_then(pos_v), sl.u_b.and_then(pos_v)) {
+                    (Some(a), Some(b)) => gaps.push((a, b, it.pairs[j].gap, kk, j)),
+                    _ => {
+                        return Err(Error::numerical(format!(
+                            "the contact QP needs both normal displacements at the open pairs;                              interface \"{}\" prescribes one at {:?}",
+                            it.spec.name, it.pairs[j].x
+                        )))
+                    }
+                },
             }
         }
     }
-    // Jacobi scaling: F = D x.
-    let d: Vec<f64> = (0..nf)
-        .map(|i| {
-            let v = kt[(i, i)];
-            if v > 0.0 {
-                1.0 / v.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    if (0..nf).any(|i| kt[(i, i)] <= 0.0) {
+    let m_v = gaps.len();
+    let form = match (forces.is_empty(), m_v == 0) {
+        (false, true) | (true, true) => "32b",
+        (true, false) => "32a",
+        (false, false) => "30",
+    };
+    // Q = −K_vv⁻¹ (K_vv negative definite: each open side is held elastically).
+    let (q_kvr, q_lv, q_bt) = if nv > 0 {
+        let neg = Mat::<f64>::from_fn(nv, nv, |i, j| -kvv[(i, j)]);
+        let llt = neg.llt(faer::Side::Lower).map_err(|_| {
+            Error::numerical(
+                "the open side of an interface is not held (the virtual stiffness K_fvfv is not \
+                 negative definite): the QP cannot eliminate its displacements",
+            )
+        })?;
+        let mut bt = Mat::<f64>::zeros(nv, m_v);
+        for (g, &(a, b, _, _, _)) in gaps.iter().enumerate() {
+            bt[(a, g)] = -1.0;
+            bt[(b, g)] = 1.0;
+        }
+        (llt.solve(&kvr), llt.solve(&lv), llt.solve(&bt))
+    } else {
+        (Mat::zeros(0, nr), Mat::zeros(0, 1), Mat::zeros(0, m_v))
+    };
+    // Variables z = [F (nr); ν (m_v)].
+    let n = nr + m_v;
+    let mut p = Mat::<f64>::zeros(n, n);
+    let mut q = vec![0.0; n];
+    // K_rv Q = K_vrᵀ Q: with Q K_vr = q_kvr, K_rv Q K_vr = K_vrᵀ q_kvr.
+    let a11 = &krr + kvr.transpose() * &q_kvr;
+    let a12 = kvr.transpose() * &q_bt; // K_rv Q Bᵀ
+    let bmat = |g: usize, row: &Mat<f64>, c: usize| -> f64 {
+        // (B M)[g, c] for M with nv rows: x_B − x_A.
+        let (a, b, _, _, _) = gaps[g];
+        row[(b, c)] - row[(a, c)]
+    };
+    for i in 0..nr {
+        for j in 0..nr {
+            p[(i, j)] = a11[(i, j)];
+        }
+        for g in 0..m_v {
+            p[(i, nr + g)] = -a12[(i, g)];
+            p[(nr + g, i)] = -a12[(i, g)];
+        }
+    }
+    for g in 0..m_v {
+        for h in 0..m_v {
+            p[(nr + g, nr + h)] = bmat(g, &q_bt, h);
+        }
+    }
+    let rq = kvr.transpose() * &q_lv;
+    for i in 0..nr {
+        q[i] = lr[(i, 0)] + rq[(i, 0)];
+    }
+    for g in 0..m_v {
+        q[nr + g] = gaps[g].2 - bmat(g, &q_lv, 0);
+    }
+    for i in 0..n {
+        for j in 0..i {
+            let m = 0.5 * (p[(i, j)] + p[(j, i)]);
+            p[(i, j)] = m;
+            p[(j, i)] = m;
+        }
+    }
+    if (0..n).any(|i| p[(i, i)] <= 0.0) {
         return Err(Error::numerical(
-            "the interface flexibility of the QP is not positive definite (a body may be free \
-             to move along an interface)",
+            "the contact QP is not positive definite (a body may be free to move along an \
+             interface)",
         ));
     }
-    let qscale = lt
+    // Jacobi scaling z = D w, and the objective scaled to O(1).
+    let d: Vec<f64> = (0..n).map(|i| 1.0 / p[(i, i)].sqrt()).collect();
+    let qscale = q
         .iter()
         .zip(&d)
         .map(|(v, di)| (v * di).abs())
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    // P upper triangle in CSC, q, A (one row per constraint), b.
     let mut colptr = vec![0usize];
-    let mut rowval = Vec::new();
-    let mut nzval = Vec::new();
-    for j in 0..nf {
+    let (mut rowval, mut nzval) = (Vec::new(), Vec::new());
+    for j in 0..n {
         for i in 0..=j {
-            let v = d[i] * kt[(i, j)] * d[j];
+            let v = d[i] * p[(i, j)] * d[j];
             if v != 0.0 {
                 rowval.push(i);
                 nzval.push(v);
@@ -174,26 +230,30 @@ pub fn solve_qp(
         }
         colptr.push(rowval.len());
     }
-    let p = CscMatrix::new(nf, nf, colptr, rowval, nzval);
-    let q: Vec<f64> = (0..nf).map(|i| d[i] * lt[i] / qscale).collect();
-    let m = rows.len();
-    let mut acol: Vec<Vec<(usize, f64)>> = vec![Vec::new(); nf];
+    let pm = CscMatrix::new(n, n, colptr, rowval, nzval);
+    let qv: Vec<f64> = (0..n).map(|i| d[i] * q[i] / qscale).collect();
+    // Constraints: F_n ≤ c (rows on F), −ν ≤ 0.
+    let m = forces.len() + m_v;
+    let mut acol: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
     let mut b = Vec::with_capacity(m);
-    for (r, &(v, c, _, _)) in rows.iter().enumerate() {
-        acol[v].push((r, 1.0));
-        b.push(c / d[v] / qscale);
+    for (row, &(r, c, _, _)) in forces.iter().enumerate() {
+        acol[r].push((row, 1.0));
+        b.push(c / d[r] / qscale);
+    }
+    for g in 0..m_v {
+        acol[nr + g].push((forces.len() + g, -1.0));
+        b.push(0.0);
     }
     let mut colptr = vec![0usize];
-    let mut rowval = Vec::new();
-    let mut nzval = Vec::new();
-    for col in &acol {
-        for &(r, v) in col {
+    let (mut rowval, mut nzval) = (Vec::new(), Vec::new());
+    for c in &acol {
+        for &(r, v) in c {
             rowval.push(r);
             nzval.push(v);
         }
         colptr.push(rowval.len());
     }
-    let a = CscMatrix::new(m, nf, colptr, rowval, nzval);
+    let am = CscMatrix::new(m, n, colptr, rowval, nzval);
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
         .tol_gap_abs(tolerance.max(1e-12))
@@ -203,7 +263,7 @@ pub fn solve_qp(
         .build()
         .map_err(|e| Error::numerical(format!("QP settings rejected: {e:?}")))?;
     let cones = [NonnegativeConeT(m)];
-    let mut solver = DefaultSolver::new(&p, &q, &a, &b, &cones, settings)
+    let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
         .map_err(|e| Error::numerical(format!("the QP could not be set up: {e:?}")))?;
     solver.solve();
     let st = solver.solution.status;
@@ -212,36 +272,45 @@ pub fn solve_qp(
             "the contact QP did not solve: Clarabel status {st:?}"
         )));
     }
-    let z = &solver.solution.z;
-    let s = &solver.solution.s;
-    let zmax = z.iter().copied().fold(0.0, f64::max).max(f64::MIN_POSITIVE);
-    let xmax = solver
-        .solution
-        .x
+    let (z, s, x) = (&solver.solution.z, &solver.solution.s, &solver.solution.x);
+    let xmax = x
         .iter()
         .map(|v| v.abs())
         .fold(0.0, f64::max)
         .max(f64::MIN_POSITIVE);
-    // Active constraint with a positive multiplier: detached (open).
-    let mut out = status.clone();
-    for (r, &(_, _, kk, j)) in rows.iter().enumerate() {
-        let active = s[r] <= 1e-6 * xmax && z[r] > 1e-6 * zmax;
-        if active {
-            out[kk][j] = [PairStatus::Open, PairStatus::Open];
-        } else {
-            let t = match model.interfaces[kk].spec.tangential {
-                Tangential::Slide => PairStatus::Open,
-                Tangential::Stick => PairStatus::Closed,
-            };
-            out[kk][j] = [t, PairStatus::Closed];
+    let zf = z[..forces.len()]
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let nu_max = x[nr..]
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let mut out = partition.clone();
+    let flip = |out: &mut Status, kk: usize, j: usize, to: PairStatus| {
+        let slide = model.interfaces[kk].spec.tangential == crate::scene::Tangential::Slide;
+        let t = if slide { PairStatus::Open } else { to };
+        out[kk][j] = [t, to];
+    };
+    for (row, &(_, _, kk, j)) in forces.iter().enumerate() {
+        if s[row] <= 1e-6 * xmax && z[row] > 1e-6 * zf {
+            flip(&mut out, kk, j, PairStatus::Open);
+        }
+    }
+    for (g, &(_, _, _, kk, j)) in gaps.iter().enumerate() {
+        if x[nr + g] > 1e-6 * nu_max && x[nr + g] > 0.0 {
+            flip(&mut out, kk, j, PairStatus::Closed);
         }
     }
     Ok(QpResult {
         status: out,
+        form,
         iterations: solver.info.iterations,
         solver_status: format!("{st:?}"),
         objective: solver.solution.obj_val * qscale * qscale,
-        variables: nf,
+        variables: n,
         constraints: m,
     })
 }
