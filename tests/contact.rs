@@ -392,8 +392,7 @@ fn load_history_reaches_the_same_final_state() {
                 .history
                 .rows
                 .iter()
-                .filter(|r| r.load_step == s)
-                .last()
+                .rfind(|r| r.load_step == s)
                 .unwrap()
                 .detached_length[0]
         })
