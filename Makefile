@@ -29,6 +29,7 @@ help:
 	@echo "  make build     cargo build --release"
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
+	@echo "  make vault     the paper's vault (example 3) for five cohesions, tables in out/vault/"
 	@echo "  make accuracy  refinement studies: error and time"
 	@echo "  make bench     per-stage benchmarks"
 	@echo "  make report    pictures and results tables"
@@ -76,6 +77,17 @@ examples: build mesh $(RESULTS)
 
 out/%/summary.json: pipelines/%.toml $(MESHES)
 	$(SGBEM) run $< --out out/$* --quiet
+
+# The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa, then the tables
+# beside the paper's Tables 3 and 4 (out/vault/table3.md, table4.md).
+.PHONY: vault
+VAULT_C := 0.4 0.3 0.2 0.1 0
+VAULT_RESULTS := $(foreach c,$(VAULT_C),out/vault_c$(c)/summary.json)
+
+vault: build out/mesh/vault.msh $(VAULT_RESULTS) out/vault/table3.md
+
+out/vault/table3.md: pipelines/vault_table.py $(VAULT_RESULTS)
+	python3 pipelines/vault_table.py out
 
 bench:
 	$(CARGO) bench --bench stages
