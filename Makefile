@@ -93,8 +93,18 @@ bench:
 	$(CARGO) bench --bench stages
 	$(CARGO) bench --bench contact
 
-accuracy report:
+accuracy:
 	@echo "make $@: not available yet (the solver stages are still to come)"; exit 1
+
+# Pictures of every run (docs/img/<run>_*.png: strained shapes, detachment along the
+# interfaces per iteration, sections, the paper's Figs. 5 and 6) and docs/results.md (headline
+# figures beside the paper's Tables 1-4). A run folder missing under out/ is skipped.
+report: setup
+	@$(MAKE) --no-print-directory -k examples || \
+	  echo "report: some runs failed (see above): their folders are skipped or show the previous run"
+	@mkdir -p docs/img
+	$(PY) pipelines/report.py $(dir $(RESULTS)) --out docs/img
+	$(PY) pipelines/results.py out --img docs/img --md docs/results.md
 
 clean:
 	rm -rf out target/release/sgbem
