@@ -14,6 +14,7 @@ pub mod expr;
 pub mod galerkin;
 pub mod interface;
 pub mod kernels;
+pub mod lcp;
 pub mod mesh;
 pub mod model;
 pub mod output;

@@ -293,6 +293,20 @@ pub fn solve_loaded_with(
         };
         let psol = solve_status_scaled(model, &prepared, &polished.status, f)?;
         let vs_lcp = final_sol.as_ref().map(|_| diff(&polished.status, &status));
+        if final_sol.is_none() {
+            // The QP alone: its polished state is the answer, judged like the LCP's.
+            iterations = polished.iterations;
+            residual = polished.residual;
+            notes.extend(polished.notes.iter().cloned());
+            if !polished.converged {
+                converged = false;
+                failure = Some(crate::contact::not_converged(&ContactView {
+                    iterations: polished.iterations,
+                    residual: polished.residual,
+                    notes: &polished.notes,
+                }));
+            }
+        }
         qp_block = Some(serde_json::json!({
             "form": q.form,
             "interfaces": crate::output::summary::interfaces(&model.interfaces, &psol.interfaces, scene.thickness),
@@ -301,6 +315,10 @@ pub fn solve_loaded_with(
             "variables": q.variables,
             "constraints": q.constraints,
             "objective": q.objective,
+            "lemke": q.lemke.as_ref().map(|(st, pivots)| serde_json::json!({
+                "pivots": pivots,
+                "differing_pairs_from_clarabel": diff(st, &q.status),
+            })),
             "polishing_iterations": polished.iterations,
             "polished_converged": polished.converged,
             "differing_pairs_from_lcp": vs_lcp,

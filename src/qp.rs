@@ -60,6 +60,8 @@ pub struct QpResult {
     /// Number of variables and constraints.
     pub variables: usize,
     pub constraints: usize,
+    /// The same problem as an LCP solved by Lemke's pivoting: its statuses, and its pivots.
+    pub lemke: Option<(Status, usize)>,
 }
 
 /// Solves the QP for the loads times `factor`, the cohesions `cohesion[k][j]` and the
@@ -210,6 +212,7 @@ pub fn solve_qp(
              interface)",
         ));
     }
+    let lemke = lemke_statuses(model, partition, &p, &q, &forces, &gaps, nr)?;
     // Jacobi scaling z = D w, and the objective scaled to O(1).
     let d: Vec<f64> = (0..n).map(|i| 1.0 / p[(i, i)].sqrt()).collect();
     let qscale = q
@@ -312,5 +315,111 @@ pub fn solve_qp(
         objective: solver.solution.obj_val * qscale * qscale,
         variables: n,
         constraints: m,
+        lemke,
     })
+}
+
+/// The QP's optimality conditions as an LCP in y = [c − F_n (closed pairs); ν (open pairs)]
+/// after eliminating the free forces (tangential, bonded), solved by Lemke's method: an
+/// exact, finite alternative to the interior-point solution (formulation §6.4).
+fn lemke_statuses(
+    model: &Model,
+    partition: &Status,
+    p: &Mat<f64>,
+    q: &[f64],
+    forces: &[(usize, f64, usize, usize)],
+    gaps: &[(usize, usize, f64, usize, usize)],
+    nr: usize,
+) -> Result<Option<(Status, usize)>> {
+    let n = p.nrows();
+    let mut constrained: Vec<(usize, f64, f64)> = Vec::new(); // (variable, a, e)
+    for &(r, c, _, _) in forces {
+        constrained.push((r, c, -1.0));
+    }
+    for g in 0..gaps.len() {
+        constrained.push((nr + g, 0.0, 1.0));
+    }
+    if constrained.is_empty() {
+        return Ok(None);
+    }
+    let is_c: Vec<bool> = {
+        let mut v = vec![false; n];
+        for &(i, _, _) in &constrained {
+            v[i] = true;
+        }
+        v
+    };
+    let free: Vec<usize> = (0..n).filter(|&i| !is_c[i]).collect();
+    let cidx: Vec<usize> = constrained.iter().map(|c| c.0).collect();
+    let nc = cidx.len();
+    let sub =
+        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| p[(r[i], c[j])]);
+    let mut s_mat = sub(&cidx, &cidx);
+    let mut r_vec: Vec<f64> = cidx.iter().map(|&i| q[i]).collect();
+    if !free.is_empty() {
+        let pff = sub(&free, &free);
+        let pfc = sub(&free, &cidx);
+        let qf = Mat::<f64>::from_fn(free.len(), 1, |i, _| q[free[i]]);
+        let lu = pff.partial_piv_lu();
+        let x = lu.solve(&pfc);
+        let y = lu.solve(&qf);
+        s_mat = &s_mat - pfc.transpose() * &x;
+        let py = pfc.transpose() * &y;
+        for i in 0..nc {
+            r_vec[i] -= py[(i, 0)];
+        }
+    }
+    // M = E S E, q = E (S a + r), Jacobi-scaled.
+    let mut mm = vec![0.0; nc * nc];
+    let mut qq = vec![0.0; nc];
+    for i in 0..nc {
+        let sa: f64 = (0..nc).map(|j| s_mat[(i, j)] * constrained[j].1).sum();
+        qq[i] = constrained[i].2 * (sa + r_vec[i]);
+        for j in 0..nc {
+            mm[i * nc + j] = constrained[i].2 * s_mat[(i, j)] * constrained[j].2;
+        }
+    }
+    let d: Vec<f64> = (0..nc)
+        .map(|i| 1.0 / mm[i * nc + i].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    for i in 0..nc {
+        qq[i] *= d[i];
+        for j in 0..nc {
+            mm[i * nc + j] *= d[i] * d[j];
+        }
+    }
+    let sol = crate::lcp::lemke(&mm, &qq, 20 * nc + 100).map_err(|f| {
+        Error::numerical(format!("Lemke's method failed on the contact LCP: {f:?}"))
+    })?;
+    let mut out = partition.clone();
+    let slide = |kk: usize| model.interfaces[kk].spec.tangential == crate::scene::Tangential::Slide;
+    let wmax = sol
+        .w
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    let zmax = sol
+        .z
+        .iter()
+        .copied()
+        .fold(0.0, f64::max)
+        .max(f64::MIN_POSITIVE);
+    for (i, &(_, _, kk, j)) in forces.iter().enumerate() {
+        // λ = 0 with a positive multiplier: the force constraint is active, the pair opens.
+        if sol.z[i] <= 1e-9 * zmax && sol.w[i] > 1e-9 * wmax {
+            out[kk][j] = [PairStatus::Open, PairStatus::Open];
+        }
+    }
+    for (g, &(_, _, _, kk, j)) in gaps.iter().enumerate() {
+        if sol.z[forces.len() + g] > 1e-9 * zmax {
+            let t = if slide(kk) {
+                PairStatus::Open
+            } else {
+                PairStatus::Closed
+            };
+            out[kk][j] = [t, PairStatus::Closed];
+        }
+    }
+    Ok(Some((out, sol.pivots)))
 }
