@@ -871,6 +871,26 @@ fn build_body(
         for &e in &l.elements {
             elements[e].loop_index = li;
         }
+        // A loop that turns back on itself (two consecutive elements on top of each other)
+        // encloses nothing there and has no normal at the fold.
+        let n = l.elements.len();
+        for k in 0..n {
+            let (p, q) = (&elements[l.elements[k]], &elements[l.elements[(k + 1) % n]]);
+            if dot(p.tangent, q.tangent) < -1.0 + 1e-9 {
+                let node = q.nodes[0];
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "the boundary of body \"{name}\" folds back on itself at node {} {} \
+                         (elements {} and {} overlap): fix the curves there",
+                        mesh.node_tags[mesh_nodes[node]],
+                        fmt_point(nodes[node]),
+                        p.tag,
+                        q.tag
+                    ),
+                ));
+            }
+        }
     }
     let area = loops.iter().map(|l| l.area).sum();
     Ok(Body {

@@ -350,3 +350,15 @@ fn gmsh_untagged_curve_gives_the_hint() {
         &["untagged.msh", "curve 5", "\"upper\"", "Physical Curve"],
     );
 }
+
+/// Found by the `model` fuzz target: a boundary that folds back on itself (two consecutive
+/// elements on top of each other) had no normal at the fold; it is now an input error.
+#[test]
+fn folded_boundary_found_by_fuzzing_is_an_input_error() {
+    let dir = tmpdir("cli-fold");
+    let scene = "plane = \"strain\"\n[body.left]\nyoung = 1.0\npoisson = 0.3\n[body.right]\nyoung = 2.0\n\
+                 poisson = 0.25\n[boundary.clamp]\nux = 0.0\nuy = \"0.01*y\"\n[boundary.free]\ntn = \"-x\"\n\
+                 [interface.interface]\nmodel = \"unilateral\"\n";
+    let msh = root().join("tests/fixtures/fuzz_model_folded_interface.msh");
+    bad(check(&dir, scene, &msh), &["folds back", "left", "node 14"]);
+}
