@@ -23,7 +23,9 @@
 //!   the history; it stops when no pair violates its condition;
 //! * **active set** (primal–dual active set, the semismooth Newton method with c → ∞):
 //!   switch every violating pair at once; converges in a few iterations; a repeated status
-//!   set (detected by hashing) is a cycle and hands over to the evolutive iteration.
+//!   set (detected by hashing) is a cycle: the iteration restarts once from the zones of
+//!   Lemke's method on the QP's LCP (`qp`, `lcp`), and a second cycle hands over to the
+//!   evolutive iteration.
 //!
 //! Brittle cohesion [paper §3.1.1]: a pair that opens loses its cohesion for good (c_j := 0);
 //! the active-set solver repeats until no new pair opens (the outer loop of formulation §6.1).
@@ -365,6 +367,7 @@ pub fn solve_contact(
     // at the contact edge that carries tension when closed and overlaps slightly when open,
     // formulation §6.4), it is the answer if its violation is small enough.
     let mut best: Option<(f64, Status)> = None;
+    let mut lemke_tried = false;
     while count < max_iterations {
         let v = violations(model, &sol, &status, &cohesion, tol);
         if v.is_empty() {
@@ -388,10 +391,39 @@ pub fn solve_contact(
         count += 1;
         if !seen.insert(key(&status)) {
             match mode {
+                Iteration::ActiveSet if !lemke_tried => {
+                    // Fall back to Lemke's pivoting on the QP's LCP with the current status
+                    // as the pre-partition, then resume the active set from its zones.
+                    lemke_tried = true;
+                    match crate::qp::solve_qp(model, prepared, load_factor, &cohesion, tol, &status)
+                    {
+                        Ok(q) => {
+                            let (st, pivots) = q.lemke.unwrap_or((q.status, 0));
+                            notes.push(format!(
+                                "the active-set iteration cycled after {count} iterations; \
+                                 restarted from the zones of Lemke's method ({pivots} pivots)"
+                            ));
+                            for (k, it) in st.iter().enumerate() {
+                                for (j, p) in it.iter().enumerate() {
+                                    if p[1] != status[k][j][1] {
+                                        switch(model, &mut status, &mut cohesion, k, j);
+                                    }
+                                }
+                            }
+                        }
+                        Err(e) => notes.push(format!(
+                            "the active-set iteration cycled after {count} iterations; Lemke's \
+                             method could not help ({})",
+                            e.message()
+                        )),
+                    }
+                    seen.clear();
+                    seen.insert(key(&status));
+                }
                 Iteration::ActiveSet => {
                     notes.push(format!(
-                        "the active-set iteration cycled after {count} iterations; continued \
-                         with the evolutive iteration"
+                        "the active-set iteration cycled again after {count} iterations; \
+                         continued with the evolutive iteration"
                     ));
                     mode = Iteration::Evolutive;
                     seen.clear();
