@@ -206,6 +206,13 @@ def check_history(c, h5, ifaces):
         c.ok(st.shape == (nr, p), f"/history status of {name} is not rows x pairs")
         if st.shape != (nr, p) or dl.shape != (nr, len(ifaces)):
             continue
+        # The last history row is the final solution.
+        if nr > 0 and "solution" in h5:
+            fin = h5["solution"]["interfaces"][i.name.split("/")[-1]]
+            c.ok(np.array_equal(st[-1], fin["status"][()]),
+                 f"/history: the last row's status of {name} differs from /solution")
+            c.close(g["normal_traction"][()][-1], fin["traction"][()][:, 1],
+                    f"/history: the last row's normal traction of {name} vs /solution")
         lengths = segment_lengths(i["x"][()], i["elements"][()])
         e = i["elements"][()]
         for r in range(nr):
