@@ -308,6 +308,23 @@ pub fn solve_contact(
             interfaces: sol.interfaces.clone(),
         })
     };
+    let record_state = |sol: &StatusSolution,
+                        status: &Status,
+                        it: usize,
+                        mode: Iteration,
+                        rows: &mut Vec<HistoryRow>,
+                        states: &mut Vec<RecordedState>| {
+        rows.push(history_row(
+            model,
+            sol,
+            status,
+            load_step,
+            load_factor,
+            it,
+            mode.name(),
+        ));
+        keep(sol, it, states);
+    };
     let mut sol = match solve(&status) {
         Ok(s) => s,
         Err(e) if e.exit_code() == 3 => {
@@ -446,16 +463,7 @@ pub fn solve_contact(
                         }
                     ));
                     if record {
-                        rows.push(history_row(
-                            model,
-                            &sol,
-                            &status,
-                            load_step,
-                            load_factor,
-                            count,
-                            mode.name(),
-                        ));
-                        keep(&sol, count, &mut states);
+                        record_state(&sol, &status, count, mode, &mut rows, &mut states);
                     }
                     break;
                 }
@@ -463,16 +471,7 @@ pub fn solve_contact(
         }
         sol = solve(&status)?;
         if record {
-            rows.push(history_row(
-                model,
-                &sol,
-                &status,
-                load_step,
-                load_factor,
-                count,
-                mode.name(),
-            ));
-            keep(&sol, count, &mut states);
+            record_state(&sol, &status, count, mode, &mut rows, &mut states);
         }
     }
     if !converged && count >= max_iterations {

@@ -245,39 +245,64 @@ pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
     x0
 }
 
+/// The interface system with the shared displacements of the closed pairs eliminated
+/// ([paper eqs. 21–24]): `K00` and `L00` over `t = [open; forces]`, with the Y indices of
+/// both parts.
+pub struct Reduced {
+    pub k00: Mat<f64>,
+    pub l00: Mat<f64>,
+    /// Y indices of the open pairs' displacements (−U of A and B), first in K00.
+    pub open: Vec<usize>,
+    /// Y indices of the closed pairs' forces, after them.
+    pub forces: Vec<usize>,
+}
+
+/// Eliminates the shared displacements of the closed pairs from `K Y + L = 0`.
+pub fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Reduced {
+    let (mut forces, mut shared, mut open) = (Vec::new(), Vec::new(), Vec::new());
+    for iface in &layout.slots {
+        for pair in iface {
+            for s in pair {
+                forces.extend(s.f);
+                shared.extend(s.u);
+                open.extend(s.u_a);
+                open.extend(s.u_b);
+            }
+        }
+    }
+    let sub =
+        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| k[(r[i], c[j])]);
+    let col = |r: &[usize]| Mat::<f64>::from_fn(r.len(), 1, |i, _| l[r[i]]);
+    let t: Vec<usize> = open.iter().chain(forces.iter()).copied().collect();
+    let (mut k00, mut l00) = (sub(&t, &t), col(&t));
+    if !shared.is_empty() {
+        let lu = sub(&shared, &shared).partial_piv_lu();
+        let htr = sub(&t, &shared);
+        let x = lu.solve(htr.transpose().to_owned());
+        let y = lu.solve(col(&shared));
+        k00 = &k00 - &htr * &x;
+        l00 = &l00 - &htr * &y;
+    }
+    Reduced {
+        k00,
+        l00,
+        open,
+        forces,
+    }
+}
+
 /// The paper's reduced interface operators of a status ([paper eqs. 21–27]), for the
 /// archive: `K` and `L` of the whole interface system, then with the shared displacements of
 /// the closed pairs eliminated, `K00 = [[K_fvfv, K_fvur], [K_urfv, K_urur]]` over
 /// (−U of open pairs, F of closed pairs) with its load `L00`, and the diagonalised
 /// `Ktilde_urur = K_urur − K_urfv K_fvfv⁻¹ K_fvur`, `Ktilde_fvfv = K_fvfv − K_fvur K_urur⁻¹ K_urfv`.
 pub fn reduced_operators(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Vec<(String, Mat<f64>)> {
-    let mut f = Vec::new(); // F of closed pairs (ur)
-    let mut ur = Vec::new(); // shared −U of closed pairs (eliminated)
-    let mut fv = Vec::new(); // −U of open pairs
-    for iface in &layout.slots {
-        for pair in iface {
-            for s in pair {
-                f.extend(s.f);
-                ur.extend(s.u);
-                fv.extend(s.u_a);
-                fv.extend(s.u_b);
-            }
-        }
-    }
-    let sub =
-        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| k[(r[i], c[j])]);
-    let vec_of = |r: &[usize]| Mat::<f64>::from_fn(r.len(), 1, |i, _| l[r[i]]);
-    let t: Vec<usize> = fv.iter().chain(f.iter()).copied().collect();
-    let (htt, htr, hrr) = (sub(&t, &t), sub(&t, &ur), sub(&ur, &ur));
-    let (gt, gr) = (vec_of(&t), vec_of(&ur));
-    let (k00, l00) = if ur.is_empty() {
-        (htt, gt)
-    } else {
-        let lu = hrr.partial_piv_lu();
-        let x = lu.solve(htr.transpose().to_owned());
-        let y = lu.solve(&gr);
-        (&htt - &htr * &x, &gt - &htr * &y)
-    };
+    let Reduced {
+        k00,
+        l00,
+        open: fv,
+        forces: f,
+    } = eliminate_shared(layout, k, l);
     let nv = fv.len();
     let nr = f.len();
     let block = |m: &Mat<f64>, r0: usize, nr_: usize, c0: usize, nc: usize| {

@@ -397,6 +397,29 @@ fn final_status(model: &Model, result: &RunResult) -> crate::contact::Status {
         .collect()
 }
 
+/// The post-processing input of every body for a boundary solution at a load factor.
+fn body_inputs<'a>(
+    model: &'a Model,
+    plane: crate::scene::Plane,
+    fields: &'a [crate::solution::BodyField],
+    factor: f64,
+) -> Vec<crate::postprocess::BodyInput<'a>> {
+    model
+        .bodies
+        .iter()
+        .zip(fields)
+        .map(|(b, field)| crate::postprocess::BodyInput {
+            body: b,
+            material: crate::assembly::material(b, plane),
+            field,
+            body_force: b
+                .body_force
+                .filter(|v| *v != [0.0, 0.0])
+                .map(|v| [factor * v[0], factor * v[1]]),
+        })
+        .collect()
+}
+
 /// What [`crate::contact::not_converged`] needs.
 pub struct ContactView<'a> {
     pub iterations: usize,
@@ -406,9 +429,8 @@ pub struct ContactView<'a> {
 
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
-    use crate::assembly::material;
     use crate::output::{csv, summary, write_atomic};
-    use crate::postprocess::{evaluate_points, field_at_nodes, section_points, BodyInput};
+    use crate::postprocess::{evaluate_points, field_at_nodes, section_points};
     use crate::quadrature::QuadratureSettings;
     use std::time::Instant;
 
@@ -435,20 +457,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 
     // Post-processing.
     let t2 = Instant::now();
-    let inputs: Vec<BodyInput> = model
-        .bodies
-        .iter()
-        .zip(&result.fields)
-        .map(|(b, f)| BodyInput {
-            body: b,
-            material: material(b, scene.plane),
-            field: f,
-            body_force: b
-                .body_force
-                .filter(|v| *v != [0.0, 0.0])
-                .map(|v| [factor * v[0], factor * v[1]]),
-        })
-        .collect();
+    let inputs = body_inputs(model, scene.plane, &result.fields, factor);
     let mut sections = Vec::new();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
@@ -481,20 +490,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                 "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
             );
             for (st, row) in result.states.iter().zip(&result.history.rows) {
-                let inputs: Vec<BodyInput> = model
-                    .bodies
-                    .iter()
-                    .zip(&st.fields)
-                    .map(|(b, f)| BodyInput {
-                        body: b,
-                        material: material(b, scene.plane),
-                        field: f,
-                        body_force: b
-                            .body_force
-                            .filter(|v| *v != [0.0, 0.0])
-                            .map(|v| [st.load_factor * v[0], st.load_factor * v[1]]),
-                    })
-                    .collect();
+                let inputs = body_inputs(model, scene.plane, &st.fields, st.load_factor);
                 let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
                 for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
                     let vals = match v {

@@ -76,34 +76,14 @@ pub fn solve_qp(
 ) -> Result<QpResult> {
     let layout = interface::layout(model, &prepared.maps, partition)?;
     let (k, l) = interface::assemble_scaled(&layout, &prepared.condensed, factor);
-    // Index sets of Y: closed forces (r), closed shared displacements (eliminated), open
-    // displacements (v).
-    let (mut fr, mut ur, mut xv) = (Vec::new(), Vec::new(), Vec::new());
-    for iface in &layout.slots {
-        for pair in iface {
-            for sl in pair {
-                fr.extend(sl.f);
-                ur.extend(sl.u);
-                xv.extend(sl.u_a);
-                xv.extend(sl.u_b);
-            }
-        }
-    }
-    let sub =
-        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| k[(r[i], c[j])]);
-    let col = |r: &[usize]| Mat::<f64>::from_fn(r.len(), 1, |i, _| l[r[i]]);
-    // Eliminate the shared displacements: K00 over t = [v; r].
-    let t: Vec<usize> = xv.iter().chain(fr.iter()).copied().collect();
+    // Closed pairs' shared displacements eliminated: K00 over [open (v); forces (r)].
+    let interface::Reduced {
+        k00,
+        l00,
+        open: xv,
+        forces: fr,
+    } = interface::eliminate_shared(&layout, &k, &l);
     let (nv, nr) = (xv.len(), fr.len());
-    let (mut k00, mut l00) = (sub(&t, &t), col(&t));
-    if !ur.is_empty() {
-        let lu = sub(&ur, &ur).partial_piv_lu();
-        let htr = sub(&t, &ur);
-        let x = lu.solve(htr.transpose().to_owned());
-        let y = lu.solve(col(&ur));
-        k00 = &k00 - &htr * &x;
-        l00 = &l00 - &htr * &y;
-    }
     let blk = |r0: usize, nrow: usize, c0: usize, ncol: usize| {
         Mat::<f64>::from_fn(nrow, ncol, |i, j| k00[(r0 + i, c0 + j)])
     };
