@@ -75,7 +75,7 @@ test: setup mesh
 
 examples: build mesh $(RESULTS)
 
-out/%/summary.json: pipelines/%.toml $(MESHES)
+out/%/summary.json: pipelines/%.toml $(MESHES) | build
 	$(SGBEM) run $< --out out/$* --quiet
 
 # The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa, then the tables
