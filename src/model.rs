@@ -395,7 +395,13 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                 ));
             }
             for c in &ent.bounding {
-                *count.entry(c.abs()).or_default() += 1;
+                let tag = c.checked_abs().filter(|t| *t > 0).ok_or_else(|| {
+                    Error::input(
+                        mfile,
+                        format!("surface {s} lists an invalid bounding curve tag {c} in $Entities"),
+                    )
+                })?;
+                *count.entry(tag).or_default() += 1;
             }
         }
         // A curve bounding two surfaces of the same body is internal to it.

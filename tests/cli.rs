@@ -362,3 +362,18 @@ fn folded_boundary_found_by_fuzzing_is_an_input_error() {
     let msh = root().join("tests/fixtures/fuzz_model_folded_interface.msh");
     bad(check(&dir, scene, &msh), &["folds back", "left", "node 14"]);
 }
+
+/// Found by the `model` fuzz target: a surface listing the curve tag i32::MIN (whose
+/// absolute value overflows) is an input error, not a panic.
+#[test]
+fn invalid_bounding_curve_tag_found_by_fuzzing_is_an_input_error() {
+    let dir = tmpdir("cli-tagmin");
+    let scene = "plane = \"strain\"\n[body.left]\nyoung = 1.0\npoisson = 0.3\n[body.right]\nyoung = 2.0\n\
+                 poisson = 0.25\n[boundary.clamp]\nux = 0.0\nuy = \"0.01*y\"\n[boundary.free]\ntn = \"-x\"\n\
+                 [interface.interface]\nmodel = \"unilateral\"\n";
+    let msh = root().join("tests/fixtures/fuzz_model_curve_tag_min.msh");
+    bad(
+        check(&dir, scene, &msh),
+        &["invalid bounding curve tag", "-2147483648"],
+    );
+}
