@@ -503,7 +503,15 @@ impl<'a> Prepared<'a> {
     fn boundary_value(&self, ei: usize, xi: f64) -> (Vec2, Mat2) {
         let nodes = self.body.elements[ei].nodes;
         let u = lerp2(self.field.u[nodes[0]], self.field.u[nodes[1]], xi);
-        let s = lerp_mat(&self.ends[ei][0], &self.ends[ei][1], xi);
+        // At a node the two elements meeting there are equally near: take the node's own
+        // value, so that the result does not depend on which element was found first.
+        let s = if xi <= 1e-12 {
+            self.nodal[nodes[0]]
+        } else if xi >= 1.0 - 1e-12 {
+            self.nodal[nodes[1]]
+        } else {
+            lerp_mat(&self.ends[ei][0], &self.ends[ei][1], xi)
+        };
         (u, s)
     }
 
