@@ -453,7 +453,8 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     } = &loaded;
     let out_dir = scene.output.directory.clone();
     let factor = result.load_factor;
-    let mut notes = result.notes.clone();
+    let mut notes = plan.advice.clone();
+    notes.extend(result.notes.iter().cloned());
 
     // Post-processing.
     let t2 = Instant::now();

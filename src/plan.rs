@@ -53,6 +53,8 @@ pub struct Plan {
     pub omitted: Vec<String>,
     /// Stages in order, with what each does.
     pub stages: Vec<(&'static str, String)>,
+    /// Advice on the settings (printed by `check`, kept in the summary by `run`).
+    pub advice: Vec<String>,
 }
 
 impl Plan {
@@ -250,10 +252,29 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     }
     stages.push(("write", write.join(", ")));
 
+    // Stiffness contrast across interfaces amplifies the quadrature floor (about 1e-12 of
+    // the operators with "standard") in the stiff body's tractions.
+    let mut advice = Vec::new();
+    let contrast = model
+        .interfaces
+        .iter()
+        .map(|i| {
+            let (a, b) = (model.bodies[i.body_a].young, model.bodies[i.body_b].young);
+            a.max(b) / a.min(b)
+        })
+        .fold(1.0, f64::max);
+    if contrast > 1e3 && scene.solve.quadrature != crate::scene::Quadrature::Accurate {
+        advice.push(format!(
+            "the stiffness contrast across an interface is {contrast:.1e}: the quadrature floor \
+             is amplified by it in the stiffer body's tractions; consider solve.quadrature = \
+             \"accurate\""
+        ));
+    }
     Ok(Plan {
         effects,
         problem,
         omitted,
         stages,
+        advice,
     })
 }

@@ -210,6 +210,9 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     for (name, what) in &plan.stages {
         let _ = writeln!(o, "    {name:<12} {what}");
     }
+    for a in &plan.advice {
+        let _ = writeln!(o, "  advice: {a}");
+    }
     if !plan.omitted.is_empty() {
         let _ = writeln!(o, "  not simulated:");
         for w in &plan.omitted {

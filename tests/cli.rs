@@ -377,3 +377,20 @@ fn invalid_bounding_curve_tag_found_by_fuzzing_is_an_input_error() {
         &["invalid bounding curve tag", "-2147483648"],
     );
 }
+
+/// A stiffness contrast above 1e3 across an interface makes `check` advise the accurate
+/// quadrature (the floor of the standard one is amplified by the contrast).
+#[test]
+fn high_contrast_advises_accurate_quadrature() {
+    let dir = tmpdir("cli-contrast");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let stiff = STACKED_SCENE.replacen("young = 1.0", "young = 1e5", 1);
+    let (code, out, err) = check(&dir, &stiff, &msh);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("advice") && out.contains("accurate"), "{out}");
+    let accurate = format!("{stiff}\n[solve]\nquadrature = \"accurate\"\n");
+    let (_, out, _) = check(&dir, &accurate, &msh);
+    assert!(!out.contains("advice"), "{out}");
+    let (_, out, _) = check(&dir, STACKED_SCENE, &msh);
+    assert!(!out.contains("advice"), "{out}");
+}
