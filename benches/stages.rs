@@ -12,26 +12,6 @@ use sgbem::quadrature::QuadratureSettings;
 use sgbem::solve::{all_closed, prepare, solve_status};
 use support::*;
 
-fn blocks(per_side: usize) -> Msh {
-    let n = per_side;
-    let mut m = Msh::default();
-    m.line(1, [0.0, 0.0], [1.0, 0.0], n, &[1]);
-    m.line(2, [1.0, 0.0], [1.0, 1.0], n, &[2]);
-    m.line(3, [1.0, 1.0], [0.0, 1.0], n, &[3]);
-    m.line(4, [0.0, 1.0], [0.0, 0.0], n, &[2]);
-    m.line(5, [1.0, 1.0], [1.0, 2.0], n, &[2]);
-    m.line(6, [1.0, 2.0], [0.0, 2.0], n, &[4]);
-    m.line(7, [0.0, 2.0], [0.0, 1.0], n, &[2]);
-    m.surface(1, &[1, 2, 3, 4], &[1]);
-    m.surface(2, &[-3, 5, 6, 7], &[2]);
-    for (t, name) in [(1, "base"), (2, "sides"), (3, "joint"), (4, "top")] {
-        m.name(1, t, name);
-    }
-    m.name(2, 1, "lower");
-    m.name(2, 2, "upper");
-    m
-}
-
 const SCENE: &str = "plane = \"strain\"\n[body.lower]\nyoung = 10.0\npoisson = 0.3\n\
 [body.upper]\nyoung = 1.0\npoisson = 0.3\n[boundary.base]\nux = 0.0\nuy = 0.0\n\
 [boundary.top]\nty = \"-1 - x\"\n[interface.joint]\nmodel = \"bonded\"\n";
@@ -63,7 +43,7 @@ fn main() {
     let (mut ns, mut ta, mut tc) = (Vec::new(), Vec::new(), Vec::new());
     for &n in &sizes {
         let per_side = (n / 4).max(1);
-        let msh = blocks(per_side).save(&dir, "m.msh");
+        let msh = stacked_blocks(per_side).save(&dir, "m.msh");
         let sc = write(&dir, "s.toml", SCENE);
         let l = load(&sc, Some(&msh)).expect("bench scene loads");
         let t0 = Instant::now();

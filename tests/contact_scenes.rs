@@ -19,17 +19,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::Value;
-
-/// One row of an interface CSV.
-#[derive(Debug, Clone)]
-struct Row {
-    x: f64,
-    y: f64,
-    s: f64,
-    closed: bool,
-    tn: f64,
-    tt: f64,
-}
+use support::{read_interface_csv as read_rows, InterfaceRow as Row};
 
 /// What a run left: its exit code, stderr, summary and interface rows.
 struct Run {
@@ -49,37 +39,6 @@ impl Run {
     fn converged(&self) -> bool {
         self.summary["status"] == "converged"
     }
-}
-
-fn read_rows(path: &Path) -> Vec<Row> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    let mut lines = text.lines();
-    assert_eq!(
-        lines.next(),
-        Some("x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap"),
-        "{}: header",
-        path.display()
-    );
-    lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            let num = |i: usize| -> f64 { f[i].parse().expect("a number in the interface CSV") };
-            Row {
-                x: num(0),
-                y: num(1),
-                s: num(2),
-                closed: match f[3] {
-                    "closed" => true,
-                    "open" => false,
-                    other => panic!("unknown status {other}"),
-                },
-                tn: num(4),
-                tt: num(5),
-            }
-        })
-        .collect()
 }
 
 /// Runs `sgbem run SCENE --mesh MESH --out DIR --quiet`; reads the summary (written even on

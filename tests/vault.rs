@@ -28,6 +28,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use serde_json::Value;
+use support::{read_interface_csv as read_rows, InterfaceRow as Row};
 
 /// The geometry the test meshes (passed to gmsh explicitly; geo/vault.geo's defaults).
 const SPAN: f64 = 600.0;
@@ -37,16 +38,6 @@ const DEPTH: f64 = 50.0;
 const GAMMA: f64 = 0.0018;
 const THICKNESS: f64 = 100.0;
 const JOINTS: [&str; 5] = ["s1", "s2", "s3", "s4", "s5"];
-
-/// One row of an interface CSV.
-#[derive(Debug, Clone)]
-struct Row {
-    x: f64,
-    y: f64,
-    closed: bool,
-    tn: f64,
-    opening: f64,
-}
 
 struct Run {
     cohesion_mpa: &'static str,
@@ -64,36 +55,6 @@ impl Run {
     fn detached(&self, joint: &str) -> f64 {
         self.iface(joint, "detached_length")
     }
-}
-
-fn read_rows(path: &Path) -> Vec<Row> {
-    let text = std::fs::read_to_string(path)
-        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
-    let mut lines = text.lines();
-    assert_eq!(
-        lines.next(),
-        Some("x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap"),
-        "{}: header",
-        path.display()
-    );
-    lines
-        .filter(|l| !l.trim().is_empty())
-        .map(|l| {
-            let f: Vec<&str> = l.split(',').collect();
-            let num = |i: usize| -> f64 { f[i].parse().expect("a number in the interface CSV") };
-            Row {
-                x: num(0),
-                y: num(1),
-                closed: match f[3] {
-                    "closed" => true,
-                    "open" => false,
-                    other => panic!("unknown status {other}"),
-                },
-                tn: num(4),
-                opening: num(6),
-            }
-        })
-        .collect()
 }
 
 fn run(mesh: &Path, dir: &Path, cohesion_mpa: &'static str) -> Run {

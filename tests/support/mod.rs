@@ -245,3 +245,52 @@ ty = -1.0
 [interface.joint]
 model = "unilateral"
 "#;
+
+/// One row of an `interfaces/<name>.csv` table.
+#[derive(Debug, Clone)]
+pub struct InterfaceRow {
+    pub x: f64,
+    pub y: f64,
+    pub s: f64,
+    pub closed: bool,
+    pub tn: f64,
+    pub tt: f64,
+    pub opening: f64,
+    pub slip: f64,
+    pub gap: f64,
+}
+
+/// Reads an interface table written by `sgbem run`, checking its header.
+pub fn read_interface_csv(path: &Path) -> Vec<InterfaceRow> {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap"),
+        "{}: header",
+        path.display()
+    );
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            let f: Vec<&str> = l.split(',').collect();
+            let num = |i: usize| -> f64 { f[i].parse().expect("a number in the interface CSV") };
+            InterfaceRow {
+                x: num(0),
+                y: num(1),
+                s: num(2),
+                closed: match f[3] {
+                    "closed" => true,
+                    "open" => false,
+                    other => panic!("unknown status {other}"),
+                },
+                tn: num(4),
+                tt: num(5),
+                opening: num(6),
+                slip: num(7),
+                gap: num(8),
+            }
+        })
+        .collect()
+}
