@@ -504,13 +504,17 @@ pub fn initial_cohesion(model: &Model) -> Vec<Vec<f64>> {
         .collect()
 }
 
-/// A contact failure as a numerical error naming what failed.
-pub fn not_converged(result: &crate::pipeline::ContactView) -> Error {
-    Error::numerical(format!(
-        "the contact solver did not converge after {} iterations (largest violation {:.1e} of \
-         its scale): {}",
-        result.iterations,
-        result.residual,
-        result.notes.join("; ")
-    ))
+impl ContactResult {
+    /// The failure of a solve that did not converge, as a numerical error naming what failed.
+    pub fn failure(&self) -> Option<Error> {
+        (!self.converged).then(|| {
+            Error::numerical(format!(
+                "the contact solver did not converge after {} iterations (largest violation \
+                 {:.1e} of its scale): {}",
+                self.iterations,
+                self.residual,
+                self.notes.join("; ")
+            ))
+        })
+    }
 }

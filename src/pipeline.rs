@@ -237,16 +237,13 @@ pub fn solve_loaded_with(
             iterations += r.iterations;
             residual = residual.max(r.residual);
             notes.extend(r.notes.iter().cloned());
+            let failed = r.failure();
             history.rows.extend(r.rows);
             states.extend(r.states);
             solver = r.solver;
-            if !r.converged {
+            if failed.is_some() {
                 converged = false;
-                failure = Some(crate::contact::not_converged(&ContactView {
-                    iterations: r.iterations,
-                    residual: r.residual,
-                    notes: &r.notes,
-                }));
+                failure = failed;
                 final_sol = Some((f, r.solution));
                 status = r.status;
                 break;
@@ -298,13 +295,9 @@ pub fn solve_loaded_with(
             iterations = polished.iterations;
             residual = polished.residual;
             notes.extend(polished.notes.iter().cloned());
-            if !polished.converged {
+            if let Some(f) = polished.failure() {
                 converged = false;
-                failure = Some(crate::contact::not_converged(&ContactView {
-                    iterations: polished.iterations,
-                    residual: polished.residual,
-                    notes: &polished.notes,
-                }));
+                failure = Some(f);
             }
         }
         qp_block = Some(serde_json::json!({
@@ -418,13 +411,6 @@ fn body_inputs<'a>(
                 .map(|v| [factor * v[0], factor * v[1]]),
         })
         .collect()
-}
-
-/// What [`crate::contact::not_converged`] needs.
-pub struct ContactView<'a> {
-    pub iterations: usize,
-    pub residual: f64,
-    pub notes: &'a [String],
 }
 
 /// Reads, validates, solves and writes every output of a scene.
