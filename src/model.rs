@@ -126,6 +126,16 @@ impl Body {
         self.elements.iter().map(|e| e.length).sum()
     }
 
+    /// Winding number of the boundary around x: non-zero inside the body (holes cancel).
+    pub fn winding_number(&self, x: [f64; 2]) -> i32 {
+        winding(
+            x,
+            self.elements
+                .iter()
+                .map(|e| (self.nodes[e.nodes[0]], self.nodes[e.nodes[1]])),
+        )
+    }
+
     /// Number of nodes in each class (U1, U0, U2), counting a node once per component.
     pub fn dof_counts(&self) -> [usize; 3] {
         let mut c = [0; 3];
@@ -1347,13 +1357,7 @@ fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
             if oi == bi {
                 continue;
             }
-            let w = winding(
-                probe,
-                other
-                    .elements
-                    .iter()
-                    .map(|oe| (other.nodes[oe.nodes[0]], other.nodes[oe.nodes[1]])),
-            );
+            let w = other.winding_number(probe);
             if w != 0 {
                 return Err(Error::input(
                     mfile,

@@ -668,19 +668,7 @@ pub struct PointValue {
 /// Winding number of the boundary loops of `body` around x: 1 inside the material (outer
 /// loops counter-clockwise, holes clockwise), 0 outside and in holes.
 pub fn winding_number(body: &Body, x: Vec2) -> i32 {
-    let mut wn = 0;
-    for e in &body.elements {
-        let (p, q) = (body.nodes[e.nodes[0]], body.nodes[e.nodes[1]]);
-        let left = (q[0] - p[0]) * (x[1] - p[1]) - (x[0] - p[0]) * (q[1] - p[1]);
-        if p[1] <= x[1] {
-            if q[1] > x[1] && left > 0.0 {
-                wn += 1;
-            }
-        } else if q[1] <= x[1] && left < 0.0 {
-            wn -= 1;
-        }
-    }
-    wn
+    body.winding_number(x)
 }
 
 /// Distance from x to the boundary of `body`.
