@@ -5,8 +5,8 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
+use sgbem::bem::quadrature::QuadratureSettings;
 use sgbem::pipeline::{load, solve_loaded, Timings};
-use sgbem::quadrature::QuadratureSettings;
 use support::*;
 
 fn main() {
@@ -52,7 +52,7 @@ fn main() {
     for (name, geo, scene, opts) in cases {
         let msh = gmsh(&root().join(geo), &dir, "m.msh", false, opts);
         let mut l = load(&root().join(scene), Some(&msh)).expect("scene loads");
-        l.scene.solve.method = sgbem::scene::Method::Both;
+        l.scene.solve.method = sgbem::input::scene::Method::Both;
         let mut t = Timings::default();
         let (_, r) = solve_loaded(&l, &q, &mut t).expect("solve");
         let get = |k: &str| {

@@ -7,9 +7,9 @@ mod support;
 
 use std::time::Instant;
 
+use sgbem::bem::quadrature::QuadratureSettings;
+use sgbem::contact::solve::{all_closed, prepare, solve_status};
 use sgbem::pipeline::load;
-use sgbem::quadrature::QuadratureSettings;
-use sgbem::solve::{all_closed, prepare, solve_status};
 use support::*;
 
 const SCENE: &str = "plane = \"strain\"\n[body.lower]\nyoung = 10.0\npoisson = 0.3\n\

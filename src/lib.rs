@@ -1,29 +1,26 @@
 //! sgbem: contact and detachment of 2D elastic bodies by the symmetric Galerkin boundary
 //! element method (SGBEM).
 //!
-//! The modules follow the data flow; each depends only on those listed before it:
-//! `error` → `expr` → `scene` → `mesh` → `model` → `kernels` → `quadrature` → `galerkin`
-//! → `plan` (the effects a scene calls for) → `report` (what `sgbem check` prints)
-//! → `pipeline` (the stage order).
+//! One folder per stage, in data-flow order; each depends only on the stages before it:
+//!
+//! * `error` — one error enum whose messages name the file, key or group and the fix;
+//! * `input` — scene (TOML), expressions, the MSH 4.1 reader, the model (bodies, loops,
+//!   parts, interface pairs, unknowns);
+//! * `bem` — kernels, quadrature, Galerkin pair integrals, per-body assembly, condensation;
+//! * `solution` — plain result records;
+//! * `contact` — the interface problem and its solvers;
+//! * `post` — boundary stresses, interior fields, sections;
+//! * `output` — summary, archive, VTK, CSV (they read result records; nothing imports them);
+//! * `plan` (the effects a scene calls for), `report` (what `sgbem check` prints) and
+//!   `pipeline` (the only module that knows the stage order).
 
-pub mod assembly;
-pub mod condensation;
+pub mod bem;
 pub mod contact;
 pub mod error;
-pub mod expr;
-pub mod galerkin;
-pub mod interface;
-pub mod kernels;
-pub mod lcp;
-pub mod mesh;
-pub mod model;
+pub mod input;
 pub mod output;
 pub mod pipeline;
 pub mod plan;
-pub mod postprocess;
-pub mod qp;
-pub mod quadrature;
+pub mod post;
 pub mod report;
-pub mod scene;
 pub mod solution;
-pub mod solve;

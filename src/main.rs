@@ -5,7 +5,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
-use sgbem::scene::Method;
+use sgbem::input::scene::Method;
 use sgbem::{pipeline, report};
 
 #[derive(Parser)]

@@ -6,10 +6,10 @@
 use std::path::{Path, PathBuf};
 
 use crate::error::{Error, Result};
-use crate::mesh::{self, Mesh};
-use crate::model::{self, Model};
+use crate::input::mesh::{self, Mesh};
+use crate::input::model::{self, Model};
+use crate::input::scene::{self, Scene};
 use crate::plan::{self, Plan};
-use crate::scene::{self, Scene};
 
 /// A scene read and validated against its mesh.
 #[derive(Debug, Clone)]
@@ -62,7 +62,7 @@ pub fn load(scene_path: &Path, mesh_override: Option<&Path>) -> Result<Loaded> {
 pub struct RunOptions {
     pub mesh: Option<PathBuf>,
     pub out: Option<PathBuf>,
-    pub method: Option<crate::scene::Method>,
+    pub method: Option<crate::input::scene::Method>,
     pub quiet: bool,
 }
 
@@ -115,9 +115,9 @@ pub struct RunResult {
 /// linear solve) for each load step, each step starting from the previous state.
 pub fn solve_loaded(
     loaded: &Loaded,
-    settings: &crate::quadrature::QuadratureSettings,
+    settings: &crate::bem::quadrature::QuadratureSettings,
     timings: &mut Timings,
-) -> Result<(crate::solve::Prepared, RunResult)> {
+) -> Result<(crate::contact::solve::Prepared, RunResult)> {
     solve_loaded_with(
         loaded,
         settings,
@@ -129,14 +129,14 @@ pub fn solve_loaded(
 /// [`solve_loaded`] showing progress on a terminal.
 pub fn solve_loaded_with(
     loaded: &Loaded,
-    settings: &crate::quadrature::QuadratureSettings,
+    settings: &crate::bem::quadrature::QuadratureSettings,
     timings: &mut Timings,
     progress: &crate::output::progress::Progress,
-) -> Result<(crate::solve::Prepared, RunResult)> {
+) -> Result<(crate::contact::solve::Prepared, RunResult)> {
+    use crate::contact::solve::{prepare, solve_status_scaled};
     use crate::contact::{initial_cohesion, initial_status, solve_contact, Iteration};
+    use crate::input::scene::Method;
     use crate::plan::ContactProblem;
-    use crate::scene::Method;
-    use crate::solve::{prepare, solve_status_scaled};
     use std::time::Instant;
 
     let Loaded {
@@ -260,7 +260,7 @@ pub fn solve_loaded_with(
     if matches!(method, Method::Qp | Method::Both) {
         let f = factors[last];
         let t = Instant::now();
-        let q = crate::qp::solve_qp(
+        let q = crate::contact::qp::solve_qp(
             model,
             &prepared,
             f,
@@ -378,8 +378,8 @@ fn final_status(model: &Model, result: &RunResult) -> crate::contact::Status {
             r.pairs
                 .iter()
                 .map(|p| {
-                    let slide = it.spec.tangential == crate::scene::Tangential::Slide
-                        && it.spec.model == crate::scene::InterfaceModel::Unilateral;
+                    let slide = it.spec.tangential == crate::input::scene::Tangential::Slide
+                        && it.spec.model == crate::input::scene::InterfaceModel::Unilateral;
                     match p.status {
                         PairStatus::Closed if slide => [PairStatus::Open, PairStatus::Closed],
                         s => [s, s],
@@ -393,17 +393,17 @@ fn final_status(model: &Model, result: &RunResult) -> crate::contact::Status {
 /// The post-processing input of every body for a boundary solution at a load factor.
 fn body_inputs<'a>(
     model: &'a Model,
-    plane: crate::scene::Plane,
+    plane: crate::input::scene::Plane,
     fields: &'a [crate::solution::BodyField],
     factor: f64,
-) -> Vec<crate::postprocess::BodyInput<'a>> {
+) -> Vec<crate::post::BodyInput<'a>> {
     model
         .bodies
         .iter()
         .zip(fields)
-        .map(|(b, field)| crate::postprocess::BodyInput {
+        .map(|(b, field)| crate::post::BodyInput {
             body: b,
-            material: crate::assembly::material(b, plane),
+            material: crate::bem::assembly::material(b, plane),
             field,
             body_force: b
                 .body_force
@@ -415,9 +415,9 @@ fn body_inputs<'a>(
 
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
+    use crate::bem::quadrature::QuadratureSettings;
     use crate::output::{csv, summary, write_atomic};
-    use crate::postprocess::{evaluate_points, field_at_nodes, section_points};
-    use crate::quadrature::QuadratureSettings;
+    use crate::post::{evaluate_points, field_at_nodes, section_points};
     use std::time::Instant;
 
     let mut timings = Timings::default();
@@ -470,7 +470,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Sections along the contact path (history = "full"): the same points at every
     // recorded iteration, for plots like the paper's Fig. 6.
     let mut section_paths = Vec::new();
-    if scene.output.history == crate::scene::History::Full && !result.states.is_empty() {
+    if scene.output.history == crate::input::scene::History::Full && !result.states.is_empty() {
         for s in &scene.output.sections {
             let pts = section_points(s.from, s.to, s.points);
             let mut text = String::from(
@@ -549,7 +549,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { scene.solve.method.name() },
         "effects": plan.effects,
         "problem": format!("{:?}", plan.problem).to_lowercase(),
-        "plane": match scene.plane { crate::scene::Plane::Strain => "strain", crate::scene::Plane::Stress => "stress" },
+        "plane": match scene.plane { crate::input::scene::Plane::Strain => "strain", crate::input::scene::Plane::Stress => "stress" },
         "thickness": scene.thickness,
         "units": {"length": scene.units.length, "force": scene.units.force},
         "load_factor": factor,
@@ -584,18 +584,21 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     if scene.output.operators {
         rec.set_operators(&prepared.systems, &prepared.condensed);
         let final_status = final_status(model, &result);
-        let layout = crate::interface::layout(model, &prepared.maps, &final_status)?;
-        let (k, l) =
-            crate::interface::assemble_scaled(&layout, &prepared.condensed, result.load_factor);
+        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
+        let (k, l) = crate::contact::interface::assemble_scaled(
+            &layout,
+            &prepared.condensed,
+            result.load_factor,
+        );
         rec.contact_operators = Some(
-            crate::interface::reduced_operators(&layout, &k, &l)
+            crate::contact::interface::reduced_operators(&layout, &k, &l)
                 .into_iter()
                 .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
                 .collect(),
         );
     }
     let mut states: Vec<crate::output::record::StateRecord> = Vec::new();
-    if scene.output.history == crate::scene::History::Full {
+    if scene.output.history == crate::input::scene::History::Full {
         let recorded = result.states.len().saturating_sub(1);
         for st in &result.states[..recorded] {
             states.push(crate::output::record::StateRecord::new(

@@ -9,8 +9,8 @@
 //! listed.
 
 use crate::error::{Error, Result};
-use crate::model::Model;
-use crate::scene::{History, InitialState, InterfaceModel, Method, Scene};
+use crate::input::model::Model;
+use crate::input::scene::{History, InitialState, InterfaceModel, Method, Scene};
 
 /// Which unilateral problem the contact solver faces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -263,7 +263,7 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
             a.max(b) / a.min(b)
         })
         .fold(1.0, f64::max);
-    if contrast > 1e3 && scene.solve.quadrature != crate::scene::Quadrature::Accurate {
+    if contrast > 1e3 && scene.solve.quadrature != crate::input::scene::Quadrature::Accurate {
         advice.push(format!(
             "the stiffness contrast across an interface is {contrast:.1e}: the quadrature floor \
              is amplified by it in the stiffer body's tractions; consider solve.quadrature = \

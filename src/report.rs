@@ -4,9 +4,9 @@
 
 use std::fmt::Write;
 
-use crate::model::{fmt_num, DofClass, Model};
+use crate::input::model::{fmt_num, DofClass, Model};
+use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential};
 use crate::plan::Plan;
-use crate::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential};
 
 /// The check report as text.
 pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool) -> String {

@@ -4,12 +4,12 @@
 mod common;
 
 use common::*;
-use sgbem::galerkin::{body_force_loads, BodyForceLoads, Segment};
-use sgbem::kernels::{
+use sgbem::bem::galerkin::{body_force_loads, BodyForceLoads, Segment};
+use sgbem::bem::kernels::{
     body_force_displacement, body_force_fields, body_force_gradient, body_force_stress,
     boundary_area, sigma_kernel, u_kernel, Mat2, Material, Vec2,
 };
-use sgbem::quadrature::{gauss, QuadratureSettings};
+use sgbem::bem::quadrature::{gauss, QuadratureSettings};
 
 fn material() -> Material {
     // Appendix A6: E = 1, ν = 0.3, plane strain, μ = 1/2.6.

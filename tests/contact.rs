@@ -4,9 +4,9 @@
 
 mod support;
 
+use sgbem::bem::quadrature::QuadratureSettings;
 use sgbem::contact::{initial_cohesion, solve_contact, Iteration, Status};
 use sgbem::pipeline::{load, solve_loaded, Loaded, Timings};
-use sgbem::quadrature::QuadratureSettings;
 use sgbem::solution::PairStatus;
 use support::*;
 
@@ -202,8 +202,8 @@ fn example_2_detachment() {
 /// changes sign when the detached length passes about 16.92 cm (the paper's Fig. 6).
 #[test]
 fn example_2_bottom_fibre_changes_sign_along_the_path() {
-    use sgbem::assembly::material;
-    use sgbem::postprocess::{evaluate_points, BodyInput};
+    use sgbem::bem::assembly::material;
+    use sgbem::post::{evaluate_points, BodyInput};
     let l = beam();
     let r = run(&l);
     let q = QuadratureSettings::standard();
@@ -247,8 +247,9 @@ fn final_state_does_not_depend_on_the_initial_status() {
     let l = beam();
     let q = QuadratureSettings::standard();
     let prep =
-        sgbem::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {}).unwrap();
-    let hash = |p: &sgbem::solve::Prepared| -> Vec<u64> {
+        sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {})
+            .unwrap();
+    let hash = |p: &sgbem::contact::solve::Prepared| -> Vec<u64> {
         p.condensed
             .iter()
             .map(|c| {
@@ -419,7 +420,8 @@ fn active_set_cycle_falls_back_to_lemke_then_evolutive() {
     let l = load(&root().join("pipelines/beam_on_blocks.toml"), Some(&msh)).unwrap();
     let q = QuadratureSettings::standard();
     let prep =
-        sgbem::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {}).unwrap();
+        sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {})
+            .unwrap();
     let start = sgbem::contact::initial_status(&l.model);
     let a = solve_contact(
         &l.model,

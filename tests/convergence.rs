@@ -27,7 +27,7 @@ use std::path::{Path, PathBuf};
 use std::time::Instant;
 
 use exact::{Exact, Plane, P2, S3};
-use sgbem::scene::{Condition, Frame};
+use sgbem::input::scene::{Condition, Frame};
 
 /// One refinement study.
 struct Study {
@@ -611,11 +611,11 @@ fn scenes_pose_the_exact_problems() {
 fn check_scene(ex: &dyn Exact, path: &Path) {
     {
         let name = ex.name();
-        let scene = sgbem::scene::read_scene(path)
+        let scene = sgbem::input::scene::read_scene(path)
             .unwrap_or_else(|e| panic!("{name}: {} does not read: {e}", path.display()));
         let plane = match scene.plane {
-            sgbem::scene::Plane::Strain => Plane::Strain,
-            sgbem::scene::Plane::Stress => Plane::Stress,
+            sgbem::input::scene::Plane::Strain => Plane::Strain,
+            sgbem::input::scene::Plane::Stress => Plane::Stress,
         };
         assert_eq!(plane, ex.plane(), "{name}: plane");
 
@@ -673,7 +673,7 @@ fn check_scene(ex: &dyn Exact, path: &Path) {
                 let spec = scene
                     .interface(pt.name)
                     .unwrap_or_else(|| panic!("{name}: interface {} missing", pt.name));
-                assert_eq!(spec.model, sgbem::scene::InterfaceModel::Bonded);
+                assert_eq!(spec.model, sgbem::input::scene::InterfaceModel::Bonded);
                 continue;
             }
             let spec = scene.boundary(pt.name);
@@ -742,7 +742,7 @@ fn section_points_lie_inside_and_off_the_curves() {
         let ex = ex.as_ref();
         let dir = support::tmpdir(&format!("sections-{}", ex.name()));
         let (path, names) = trimmed_scene(ex.name(), &dir, &[]);
-        let scene = sgbem::scene::read_scene(&path).expect("trimmed scene reads");
+        let scene = sgbem::input::scene::read_scene(&path).expect("trimmed scene reads");
         assert_eq!(scene.output.sections.len(), names.len());
         let mut near = f64::INFINITY;
         for s in &scene.output.sections {

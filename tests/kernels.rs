@@ -1,7 +1,7 @@
 //! Kernel identities by finite differences (formulation §2.1, §7 item 1).
 #![allow(clippy::needless_range_loop)]
 
-use sgbem::kernels::{
+use sgbem::bem::kernels::{
     b_kernel, s_kernel, sigma_kernel, t_kernel, tu_kernel, u_kernel, Mat2, Material, Vec2,
 };
 

@@ -5,7 +5,7 @@
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 
-use sgbem::mesh::{parse_msh, read_msh, Mesh};
+use sgbem::input::mesh::{parse_msh, read_msh, Mesh};
 
 fn fixture(name: &str) -> PathBuf {
     Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -75,7 +75,7 @@ fn ascii_fixture_matches_the_file() {
     // The transfinite curve 7 (x = 1) holds 3 lines through nodes 2, 13, 14, 5.
     let on_7: Vec<_> = mesh.lines.iter().filter(|l| l.curve == 7).collect();
     assert_eq!(on_7.len(), 3);
-    let tags = |l: &sgbem::mesh::Line| l.nodes.map(|i| mesh.node_tags[i]);
+    let tags = |l: &sgbem::input::mesh::Line| l.nodes.map(|i| mesh.node_tags[i]);
     assert_eq!(tags(on_7[0]), [2, 13]);
     assert_eq!(tags(on_7[2]), [14, 5]);
     for line in on_7 {

@@ -3,7 +3,7 @@
 
 mod support;
 
-use sgbem::model::{DofClass, Model, Role};
+use sgbem::input::model::{DofClass, Model, Role};
 use sgbem::pipeline::load;
 use support::*;
 

@@ -4,10 +4,10 @@
 
 mod support;
 
-use sgbem::kernels::Material;
+use sgbem::bem::kernels::Material;
+use sgbem::bem::quadrature::QuadratureSettings;
+use sgbem::contact::solve::{all_closed, prepare, solve_status};
 use sgbem::pipeline::load;
-use sgbem::quadrature::QuadratureSettings;
-use sgbem::solve::{all_closed, prepare, solve_status};
 use support::*;
 
 /// A linear elastic field: strain, rotation, translation, stress (plane strain or stress).
@@ -205,8 +205,8 @@ fn solve_scene(
     quadrature: &str,
 ) -> (
     sgbem::pipeline::Loaded,
-    sgbem::solve::Prepared,
-    sgbem::solve::StatusSolution,
+    sgbem::contact::solve::Prepared,
+    sgbem::contact::solve::StatusSolution,
 ) {
     let msh = mesh.save(dir, "m.msh");
     let sc = write(dir, "s.toml", scene);
@@ -333,7 +333,7 @@ fn condensed_operators_are_symmetric_and_definite() {
                 .fold(f64::INFINITY, f64::min);
             let floating = sys.unknowns[..sys.n_x]
                 .iter()
-                .all(|u| !matches!(u, sgbem::assembly::Unknown::Traction1 { .. }));
+                .all(|u| !matches!(u, sgbem::bem::assembly::Unknown::Traction1 { .. }));
             println!("{name}: {zero} zero eigenvalues, smallest positive {min_pos:.3e}, largest {max:.3e}, floating {floating}");
             let expect_zero = if floating && name != "(W,F)" { 3 } else { 0 };
             assert_eq!(zero, expect_zero, "{name}: zero eigenvalues");
@@ -527,8 +527,8 @@ fn results_follow_rotation_translation_and_scaling() {
 /// radius 1/2) makes the same body solvable.
 #[test]
 fn degenerate_scale_is_detected_and_avoided() {
-    use sgbem::assembly::{assemble_body, assemble_body_scaled, check_single_layer};
-    use sgbem::scene::Plane;
+    use sgbem::bem::assembly::{assemble_body, assemble_body_scaled, check_single_layer};
+    use sgbem::input::scene::Plane;
     let (a, n) = (1.34, 48);
     let mut m = Msh::default();
     let pts: Vec<[f64; 2]> = (0..n)

@@ -5,13 +5,13 @@
 mod common;
 
 use common::*;
-use sgbem::galerkin::{
+use sgbem::bem::galerkin::{
     adjacent_blocks, coincident_blocks, pair_blocks, pair_blocks_of_kind,
     point_displacement_integrals, point_stress_integrals, ElementRef, PairBlocks, PairKind,
     Segment, LOG_INTEGRALS,
 };
-use sgbem::kernels::{b_kernel, t_kernel, tu_kernel, u_kernel, Mat2, Material, Vec2};
-use sgbem::quadrature::{gauss, graded_both_ends, QuadratureSettings};
+use sgbem::bem::kernels::{b_kernel, t_kernel, tu_kernel, u_kernel, Mat2, Material, Vec2};
+use sgbem::bem::quadrature::{gauss, graded_both_ends, QuadratureSettings};
 
 fn steel_like() -> Material {
     Material::new(1.0, 0.3, false)
@@ -406,7 +406,7 @@ fn near_and_far_pairs_match_brute_force() {
     for (e, f, kind) in cases {
         let ee = ElementRef::new(e, [0, 1]);
         let ff = ElementRef::new(f, [2, 3]);
-        assert_eq!(sgbem::galerkin::classify(&ee, &ff, &s), kind);
+        assert_eq!(sgbem::bem::galerkin::classify(&ee, &ff, &s), kind);
         let got = pair_blocks(&m, &ee, &ff, &s);
         if kind == PairKind::Far {
             // Through the bisection path (one leaf, other orders) the numbers must agree.
@@ -591,7 +591,7 @@ fn calderon_identities_converge_for_kelvin_field() {
         ]
     };
     let sf = |x: Vec2| {
-        let sg = sgbem::kernels::sigma_kernel(&m, [x[0] - y0[0], x[1] - y0[1]]);
+        let sg = sgbem::bem::kernels::sigma_kernel(&m, [x[0] - y0[0], x[1] - y0[1]]);
         let mut o = [[0.0; 2]; 2];
         for i in 0..2 {
             for j in 0..2 {
@@ -733,7 +733,7 @@ fn pair_timings() {
         ),
     ];
     for (name, f) in cases {
-        let kind = sgbem::galerkin::classify(&e, &f, &s);
+        let kind = sgbem::bem::galerkin::classify(&e, &f, &s);
         let reps = 200_000;
         let t0 = Instant::now();
         for _ in 0..reps {

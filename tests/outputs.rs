@@ -8,13 +8,13 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use hdf5_metno as h5;
+use sgbem::input::scene::{Plane, Units};
 use sgbem::output::archive::{read_archive, write_archive, FORMAT};
 use sgbem::output::record::{
     Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord, RunRecord,
     StateRecord, FORMAT_VERSION,
 };
 use sgbem::output::vtk::{export, write_vtk};
-use sgbem::scene::{Plane, Units};
 use sgbem::solution::{BodyField, HistoryRow, InterfaceResult, PairResult, PairStatus};
 use support::{sgbem, stacked_blocks, tmpdir, STACKED_SCENE};
 

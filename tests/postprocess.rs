@@ -3,11 +3,11 @@
 //! boundary stresses and interior fields are compared with the same field.
 #![allow(clippy::needless_range_loop)]
 
-use sgbem::assembly::scaling;
-use sgbem::kernels::{sigma_kernel, u_kernel, Mat2, Material, Vec2};
-use sgbem::model::{Body, DofClass, Element, Loop, NodeDofs, Role};
-use sgbem::postprocess::*;
-use sgbem::quadrature::QuadratureSettings;
+use sgbem::bem::assembly::scaling;
+use sgbem::bem::kernels::{sigma_kernel, u_kernel, Mat2, Material, Vec2};
+use sgbem::bem::quadrature::QuadratureSettings;
+use sgbem::input::model::{Body, DofClass, Element, Loop, NodeDofs, Role};
+use sgbem::post::*;
 use sgbem::solution::BodyField;
 
 /// The quadrilateral of formulation Appendix A1.

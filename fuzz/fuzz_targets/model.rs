@@ -25,13 +25,13 @@ model = "unilateral"
 "#;
 
 fuzz_target!(|data: &[u8]| {
-    let Ok(scene) = sgbem::scene::parse_scene(SCENE, Path::new("fuzz/scene.toml")) else {
+    let Ok(scene) = sgbem::input::scene::parse_scene(SCENE, Path::new("fuzz/scene.toml")) else {
         return;
     };
-    let Ok(mesh) = sgbem::mesh::parse_msh(data, Path::new("fuzz.msh")) else {
+    let Ok(mesh) = sgbem::input::mesh::parse_msh(data, Path::new("fuzz.msh")) else {
         return;
     };
-    if let Ok(model) = sgbem::model::build(&scene, &mesh, Path::new("fuzz.msh")) {
+    if let Ok(model) = sgbem::input::model::build(&scene, &mesh, Path::new("fuzz.msh")) {
         for it in &model.interfaces {
             let (a, b) = (&model.bodies[it.body_a], &model.bodies[it.body_b]);
             for p in &it.pairs {

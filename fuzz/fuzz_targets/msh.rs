@@ -7,7 +7,7 @@ use std::path::Path;
 use libfuzzer_sys::fuzz_target;
 
 fuzz_target!(|data: &[u8]| {
-    if let Ok(mesh) = sgbem::mesh::parse_msh(data, Path::new("fuzz.msh")) {
+    if let Ok(mesh) = sgbem::input::mesh::parse_msh(data, Path::new("fuzz.msh")) {
         let n = mesh.nodes.len();
         assert_eq!(mesh.node_tags.len(), n);
         assert!(mesh.nodes.iter().flatten().all(|c| c.is_finite()));

@@ -10,7 +10,7 @@ fuzz_target!(|data: &[u8]| {
     let Ok(text) = std::str::from_utf8(data) else {
         return;
     };
-    if let Ok(s) = sgbem::scene::parse_scene(text, Path::new("fuzz/scene.toml")) {
+    if let Ok(s) = sgbem::input::scene::parse_scene(text, Path::new("fuzz/scene.toml")) {
         assert!(!s.bodies.is_empty());
         for b in &s.bodies {
             assert!(b.young > 0.0 && b.poisson > -1.0 && b.poisson <= 0.5);
@@ -23,8 +23,8 @@ fuzz_target!(|data: &[u8]| {
         // Expressions evaluate to a number or NaN, never panic.
         for b in &s.boundaries {
             for c in &b.components {
-                let (sgbem::scene::Condition::Displacement(v)
-                | sgbem::scene::Condition::Traction(v)) = c;
+                let (sgbem::input::scene::Condition::Displacement(v)
+                | sgbem::input::scene::Condition::Traction(v)) = c;
                 let _ = v.eval([0.3, -1.7]);
             }
         }

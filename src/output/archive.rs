@@ -55,7 +55,7 @@ use super::record::{
     RunRecord, StateRecord, FORMAT_VERSION,
 };
 use crate::error::{Error, Result};
-use crate::scene::{Plane, Units};
+use crate::input::scene::{Plane, Units};
 use crate::solution::{BodyField, History, HistoryRow, InterfaceResult, PairResult, PairStatus};
 
 /// The value of the root attribute `format`.

@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::model::Interface;
+use crate::input::model::Interface;
 use crate::solution::{InterfaceResult, PairStatus};
 
 /// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:

@@ -10,7 +10,7 @@
 //! record itself.
 //!
 //! Conventions: indices are 0-based; body node indices are body-local (as
-//! [`crate::model::Body::nodes`]); mesh node indices index [`MeshRecord::nodes`]; pair
+//! [`crate::input::model::Body::nodes`]); mesh node indices index [`MeshRecord::nodes`]; pair
 //! quantities are in the pair frame (s, n) of the first body, tractions tension positive.
 
 use std::collections::HashMap;
@@ -19,13 +19,13 @@ use std::path::Path;
 
 use faer::Mat;
 
-use crate::assembly::{BodySystem, Unknown};
-use crate::condensation::Condensed;
+use crate::bem::assembly::{BodySystem, Unknown};
+use crate::bem::condensation::Condensed;
 use crate::error::{Error, Result};
-use crate::mesh::Mesh;
-use crate::model::{fmt_num, Interface, Model};
-use crate::postprocess::NodeValue;
-use crate::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential, Units};
+use crate::input::mesh::Mesh;
+use crate::input::model::{fmt_num, Interface, Model};
+use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential, Units};
+use crate::post::NodeValue;
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
 
 /// Version of the archive layout written by this build (root attribute `format_version`).
@@ -119,7 +119,7 @@ pub struct MeshRecord {
 }
 
 impl MeshRecord {
-    /// The record of a mesh read by [`crate::mesh::read_msh`]. A line or triangle takes the
+    /// The record of a mesh read by [`crate::input::mesh::read_msh`]. A line or triangle takes the
     /// first physical group of its entity.
     pub fn from_mesh(mesh: &Mesh) -> MeshRecord {
         let group_names = mesh.physical_names.iter().map(|p| p.name.clone()).collect();
@@ -353,7 +353,7 @@ pub struct InteriorRecord {
 }
 
 impl InteriorRecord {
-    /// From the values of [`crate::postprocess::field_at_nodes`].
+    /// From the values of [`crate::post::field_at_nodes`].
     pub fn from_values(values: &[NodeValue]) -> InteriorRecord {
         InteriorRecord {
             mesh_nodes: values.iter().map(|v| v.mesh_node).collect(),

@@ -2,7 +2,7 @@
 
 use serde_json::{json, Map, Value};
 
-use crate::model::Interface;
+use crate::input::model::Interface;
 use crate::solution::{InterfaceResult, PairStatus};
 
 /// Per-interface figures: detached and closed lengths, open pairs, resultants, extreme

@@ -32,7 +32,7 @@ use vtkio::model::{
 use super::record::RunRecord;
 use super::write_atomic;
 use crate::error::{Error, Result};
-use crate::postprocess::{out_of_plane_stress, principal_stresses, von_mises};
+use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
 use crate::solution::PairStatus;
 
 /// File name of the boundary file of state `k`.

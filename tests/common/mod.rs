@@ -5,9 +5,9 @@
 
 use faer::Mat;
 use rayon::prelude::*;
-use sgbem::galerkin::{element_mass, pair_blocks, ElementRef, PairBlocks, Segment};
-use sgbem::kernels::{Material, Vec2};
-use sgbem::quadrature::QuadratureSettings;
+use sgbem::bem::galerkin::{element_mass, pair_blocks, ElementRef, PairBlocks, Segment};
+use sgbem::bem::kernels::{Material, Vec2};
+use sgbem::bem::quadrature::QuadratureSettings;
 
 /// One closed loop: element e runs from node e to node e+1 (mod n).
 pub struct Loop {

@@ -35,14 +35,14 @@
 use faer::Mat;
 use rayon::prelude::*;
 
-use crate::error::{Error, Result};
-use crate::galerkin::{
+use crate::bem::galerkin::{
     body_force_loads, element_mass, pair_blocks, ElementRef, PairBlocks, Segment,
 };
-use crate::kernels::{boundary_area, Material};
-use crate::model::{Body, DofClass, Model, Role};
-use crate::quadrature::QuadratureSettings;
-use crate::scene::{Condition, Frame, Plane};
+use crate::bem::kernels::{boundary_area, Material};
+use crate::bem::quadrature::QuadratureSettings;
+use crate::error::{Error, Result};
+use crate::input::model::{Body, DofClass, Model, Role};
+use crate::input::scene::{Condition, Frame, Plane};
 
 /// What one unknown of a body is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -765,7 +765,7 @@ fn known_displacements(
 fn fmt_point(p: [f64; 2]) -> String {
     format!(
         "({}, {})",
-        crate::model::fmt_num(p[0]),
-        crate::model::fmt_num(p[1])
+        crate::input::model::fmt_num(p[0]),
+        crate::input::model::fmt_num(p[1])
     )
 }

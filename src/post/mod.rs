@@ -30,7 +30,7 @@
 //! * **Invariants**: [`out_of_plane_stress`], [`von_mises`], [`principal_stresses`].
 //!
 //! **Scaled coordinates.** The boundary operators of a body are integrated in the scaled
-//! coordinates `x' = (x − c)/L` of [`crate::assembly::scaling`] (formulation §8.4), which
+//! coordinates `x' = (x − c)/L` of [`crate::bem::assembly::scaling`] (formulation §8.4), which
 //! amounts to the single-layer kernel `U + const·I`. The interior identities use the same
 //! coordinates, so that interior values belong to the same discrete solution as the boundary
 //! values. Back in physical units the single-layer displacement integrals carry a factor L,
@@ -46,12 +46,12 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
-use crate::assembly::scaling;
-use crate::galerkin::{point_displacement_integrals, point_stress_integrals, Segment};
-use crate::kernels::{body_force_fields, boundary_area, Mat2, Material, Vec2};
-use crate::model::Body;
-use crate::quadrature::QuadratureSettings;
-use crate::scene::Plane;
+use crate::bem::assembly::scaling;
+use crate::bem::galerkin::{point_displacement_integrals, point_stress_integrals, Segment};
+use crate::bem::kernels::{body_force_fields, boundary_area, Mat2, Material, Vec2};
+use crate::bem::quadrature::QuadratureSettings;
+use crate::input::model::Body;
+use crate::input::scene::Plane;
 use crate::solution::BodyField;
 
 /// Thickness of the boundary layer of [`interior`], as a fraction of the nearest element's
@@ -582,7 +582,7 @@ impl<'a> Prepared<'a> {
 }
 
 /// Displacement and stress at x by the Somigliana identities [paper eqs. 1a,b] alone, without
-/// the boundary layer of [`interior`]. `scaling` is [`crate::assembly::scaling`] of the
+/// the boundary layer of [`interior`]. `scaling` is [`crate::bem::assembly::scaling`] of the
 /// body, `body_force` the body force already multiplied by the load factor. The point must lie
 /// inside the body and off its boundary; the stress loses about `ε·(L/d)²` to rounding at a
 /// distance d from an element of length L.
@@ -615,7 +615,7 @@ pub fn somigliana(
 ///   just outside): the raw identities, or the boundary values closer than
 ///   [`NEAR_BOUNDARY_FRACTION`]·L_e.
 ///
-/// `scaling` is [`crate::assembly::scaling`] of the body, `body_force` the body force already
+/// `scaling` is [`crate::bem::assembly::scaling`] of the body, `body_force` the body force already
 /// multiplied by the load factor. For a point outside the body the result is meaningless;
 /// [`evaluate_points`] locates points first.
 pub fn interior(

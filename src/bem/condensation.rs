@@ -17,7 +17,7 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use crate::assembly::BodySystem;
+use crate::bem::assembly::BodySystem;
 use crate::error::{Error, Result};
 
 /// A body condensed onto its interface unknowns.

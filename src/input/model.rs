@@ -31,8 +31,8 @@ use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::path::{Path, PathBuf};
 
 use crate::error::{did_you_mean, Error, Result};
-use crate::mesh::Mesh;
-use crate::scene::{BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene};
+use crate::input::mesh::Mesh;
+use crate::input::scene::{BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene};
 
 /// Turning angle above which two elements meet at a corner, within one gmsh curve.
 const CORNER_ANGLE_IN_CURVE: f64 = 10.0 * std::f64::consts::PI / 180.0;

@@ -14,7 +14,7 @@ use std::path::{Path, PathBuf};
 use serde::Deserialize;
 
 use crate::error::{did_you_mean, Error, Result};
-use crate::expr::{Expr, Scalar};
+use crate::input::expr::{Expr, Scalar};
 
 /// Plane strain or plane stress (SPEC.md `plane`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

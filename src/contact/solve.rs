@@ -8,13 +8,13 @@
 
 use std::time::Instant;
 
-use crate::assembly::{assemble_body, check_single_layer, BodySystem, Unknown};
-use crate::condensation::{condense, Condensed};
+use crate::bem::assembly::{assemble_body, check_single_layer, BodySystem, Unknown};
+use crate::bem::condensation::{condense, Condensed};
+use crate::bem::quadrature::QuadratureSettings;
+use crate::contact::interface::{self, Layout, X0Map};
 use crate::error::Result;
-use crate::interface::{self, Layout, X0Map};
-use crate::model::Model;
-use crate::quadrature::QuadratureSettings;
-use crate::scene::Plane;
+use crate::input::model::Model;
+use crate::input::scene::Plane;
 use crate::solution::{BodyField, InterfaceResult, PairResult, PairStatus};
 
 /// Every body assembled and condensed.
@@ -209,7 +209,7 @@ pub fn body_field(
                     it.pairs[pair].node_b
                 };
                 for (e, el) in body.elements.iter().enumerate() {
-                    if el.role != crate::model::Role::Interface(iface) {
+                    if el.role != crate::input::model::Role::Interface(iface) {
                         continue;
                     }
                     for (end, te) in t[e].iter_mut().enumerate() {

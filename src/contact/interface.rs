@@ -19,10 +19,10 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use crate::assembly::{BodySystem, Unknown};
-use crate::condensation::Condensed;
+use crate::bem::assembly::{BodySystem, Unknown};
+use crate::bem::condensation::Condensed;
 use crate::error::{Error, Result};
-use crate::model::Model;
+use crate::input::model::Model;
 use crate::solution::PairStatus;
 
 /// Where the unknowns of one pair component sit in Y.

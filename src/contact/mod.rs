@@ -30,13 +30,18 @@
 //! Brittle cohesion [paper §3.1.1]: a pair that opens loses its cohesion for good (c_j := 0);
 //! the active-set solver repeats until no new pair opens (the outer loop of formulation §6.1).
 
+pub mod interface;
+pub mod lemke;
+pub mod qp;
+pub mod solve;
+
 use std::collections::HashSet;
 
+use crate::contact::solve::{solve_status_scaled, Prepared, StatusSolution};
 use crate::error::{Error, Result};
-use crate::model::Model;
-use crate::scene::{InterfaceModel, Tangential};
+use crate::input::model::Model;
+use crate::input::scene::{InterfaceModel, Tangential};
 use crate::solution::{HistoryRow, PairStatus};
-use crate::solve::{solve_status_scaled, Prepared, StatusSolution};
 
 /// Largest relative violation accepted when the iteration cycles between states that differ
 /// at the contact edge only (see [`solve_contact`]).
@@ -99,7 +104,9 @@ pub fn initial_status(model: &Model) -> Status {
         .map(|it| {
             let closed = match it.spec.model {
                 InterfaceModel::Bonded => true,
-                InterfaceModel::Unilateral => it.spec.initial == crate::scene::InitialState::Closed,
+                InterfaceModel::Unilateral => {
+                    it.spec.initial == crate::input::scene::InitialState::Closed
+                }
             };
             let n = if closed {
                 PairStatus::Closed
@@ -112,7 +119,7 @@ pub fn initial_status(model: &Model) -> Status {
         .collect()
 }
 
-fn tangential_status(it: &crate::model::Interface, normal: PairStatus) -> PairStatus {
+fn tangential_status(it: &crate::input::model::Interface, normal: PairStatus) -> PairStatus {
     match (it.spec.model, it.spec.tangential) {
         (InterfaceModel::Unilateral, Tangential::Slide) => PairStatus::Open,
         _ => normal,
@@ -412,8 +419,14 @@ pub fn solve_contact(
                     // Fall back to Lemke's pivoting on the QP's LCP with the current status
                     // as the pre-partition, then resume the active set from its zones.
                     lemke_tried = true;
-                    match crate::qp::solve_qp(model, prepared, load_factor, &cohesion, tol, &status)
-                    {
+                    match crate::contact::qp::solve_qp(
+                        model,
+                        prepared,
+                        load_factor,
+                        &cohesion,
+                        tol,
+                        &status,
+                    ) {
                         Ok(q) => {
                             let (st, pivots) = q.lemke.unwrap_or((q.status, 0));
                             notes.push(format!(

@@ -28,10 +28,10 @@
 // Index loops mirror the component formulas (δ_ik, r̂_i r̂_k, …) and read better than iterators.
 #![allow(clippy::needless_range_loop)]
 
-use crate::kernels::{body_force_fields, Mat2, Material, Tensor3, Vec2};
-use crate::quadrature::{gauss, graded_point, split_towards_pole, QuadratureSettings, Rule};
+use crate::bem::kernels::{body_force_fields, Mat2, Material, Tensor3, Vec2};
+use crate::bem::quadrature::{gauss, graded_point, split_towards_pole, QuadratureSettings, Rule};
 
-pub use crate::kernels::Segment;
+pub use crate::bem::kernels::Segment;
 
 /// An element as the pair integrator sees it: its geometry and the caller's indices of its
 /// start and end nodes (P, Q).
@@ -560,8 +560,8 @@ pub fn point_displacement_integrals(
     let mut out = PointDisplacement::default();
     point_rule(x, f, lf, (0.0, 1.0), 0, settings, &mut |eta, w| {
         let r = [xp[0] - eta * c[0], xp[1] - eta * c[1]];
-        let u = crate::kernels::u_kernel(m, r);
-        let t = crate::kernels::t_kernel(m, r, n);
+        let u = crate::bem::kernels::u_kernel(m, r);
+        let t = crate::bem::kernels::t_kernel(m, r, n);
         let nb = [1.0 - eta, eta];
         for b in 0..2 {
             let wb = w * nb[b];
@@ -590,8 +590,8 @@ pub fn point_stress_integrals(
     let mut out = PointStress::default();
     point_rule(x, f, lf, (0.0, 1.0), 0, settings, &mut |eta, w| {
         let r = [xp[0] - eta * c[0], xp[1] - eta * c[1]];
-        let sg = crate::kernels::sigma_kernel(m, r);
-        let s = crate::kernels::s_kernel(m, r, n);
+        let sg = crate::bem::kernels::sigma_kernel(m, r);
+        let s = crate::bem::kernels::s_kernel(m, r, n);
         let nb = [1.0 - eta, eta];
         for b in 0..2 {
             let wb = w * nb[b];
@@ -617,12 +617,12 @@ pub struct BodyForceLoads {
 }
 
 /// Body-force loads of test element `e` for a constant body force `b` over the body bounded
-/// by `boundary` with area `area` ([`crate::kernels::boundary_area`]).
+/// by `boundary` with area `area` ([`crate::bem::kernels::boundary_area`]).
 ///
 /// `u^b` and `∇u^b` are exact at every point (closed-form segment integrals, see
 /// [`body_force_fields`]); along e they are continuous but behave like `d ln d` near corners,
 /// so the x-integral uses the Gauss rule of order `near_order` graded towards both ends
-/// ([`crate::quadrature::graded_both_ends`]). Cost:
+/// ([`crate::bem::quadrature::graded_both_ends`]). Cost:
 /// `near_order × boundary.len()` closed forms per element.
 pub fn body_force_loads(
     m: &Material,

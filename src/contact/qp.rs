@@ -39,13 +39,13 @@ use clarabel::solver::{
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
+use crate::contact::interface;
+use crate::contact::solve::Prepared;
 use crate::contact::Status;
 use crate::error::{Error, Result};
-use crate::interface;
-use crate::model::Model;
-use crate::scene::InterfaceModel;
+use crate::input::model::Model;
+use crate::input::scene::InterfaceModel;
 use crate::solution::PairStatus;
-use crate::solve::Prepared;
 
 /// What the QP found.
 pub struct QpResult {
@@ -273,7 +273,7 @@ pub fn solve_qp(
         .max(f64::MIN_POSITIVE);
     let mut out = partition.clone();
     let flip = |out: &mut Status, kk: usize, j: usize, to: PairStatus| {
-        let slide = model.interfaces[kk].spec.tangential == crate::scene::Tangential::Slide;
+        let slide = model.interfaces[kk].spec.tangential == crate::input::scene::Tangential::Slide;
         let t = if slide { PairStatus::Open } else { to };
         out[kk][j] = [t, to];
     };
@@ -368,11 +368,12 @@ fn lemke_statuses(
             mm[i * nc + j] *= d[i] * d[j];
         }
     }
-    let sol = crate::lcp::lemke(&mm, &qq, 20 * nc + 100).map_err(|f| {
+    let sol = crate::contact::lemke::lemke(&mm, &qq, 20 * nc + 100).map_err(|f| {
         Error::numerical(format!("Lemke's method failed on the contact LCP: {f:?}"))
     })?;
     let mut out = partition.clone();
-    let slide = |kk: usize| model.interfaces[kk].spec.tangential == crate::scene::Tangential::Slide;
+    let slide =
+        |kk: usize| model.interfaces[kk].spec.tangential == crate::input::scene::Tangential::Slide;
     let wmax = sol
         .w
         .iter()

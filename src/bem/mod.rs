@@ -1,0 +1,8 @@
+//! The boundary element stage: kernels, quadrature, Galerkin element-pair integrals,
+//! per-body assembly and condensation onto the interface unknowns.
+
+pub mod assembly;
+pub mod condensation;
+pub mod galerkin;
+pub mod kernels;
+pub mod quadrature;
