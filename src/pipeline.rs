@@ -103,6 +103,9 @@ pub struct RunResult {
     pub load_factor: f64,
     pub fields: Vec<crate::solution::BodyField>,
     pub interfaces: Vec<crate::solution::InterfaceResult>,
+    /// Nodal normal contact force of each interface pair (on the second body, compression
+    /// positive): the force the complementarity conditions hold.
+    pub nodal_force: Vec<Vec<f64>>,
     pub history: crate::solution::History,
     pub states: Vec<crate::contact::RecordedState>,
     pub contact: serde_json::Value,
@@ -166,7 +169,7 @@ pub fn solve_loaded_with(
         let start = session.initial();
         let f = factors[last];
         let n = session.problem.n_open_rows;
-        let (fields, interfaces, _) =
+        let (fields, interfaces, nodal_force) =
             session
                 .problem
                 .state(model, &prepared, f, &vec![0.0; n], &start.open);
@@ -176,6 +179,7 @@ pub fn solve_loaded_with(
             load_factor: f,
             fields,
             interfaces,
+            nodal_force,
             history,
             states,
             contact: serde_json::json!({"solver": "linear (no unilateral interface)"}),
@@ -215,7 +219,8 @@ pub fn solve_loaded_with(
     for (step, &f) in factors.iter().enumerate() {
         stage.set_message(format!("load step {} of {}", step + 1, factors.len()));
         let t = Instant::now();
-        let r = session.solve_step(&state, main, tol, maxit, step, f, true);
+        let full = scene.output.history == crate::input::scene::History::Full;
+        let mut r = session.solve_step(&state, main, tol, maxit, step, f, full);
         timings.add(
             if main == Solver::Qp {
                 "contact_qp"
@@ -224,6 +229,9 @@ pub fn solve_loaded_with(
             },
             t.elapsed().as_secs_f64(),
         );
+        let t = Instant::now();
+        session.expand(&mut r);
+        timings.add("contact_record", t.elapsed().as_secs_f64());
         for &c in &checks {
             let t = Instant::now();
             let x = session.solve_step(&state, c, tol, maxit, step, f, false);
@@ -267,7 +275,7 @@ pub fn solve_loaded_with(
             }));
         }
         state = r.state;
-        final_sol = Some((f, r.fields, r.interfaces));
+        final_sol = Some((f, r.fields, r.interfaces, r.nodal_force));
         if let Some(e) = r.failure {
             converged = false;
             failure = Some(e);
@@ -286,7 +294,7 @@ pub fn solve_loaded_with(
         "interface_system_size": session.problem.base_size(),
         "cross_checks": cross,
     });
-    let (load_factor, fields, interfaces) = match final_sol {
+    let (load_factor, fields, interfaces, nodal_force) = match final_sol {
         Some(x) => x,
         None => return Err(Error::numerical("the contact stage produced no state")),
     };
@@ -299,6 +307,7 @@ pub fn solve_loaded_with(
         load_factor,
         fields,
         interfaces,
+        nodal_force,
         history,
         states,
         contact,

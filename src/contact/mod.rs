@@ -103,6 +103,11 @@ pub struct ContactResult {
     pub failure: Option<Error>,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
     pub info: serde_json::Value,
+    /// The states of the evolutive path in compact form (iteration, open rows, openings),
+    /// expanded into `rows` and `states` by [`Session::expand`].
+    pub recorded: Vec<(usize, Vec<bool>, Vec<f64>)>,
+    pub load_step: usize,
+    pub load_factor: f64,
 }
 
 /// A contact run: the problem and the columns of its opening stiffness, shared by every
@@ -337,27 +342,7 @@ impl<'a> Session<'a> {
         );
         let mut rows = Vec::new();
         let mut states = Vec::new();
-        for (it, open, s) in &compact {
-            let (f, i, _) = self
-                .problem
-                .state(self.model, self.prepared, factor, s, open);
-            rows.push(history_row(
-                self.model,
-                &i,
-                load_step,
-                factor,
-                *it,
-                method.name(),
-            ));
-            states.push(RecordedState {
-                load_step,
-                load_factor: factor,
-                iteration: *it,
-                fields: f,
-                interfaces: i,
-            });
-        }
-        if !record || rows.is_empty() {
+        if !record || compact.is_empty() {
             rows.push(history_row(
                 self.model,
                 &interfaces,
@@ -398,6 +383,30 @@ impl<'a> Session<'a> {
             notes,
             failure,
             info,
+            recorded: compact,
+            load_step,
+            load_factor: factor,
+        }
+    }
+
+    /// Expands the compact states of an evolutive path into history rows and boundary
+    /// solutions of every body (one sparse solve and one recovery per body each).
+    pub fn expand(&self, result: &mut ContactResult) {
+        let (step, factor) = (result.load_step, result.load_factor);
+        for (it, open, s) in std::mem::take(&mut result.recorded) {
+            let (f, i, _) = self
+                .problem
+                .state(self.model, self.prepared, factor, &s, &open);
+            result
+                .rows
+                .push(history_row(self.model, &i, step, factor, it, result.solver));
+            result.states.push(RecordedState {
+                load_step: step,
+                load_factor: factor,
+                iteration: it,
+                fields: f,
+                interfaces: i,
+            });
         }
     }
 

@@ -72,6 +72,15 @@ use crate::input::model::Model;
 use crate::input::scene::{InterfaceModel, Tangential};
 use crate::solution::{BodyField, InterfaceResult, PairResult, PairStatus};
 
+/// `m x` by faer's product (vectorised, parallel on large blocks).
+pub fn matvec(m: &Mat<f64>, x: &[f64]) -> Vec<f64> {
+    if m.nrows() == 0 {
+        return Vec::new();
+    }
+    let y = m * faer::ColRef::from_slice(x);
+    y.iter().copied().collect()
+}
+
 /// One body's Steklov–Poincaré operator.
 pub struct BodyOp {
     /// X0 indices of the displacement unknowns (the body's dofs) and of the tractions.
@@ -421,13 +430,9 @@ impl Problem {
         let u = self.displacements(&zero, s);
         let mut f = vec![0.0; self.n_glued];
         for (b, op) in self.ops.iter().enumerate() {
-            let n = op.u_idx.len();
-            for i in 0..n {
-                let mut acc = factor * op.p[i];
-                for j in 0..n {
-                    acc += op.s[(i, j)] * u[b][j];
-                }
-                f[self.glued[self.dof_start[b] + i]] += acc;
+            let su = matvec(&op.s, &u[b]);
+            for (i, v) in su.iter().enumerate() {
+                f[self.glued[self.dof_start[b] + i]] += factor * op.p[i] + v;
             }
         }
         f
@@ -446,9 +451,10 @@ impl Problem {
             .iter()
             .zip(u)
             .map(|(op, ub)| {
-                let n = op.u_idx.len();
-                (0..n)
-                    .map(|i| factor * op.p[i] + (0..n).map(|j| op.s[(i, j)] * ub[j]).sum::<f64>())
+                matvec(&op.s, ub)
+                    .iter()
+                    .zip(&op.p)
+                    .map(|(v, p)| v + factor * p)
                     .collect()
             })
             .collect()
@@ -512,9 +518,7 @@ impl Problem {
                 if b == bj {
                     du[lj] += 1.0;
                 }
-                (0..n)
-                    .map(|i| (0..n).map(|k| op.s[(i, k)] * du[k]).sum::<f64>())
-                    .collect()
+                matvec(&op.s, &du)
             })
             .collect();
         (0..self.n_open_rows)
@@ -545,11 +549,9 @@ impl Problem {
             for (l, &i) in op.u_idx.iter().enumerate() {
                 x0[i] = -u[b][l];
             }
+            let gu = matvec(&op.gu, &u[b]);
             for (m, &i) in op.f_idx.iter().enumerate() {
-                x0[i] = -factor * op.gz[m]
-                    + (0..op.u_idx.len())
-                        .map(|l| op.gu[(m, l)] * u[b][l])
-                        .sum::<f64>();
+                x0[i] = -factor * op.gz[m] + gu[m];
             }
             let x = prepared.condensed[b].recover_x_scaled(&x0, factor);
             fields.push(body_field(model, b, sys, &x, &x0, factor));
@@ -568,10 +570,30 @@ impl Problem {
                     .iter()
                     .enumerate()
                     .map(|(j, pr)| {
+                        // The traction on A of the discrete problem: the nodal force of the
+                        // row over the pair's tributary length (∫ψ_j t = t w_j for a uniform
+                        // traction; zero exactly where a row is open or frictionless); the
+                        // body's own traction hat where no row exists (prescribed both sides).
                         let mut traction = [0.0; 2];
                         for (c, t) in traction.iter_mut().enumerate() {
-                            if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true) {
-                                *t = tractions[it.body_a][i];
+                            match self.row_of[k][j][c] {
+                                Some(r) => {
+                                    let row = &self.rows[r];
+                                    let (b, l) = self.body_of(row.dof_b);
+                                    *t = -p[b][l] / row.weight;
+                                }
+                                None => {
+                                    // Frictionless tangential component: no row, no force.
+                                    let slide = c == 0
+                                        && it.spec.model == InterfaceModel::Unilateral
+                                        && it.spec.tangential == Tangential::Slide;
+                                    if !slide {
+                                        if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true)
+                                        {
+                                            *t = tractions[it.body_a][i];
+                                        }
+                                    }
+                                }
                             }
                         }
                         let (ua, ub) = (
