@@ -26,6 +26,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns, open: &[bool], max_iterations: u
                 iterations,
                 converged: true,
                 notes,
+                blocked: Vec::new(),
             };
         }
         if !seen.insert(st.open.clone()) || iterations >= max_iterations || v.is_empty() {

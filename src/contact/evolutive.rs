@@ -20,6 +20,8 @@ pub struct Outcome {
     pub iterations: usize,
     pub converged: bool,
     pub notes: Vec<String>,
+    /// Violated rows that could not open without leaving a body free (a mechanism).
+    pub blocked: Vec<usize>,
 }
 
 /// Solves the inner problem from the normal statuses `open`; `record` is called with every
@@ -55,6 +57,7 @@ pub fn solve(
                 iterations,
                 converged: true,
                 notes,
+                blocked: Vec::new(),
             };
         }
         let mut candidates: Vec<usize> = v.iter().map(|x| x.row).collect();
@@ -79,16 +82,14 @@ pub fn solve(
             blocked.insert(r);
         }
         if !switched {
-            notes.push(format!(
-                "every violated pair would leave a body free if it opened ({} pairs): the \
-                 loads cannot be carried (a mechanism)",
-                blocked.len()
-            ));
+            let mut rows: Vec<usize> = blocked.iter().copied().collect();
+            rows.sort_unstable();
             return Outcome {
                 state: st,
                 iterations,
                 converged: false,
                 notes,
+                blocked: rows,
             };
         }
         iterations += 1;
@@ -106,6 +107,7 @@ pub fn solve(
                     iterations,
                     converged: false,
                     notes,
+                    blocked: Vec::new(),
                 };
             }
             notes.push(format!(
@@ -126,5 +128,6 @@ pub fn solve(
         iterations,
         converged: false,
         notes,
+        blocked: Vec::new(),
     }
 }

@@ -25,6 +25,9 @@
 //! A repeated outer state is a stick edge cycle (a pair at the contact edge that opens once
 //! untied and closes once tied): reported, not hidden.
 
+// Index loops over rows mirror the problem's row numbering.
+#![allow(clippy::needless_range_loop)]
+
 pub mod active_set;
 pub mod evolutive;
 pub mod interface;
@@ -239,8 +242,21 @@ impl<'a> Session<'a> {
             let outcome = match outcome {
                 Ok(o) => o,
                 Err(e) => {
+                    // Name the mechanism: the pivoting path finds the rows that cannot open.
+                    let probe = evolutive::solve(
+                        &inner,
+                        &mut self.cols,
+                        &start_open,
+                        max_iterations,
+                        &mut |_| {},
+                    );
+                    let hint = if probe.blocked.is_empty() {
+                        String::new()
+                    } else {
+                        format!("; {}", self.mechanism(&probe.blocked))
+                    };
                     failure = Some(Error::numerical(format!(
-                        "the contact solver ({}) failed at load step {}: {e}",
+                        "the contact solver ({}) failed at load step {}: {e}{hint}",
                         method.name(),
                         load_step + 1
                     )));
@@ -251,14 +267,15 @@ impl<'a> Session<'a> {
             notes.extend(outcome.notes.iter().cloned());
             let residual = inner.residual(&outcome.state);
             let ok = outcome.converged;
+            let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {
                 let closed: Vec<bool> = state.open.iter().map(|o| !o).collect();
                 let _ = closed;
-                let hint = if notes.iter().any(|n| n.contains("free")) {
-                    self.mechanism(&state.open, &inner)
-                } else {
+                let hint = if outcome_blocked.is_empty() {
                     String::new()
+                } else {
+                    format!("; {}", self.mechanism(&outcome_blocked))
                 };
                 failure = Some(Error::numerical(format!(
                     "the contact solver ({}) did not converge at load step {} (largest \
@@ -410,29 +427,33 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// " (body X is free to move ...)" for a state whose open rows leave a body free.
-    fn mechanism(&self, open: &[bool], inner: &Inner) -> String {
-        let v = inner.violations(&InnerState {
-            open: open.to_vec(),
-            s: vec![0.0; open.len()],
-            lambda: vec![0.0; open.len()],
-        });
-        let _ = v;
-        let rows: Vec<problem::Row> = self
-            .problem
-            .rows
-            .iter()
-            .enumerate()
-            .filter(|(r, _)| *r >= self.problem.n_open_rows || !open[*r])
-            .map(|(_, row)| *row)
-            .collect();
-        let h = problem::mechanism_hint(
-            self.model,
-            &self.problem.ops,
-            &rows,
-            &self.problem.dof_start,
-        );
-        format!("; {h}")
+    /// Names the bodies and the motion that opening the `blocked` rows would leave free.
+    fn mechanism(&self, blocked: &[usize]) -> String {
+        let mut parts = Vec::new();
+        for &r in blocked.iter().take(3) {
+            let row = self.problem.rows[r];
+            let it = &self.model.interfaces[row.iface];
+            let pr = &it.pairs[row.pair];
+            let dir = if row.comp == 1 { pr.normal } else { pr.tangent };
+            parts.push(format!(
+                "interface \"{}\" at ({}, {}) cannot open without leaving body \"{}\" or \
+                 body \"{}\" free: the free motion is a translation or rotation that opens it \
+                 along ({:.3}, {:.3})",
+                it.spec.name,
+                crate::input::model::fmt_num(pr.x[0]),
+                crate::input::model::fmt_num(pr.x[1]),
+                self.model.bodies[it.body_b].name,
+                self.model.bodies[it.body_a].name,
+                dir[0],
+                dir[1],
+            ));
+        }
+        format!(
+            "no equilibrium exists (a mechanism): the loads pull the bodies apart where nothing \
+             else holds them: {}; hold the body with a displacement condition or change the \
+             loads",
+            parts.join("; ")
+        )
     }
 }
 
@@ -468,6 +489,7 @@ fn exact_state(
         iterations: 0,
         converged,
         notes,
+        blocked: refused,
     })
 }
 

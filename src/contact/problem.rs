@@ -150,7 +150,11 @@ pub struct Base {
     pub cohesion: Vec<f64>,
 }
 
-fn x0_maps(sys: &BodySystem) -> (Vec<usize>, Vec<usize>, Vec<(usize, usize, usize)>) {
+/// X0 indices of a body's displacement and traction unknowns, and the (interface, pair,
+/// component) of each displacement.
+type X0Maps = (Vec<usize>, Vec<usize>, Vec<(usize, usize, usize)>);
+
+fn x0_maps(sys: &BodySystem) -> X0Maps {
     let (mut u_idx, mut f_idx, mut on) = (Vec::new(), Vec::new(), Vec::new());
     for (i, u) in sys.unknowns[sys.n_x..].iter().enumerate() {
         match *u {
@@ -382,7 +386,7 @@ impl Problem {
             .map(|i| (kx[i] - b[(i, 0)]).abs())
             .fold(0.0, f64::max)
             / 7.0;
-        if !(res < 1e-6) {
+        if res.is_nan() || res >= 1e-6 {
             return Err(Error::numerical(format!(
                 "the interface system with every pair closed is singular (relative residual \
                  {res:.1e}): {}",
@@ -577,6 +581,9 @@ impl Problem {
                         let mut traction = [0.0; 2];
                         for (c, t) in traction.iter_mut().enumerate() {
                             match self.row_of[k][j][c] {
+                                // An open row carries no force (exactly: it is the
+                                // stationarity condition of its opening).
+                                Some(r) if r < self.n_open_rows && open[r] => {}
                                 Some(r) => {
                                     let row = &self.rows[r];
                                     let (b, l) = self.body_of(row.dof_b);
@@ -681,7 +688,7 @@ pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[
             }
         }
         let held_elsewhere = body_has_support(model, b);
-        if held_elsewhere || !touched && !held_elsewhere && n == 0 {
+        if held_elsewhere || (!touched && n == 0) {
             continue;
         }
         // Smallest eigenvector of the 3×3 Gram matrix by a few inverse-free sweeps (Jacobi).
@@ -795,7 +802,7 @@ impl Opening {
             x[i] = acc / self.l[i][i];
         }
         let d2 = col[r] - x.iter().map(|v| v * v).sum::<f64>();
-        if !(d2 > 1e-12 * col[r].abs()) {
+        if d2.is_nan() || d2 <= 1e-12 * col[r].abs() {
             return false;
         }
         x.push(d2.sqrt());

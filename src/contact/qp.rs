@@ -93,11 +93,17 @@ pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutc
     }
     let am = CscMatrix::new(m, nv, colptr, rowval, nzval);
     let b = vec![0.0; m];
+    // Tight enough to split every complementary pair (see below); 1e-13 fails to converge.
+    let tol = if tolerance.is_finite() && tolerance < 1e-11 {
+        1e-12
+    } else {
+        1e-11
+    };
     let settings = DefaultSettingsBuilder::default()
         .verbose(false)
-        .tol_gap_abs(tolerance.min(1e-11).max(1e-12))
-        .tol_gap_rel(tolerance.min(1e-11).max(1e-12))
-        .tol_feas(tolerance.min(1e-11).max(1e-12))
+        .tol_gap_abs(tol)
+        .tol_gap_rel(tol)
+        .tol_feas(tol)
         .max_iter(500)
         .build()
         .map_err(|e| format!("QP settings rejected: {e:?}"))?;
