@@ -47,6 +47,11 @@ enum Command {
         /// No progress bars.
         #[arg(long)]
         quiet: bool,
+        /// Override a scene key: a dotted TOML path and a TOML value, e.g.
+        /// `--set interface.joint.cohesion=2.0 --set solve.method=qp` (repeatable; validated
+        /// like the file).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Read and validate only; print the model and the plan.
     Check {
@@ -55,6 +60,11 @@ enum Command {
         /// Mesh file (MSH 4.1); overrides the scene's `mesh`.
         #[arg(long)]
         mesh: Option<PathBuf>,
+        /// Override a scene key: a dotted TOML path and a TOML value, e.g.
+        /// `--set interface.joint.cohesion=2.0 --set solve.method=qp` (repeatable; validated
+        /// like the file).
+        #[arg(long = "set", value_name = "KEY=VALUE")]
+        set: Vec<String>,
     },
     /// Print what an archive holds.
     Inspect {
@@ -74,18 +84,32 @@ enum Command {
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
-        Command::Check { scene, mesh } => pipeline::load(&scene, mesh.as_deref()).map(|l| {
-            print!(
-                "{}",
-                report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
+        Command::Check { scene, mesh, set } => {
+            // A .geo mesh is meshed into a temporary folder, removed afterwards.
+            let tmp = std::env::temp_dir().join(format!("sgbem-check-{}", std::process::id()));
+            let loaded = pipeline::load_with(
+                &scene,
+                &pipeline::LoadOptions {
+                    mesh,
+                    sets: set,
+                    mesh_dir: Some(tmp.clone()),
+                },
             );
-        }),
+            let _ = std::fs::remove_dir_all(&tmp);
+            loaded.map(|l| {
+                print!(
+                    "{}",
+                    report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
+                );
+            })
+        }
         Command::Run {
             scene,
             mesh,
             out,
             method,
             quiet,
+            set,
         } => {
             let opts = pipeline::RunOptions {
                 mesh,
@@ -96,6 +120,7 @@ fn main() -> ExitCode {
                     MethodArg::Both => Method::Both,
                 }),
                 quiet,
+                sets: set,
             };
             pipeline::run(&scene, &opts).map(|r| {
                 for n in &r.notes {
