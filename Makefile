@@ -72,6 +72,13 @@ test: setup mesh
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
+	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
+	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
+	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
+	  xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint; \
+	else \
+	  echo "test: ParaView check SKIPPED: no pvpython or xvfb-run (apt-get install -y paraview xvfb)"; \
+	fi
 
 examples: build mesh $(RESULTS)
 

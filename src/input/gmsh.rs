@@ -15,11 +15,14 @@ pub fn is_geo(path: &Path) -> bool {
 }
 
 /// Meshes `geo` into `dir/<stem>.msh` (MSH 4.1, 2D) with the given `-setnumber`
-/// parameters; gmsh's log goes to `dir/<stem>.msh.log`. Returns the mesh path. A missing
+/// parameters (gmsh's log is not kept: it holds timings). Returns the mesh path. A missing
 /// gmsh or a failing one is bad input (exit 2) with gmsh's message.
 pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<PathBuf> {
     if !geo.is_file() {
-        return Err(Error::input(geo, "no such .geo file: check the scene's `mesh`"));
+        return Err(Error::input(
+            geo,
+            "no such .geo file: check the scene's `mesh`",
+        ));
     }
     std::fs::create_dir_all(dir)
         .map_err(|e| Error::io(dir, format!("cannot create the mesh folder: {e}")))?;
@@ -56,7 +59,6 @@ pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<Path
         )
     })?;
     let log = [output.stdout.as_slice(), output.stderr.as_slice()].concat();
-    let _ = std::fs::write(dir.join(format!("{stem}.msh.log")), &log);
     // gmsh reports some errors with exit status 0: judge by its "Error" lines too.
     let text = String::from_utf8_lossy(&log);
     let mut errors: Vec<&str> = Vec::new();

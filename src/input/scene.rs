@@ -310,7 +310,9 @@ fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result<(), String
             doc.insert("mesh".into(), toml::Value::Table(t));
         }
     }
-    let (last, parents) = path.split_last().ok_or_else(|| format!("--set {set}: no key"))?;
+    let (last, parents) = path
+        .split_last()
+        .ok_or_else(|| format!("--set {set}: no key"))?;
     let mut table = doc;
     for (i, k) in parents.iter().enumerate() {
         let entry = table
@@ -645,12 +647,15 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     })
 }
 
+/// The mesh file and its gmsh parameters.
+type MeshSpec = (Option<PathBuf>, Vec<(String, f64)>);
+
 /// `mesh = "FILE"`, or a `[mesh]` table: `file` and gmsh parameters (numbers) for a `.geo`.
 fn mesh_spec(
     v: Option<&toml::Value>,
     dir: &Path,
     path: &Path,
-) -> Result<(Option<PathBuf>, Vec<(String, f64)>)> {
+) -> Result<MeshSpec> {
     let err = |msg: String| Error::input(path, msg);
     let t = match v {
         None => return Ok((None, Vec::new())),
@@ -664,16 +669,15 @@ fn mesh_spec(
             ))
         }
     };
-    let file = match t.get("file") {
-        Some(toml::Value::String(f)) => dir.join(f),
-        Some(_) => return Err(err("`mesh.file` must be a file name".into())),
-        None => {
-            return Err(err(
+    let file =
+        match t.get("file") {
+            Some(toml::Value::String(f)) => dir.join(f),
+            Some(_) => return Err(err("`mesh.file` must be a file name".into())),
+            None => return Err(err(
                 "`mesh.file` is missing: the [mesh] table names the .geo with file = \"NAME.geo\""
                     .into(),
-            ))
-        }
-    };
+            )),
+        };
     let mut params = Vec::new();
     for (k, v) in t {
         if k == "file" {
@@ -693,7 +697,9 @@ fn mesh_spec(
         }
         params.push((k.clone(), x));
     }
-    let is_geo = file.extension().is_some_and(|e| e.eq_ignore_ascii_case("geo"));
+    let is_geo = file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("geo"));
     if !params.is_empty() && !is_geo {
         return Err(err(format!(
             "`mesh.{}`: mesh parameters apply to a .geo file only, and `mesh.file` is {}",

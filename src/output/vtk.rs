@@ -275,7 +275,7 @@ fn write_data_array(o: &mut String, a: &DataArray) {
     let body = a.values.bytes();
     let mut payload = (body.len() as u64).to_le_bytes().to_vec();
     payload.extend(body);
-    let _ = write!(o, ">{}</DataArray>\n", base64(&payload));
+    let _ = writeln!(o, ">{}</DataArray>", base64(&payload));
 }
 
 fn grid_xml(g: &Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
