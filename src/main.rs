@@ -66,6 +66,23 @@ enum Command {
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
     },
+    /// Run a scene for every combination of values and tabulate the headline results.
+    Sweep {
+        /// The scene file (TOML).
+        scene: PathBuf,
+        /// A swept key and its values, e.g. `--set interface.joint.cohesion=0,1,2`
+        /// (repeatable: every combination runs; `*` matches every key of a table, e.g.
+        /// `interface.*.cohesion`; a single value is a plain override).
+        #[arg(long = "set", value_name = "KEY=V1,V2,...", required = true)]
+        set: Vec<String>,
+        /// Runs at a time.
+        #[arg(long, default_value_t = 1)]
+        jobs: usize,
+        /// Folder for the runs (one sub-folder per point, named from key=value) and
+        /// sweep.csv / sweep.md.
+        #[arg(long)]
+        out: PathBuf,
+    },
     /// Print what an archive holds.
     Inspect {
         /// An archive.h5 written by `sgbem run`.
@@ -131,6 +148,23 @@ fn main() -> ExitCode {
                 }
             })
         }
+        Command::Sweep {
+            scene,
+            set,
+            jobs,
+            out,
+        } => sgbem::sweep::sweep(&scene, &set, jobs, &out).and_then(|(table, failed)| {
+            println!("sweep table in {}", table.display());
+            if failed > 0 {
+                Err(sgbem::error::Error::numerical(format!(
+                    "{failed} point(s) of the sweep failed: see the exit_code and status \
+                     columns of {}",
+                    table.display()
+                )))
+            } else {
+                Ok(())
+            }
+        }),
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).map(|text| print!("{text}"))
         }

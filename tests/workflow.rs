@@ -346,3 +346,88 @@ points = 5
         "{out}"
     );
 }
+
+#[test]
+fn sweep_runs_every_point_and_tabulates() {
+    let dir = tmpdir("workflow-sweep");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    let out = dir.join("sweep");
+    let (code, stdout, err) = sgbem(&[
+        "sweep",
+        s,
+        "--set",
+        "boundary.top.ty=-1,-2,-3",
+        "--set",
+        "interface.*.initial=closed",
+        "--jobs",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("sweep.csv"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "point,boundary.top.ty,interface.*.initial,exit_code,status,contact_iterations,\
+         joint.detached_length,joint.normal_resultant"
+    );
+    assert_eq!(lines.len(), 4, "{csv}");
+    let mut resultants = Vec::new();
+    for (line, ty) in lines[1..].iter().zip([-1.0, -2.0, -3.0]) {
+        let c: Vec<&str> = line.split(',').collect();
+        let name = format!("ty={ty}_initial=closed");
+        assert_eq!(c[0], name, "{csv}");
+        assert_eq!(&c[3..5], ["0", "converged"], "{csv}");
+        assert_eq!(c[6], "0", "{csv}");
+        // Each point's folder is a whole run whose summary gives the table's figures.
+        let sm = summary(&out.join(&name));
+        let r: f64 = c[7].parse().unwrap();
+        assert_eq!(
+            r,
+            sm["interfaces"]["joint"]["normal_resultant"]
+                .as_f64()
+                .unwrap()
+        );
+        assert_eq!(
+            sm["overrides"],
+            serde_json::json!([
+                format!("boundary.top.ty={ty}"),
+                "interface.*.initial=closed"
+            ])
+        );
+        resultants.push(r);
+    }
+    // Linear in the load while the joint stays closed.
+    assert!(
+        (resultants[1] - 2.0 * resultants[0]).abs() < 1e-9,
+        "{resultants:?}"
+    );
+    assert!(
+        (resultants[2] - 3.0 * resultants[0]).abs() < 1e-9,
+        "{resultants:?}"
+    );
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    assert_eq!(md.lines().count(), 5, "{md}");
+    // A bad key fails every point before any runs, naming the override.
+    let out2 = dir.join("bad");
+    let (code, _, err) = sgbem(&[
+        "sweep",
+        s,
+        "--set",
+        "interface.*.cohesin=1,2",
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--set interface.*.cohesin=1") && err.contains("cohesion"),
+        "{err}"
+    );
+    assert!(!out2.exists());
+    // Values with commas inside brackets stay whole.
+    let a = sgbem::sweep::parse_axis("solve.load_factors=[0.5, 1],[1]").unwrap();
+    assert_eq!(a.values, ["[0.5, 1]", "[1]"]);
+}

@@ -299,8 +299,9 @@ pub fn parse_set(set: &str) -> std::result::Result<(Vec<String>, toml::Value), S
     ))
 }
 
-/// Applies one override to a TOML document, creating the tables on its path. A top-level
-/// `mesh = "FILE"` becomes `[mesh] file = "FILE"` when a mesh parameter is set.
+/// Applies one override to a TOML document, creating the tables on its path (`*` matches
+/// every key of a table). A top-level `mesh = "FILE"` becomes `[mesh] file = "FILE"` when a
+/// mesh parameter is set.
 fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result<(), String> {
     let (path, value) = parse_set(set)?;
     if path.len() > 1 && path[0] == "mesh" {
@@ -310,27 +311,60 @@ fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result<(), String
             doc.insert("mesh".into(), toml::Value::Table(t));
         }
     }
-    let (last, parents) = path
-        .split_last()
-        .ok_or_else(|| format!("--set {set}: no key"))?;
-    let mut table = doc;
-    for (i, k) in parents.iter().enumerate() {
-        let entry = table
-            .entry(k.clone())
-            .or_insert_with(|| toml::Value::Table(toml::Table::new()));
-        table = match entry {
-            toml::Value::Table(t) => t,
-            _ => {
-                return Err(format!(
-                    "--set {set}: `{}` is not a table, so it has no key `{}`",
-                    path[..=i].join("."),
-                    path[i + 1]
-                ))
+    set_path(doc, &path, 0, &value, set)
+}
+
+/// Sets `path[i..]` below `table` (the keys before `i` already walked). A `*` segment stands
+/// for every existing key of its table, e.g. `interface.*.cohesion`.
+fn set_path(
+    table: &mut toml::Table,
+    path: &[String],
+    i: usize,
+    value: &toml::Value,
+    set: &str,
+) -> std::result::Result<(), String> {
+    let k = &path[i];
+    let last = i + 1 == path.len();
+    if k == "*" {
+        if last {
+            return Err(format!(
+                "--set {set}: `*` stands for a table's keys, not a value"
+            ));
+        }
+        if table.is_empty() {
+            return Err(format!(
+                "--set {set}: `{}` has no entries for `*` to match",
+                path[..i].join(".")
+            ));
+        }
+        for (name, v) in table.iter_mut() {
+            match v {
+                toml::Value::Table(t) => set_path(t, path, i + 1, value, set)?,
+                _ => {
+                    return Err(format!(
+                        "--set {set}: `{}.{name}` is not a table",
+                        path[..i].join(".")
+                    ))
+                }
             }
-        };
+        }
+        return Ok(());
     }
-    table.insert(last.clone(), value);
-    Ok(())
+    if last {
+        table.insert(k.clone(), value.clone());
+        return Ok(());
+    }
+    let entry = table
+        .entry(k.clone())
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    match entry {
+        toml::Value::Table(t) => set_path(t, path, i + 1, value, set),
+        _ => Err(format!(
+            "--set {set}: `{}` is not a table, so it has no key `{}`",
+            path[..=i].join("."),
+            path[i + 1]
+        )),
+    }
 }
 
 /// [`parse_scene`] with `--set KEY=VALUE` overrides applied to the document first. An error
@@ -651,11 +685,7 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
 type MeshSpec = (Option<PathBuf>, Vec<(String, f64)>);
 
 /// `mesh = "FILE"`, or a `[mesh]` table: `file` and gmsh parameters (numbers) for a `.geo`.
-fn mesh_spec(
-    v: Option<&toml::Value>,
-    dir: &Path,
-    path: &Path,
-) -> Result<MeshSpec> {
+fn mesh_spec(v: Option<&toml::Value>, dir: &Path, path: &Path) -> Result<MeshSpec> {
     let err = |msg: String| Error::input(path, msg);
     let t = match v {
         None => return Ok((None, Vec::new())),
