@@ -174,8 +174,12 @@ pub fn solve_loaded_with(
     let Loaded {
         scene, model, plan, ..
     } = loaded;
-    let stage = progress.spinner("assemble");
+    // Two steps per body (assembly, condensation); each message starts the next.
+    let stage = progress.bar("assemble", 2 * model.bodies.len() as u64);
+    let started = std::cell::Cell::new(0u64);
     let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
+        stage.set_position(started.get());
+        started.set(started.get() + 1);
         stage.set_message(m.to_string())
     })?;
     stage.finish();
@@ -220,7 +224,7 @@ pub fn solve_loaded_with(
     let mut solver = "lcp";
     let mut active = Vec::new();
     let lcp_stage = if run_lcp {
-        progress.spinner("contact (evolutive LCP)")
+        progress.contact(factors.len())
     } else {
         crate::output::progress::Stage::hidden()
     };
@@ -271,6 +275,22 @@ pub fn solve_loaded_with(
             notes.extend(r.notes.iter().cloned());
             let failed = r.failure();
             history.rows.extend(r.rows);
+            if let Some(row) = history.rows.last() {
+                let status = row.status.iter().flatten();
+                lcp_stage.contact_tick(&crate::output::progress::ContactTick {
+                    load_step: step,
+                    load_steps: factors.len(),
+                    iteration: row.iteration,
+                    max_iterations: maxit,
+                    open_pairs: status
+                        .clone()
+                        .filter(|s| **s == crate::solution::PairStatus::Open)
+                        .count(),
+                    pairs: status.count(),
+                    detached_length: row.detached_length.iter().sum(),
+                    step_done: true,
+                });
+            }
             states.extend(r.states);
             solver = r.solver;
             if failed.is_some() {
@@ -449,7 +469,7 @@ fn body_inputs<'a>(
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
     use crate::output::{csv, summary, write_atomic};
-    use crate::post::{evaluate_points, field_at_nodes, section_points};
+    use crate::post::{evaluate_points, section_points};
     use std::time::Instant;
 
     let mut timings = Timings::default();
@@ -538,9 +558,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let mut field_nodes = 0usize;
     let mut interior = Vec::new();
     if scene.output.field {
-        let stage = progress.spinner("interior field");
+        let total: usize = model.bodies.iter().map(crate::post::field_node_count).sum();
+        let stage = progress.bar("field points", total as u64);
         for input in &inputs {
-            let values = field_at_nodes(input, &settings, &loaded.mesh.nodes);
+            let values =
+                crate::post::field_at_nodes_with(input, &settings, &loaded.mesh.nodes, &|n| {
+                    stage.inc(n)
+                });
             field_nodes += values.len();
             interior.push(crate::output::record::InteriorRecord::from_values(&values));
         }
