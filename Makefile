@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 .DELETE_ON_ERROR:
 .DEFAULT_GOAL := help
-.PHONY: help setup build mesh test demo examples accuracy bench report clean
+.PHONY: help setup build mesh test demo examples accuracy bench report clean view
 
 CARGO   ?= cargo
 GMSH    ?= gmsh
@@ -32,8 +32,9 @@ help:
 	@echo "  make vault     the paper's vault (example 3) for five cohesions, tables in out/vault/"
 	@echo "  make accuracy  refinement studies: error and time"
 	@echo "  make bench     per-stage benchmarks"
-	@echo "  make report    pictures and results tables"
-	@echo "  make clean     remove out/ and build products"
+	@echo "  make report    refresh the committed pictures (docs/img) and docs/results.md"
+	@echo "  make view NAME=clamped_beam_joint   render a run in ParaView (off-screen)"
+	@echo "  make clean     remove out/ (meshes and results; not the build: cargo clean)"
 
 setup:
 	@missing=""; for p in $(APT_PACKAGES); do \
@@ -53,7 +54,15 @@ build:
 
 mesh: $(MESHES)
 
-out/mesh/%.msh: geo/%.geo
+# The meshes depend on MESH_OPTS through a stamp file rewritten only when the options change.
+MESH_STAMP := out/mesh/.mesh_opts
+$(MESH_STAMP): FORCE
+	@mkdir -p $(@D)
+	@echo '$(MESH_OPTS)' | cmp -s - $@ || echo '$(MESH_OPTS)' > $@
+.PHONY: FORCE
+FORCE:
+
+out/mesh/%.msh: geo/%.geo $(MESH_STAMP)
 	@mkdir -p $(@D)
 	$(GMSH) -2 -format msh41 $(MESH_OPTS) $< -o $@.tmp.msh > $@.log
 	@mv $@.tmp.msh $@
@@ -72,21 +81,29 @@ test: setup mesh
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
+	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
+	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
+	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
+	  xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint; \
+	else \
+	  echo "test: ParaView check SKIPPED: no pvpython or xvfb-run (apt-get install -y paraview xvfb)"; \
+	fi
 
 examples: build mesh $(RESULTS)
 
 out/%/summary.json: pipelines/%.toml $(MESHES) | build
 	$(SGBEM) run $< --out out/$* --quiet
 
-# The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa, then the tables
+# The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa (a sweep of the
+# base scene: one folder per cohesion in out/vault/sweep/, with sweep.csv), then the tables
 # beside the paper's Tables 3 and 4 (out/vault/table3.md, table4.md).
 .PHONY: vault
-VAULT_C := 0.4 0.3 0.2 0.1 0
-VAULT_RESULTS := $(foreach c,$(VAULT_C),out/vault_c$(c)/summary.json)
+VAULT_COHESION := 4.0,3.0,2.0,1.0,0.0# daN/cm² (0.4 ... 0 MPa)
+JOBS ?= 2
 
-vault: build out/mesh/vault.msh $(VAULT_RESULTS) out/vault/table3.md
-
-out/vault/table3.md: pipelines/vault_table.py $(VAULT_RESULTS)
+vault: build out/mesh/vault.msh
+	$(SGBEM) sweep pipelines/vault_c0.toml --set 'interface.*.cohesion=$(VAULT_COHESION)' \
+	  --jobs $(JOBS) --out out/vault/sweep
 	python3 pipelines/vault_table.py out
 
 bench:
@@ -108,6 +125,20 @@ report: setup
 	@mkdir -p docs/img
 	$(PY) pipelines/report.py $(dir $(RESULTS)) --out docs/img
 	$(PY) pipelines/results.py out --img docs/img --md docs/results.md
+	@if [ -f out/accuracy/accuracy_benchmarks.png ]; then \
+	  cp out/accuracy/accuracy_benchmarks.png docs/img/ && echo "report: docs/img/accuracy_benchmarks.png from out/accuracy/"; \
+	else echo "report: no out/accuracy/ (make accuracy): docs/img/accuracy_benchmarks.png left as it is"; fi
+
+# A run's final state rendered off-screen by ParaView (pvpython under xvfb-run): strained
+# shape (warp factor: 5 % of the model size over the largest displacement) coloured by von
+# Mises, into docs/img/NAME_paraview.png (the README's screenshots: `make view` is the way
+# to refresh them). Runs the scene first if out/NAME/ has no results.
+NAME ?= clamped_beam_joint
+view: out/$(NAME)/summary.json
+	@command -v pvpython >/dev/null && command -v xvfb-run >/dev/null || \
+	  { echo "view: needs ParaView: apt-get install -y paraview xvfb"; exit 2; }
+	@mkdir -p docs/img
+	xvfb-run -a pvpython pipelines/view.py out/$(NAME) docs/img/$(NAME)_paraview.png
 
 clean:
-	rm -rf out target/release/sgbem
+	rm -rf out

@@ -15,7 +15,7 @@ standard, accurate) and record
     paper's value; also a sub-element estimate of the detachment front (the opening near a
     smooth contact edge grows as d^(3/2): opening^(2/3) of the last two open pairs is
     extrapolated linearly to zero);
-  * the run time: summary.json timings.total, the minimum over repeats for short runs.
+  * the run time: timings.json stages.total, the minimum over repeats for short runs.
 
 Each run uses a copy of the pipeline's scene (written under out/accuracy/runs/) with only the
 outputs the study reads: no interior field, no VTK, no archived operators, final history
@@ -35,7 +35,6 @@ import csv
 import json
 import math
 import os
-import re
 import shutil
 import subprocess
 import sys
@@ -291,47 +290,16 @@ def cases(quick: bool) -> list[Case]:
 # ---------------------------------------------------------------------------------------
 # Scenes, meshes, runs.
 
-def set_keys(text: str, table: str, keys: dict[str, str]) -> str:
-    """Sets `keys` (TOML literals) in [table] of a scene's text, adding the table if absent;
-    other lines are kept as they are."""
-    lines = text.splitlines()
-    header = re.compile(r"^\s*\[\[?\s*([^\]]+?)\s*\]\]?\s*(#.*)?$")
-    start = next((i for i, l in enumerate(lines)
-                  if (m := header.match(l)) and not l.lstrip().startswith("[[")
-                  and m.group(1) == table), None)
-    new = [f"{k} = {v}" for k, v in keys.items()]
-    if start is None:
-        return "\n".join(lines + ["", f"[{table}]"] + new) + "\n"
-    end = next((i for i in range(start + 1, len(lines)) if header.match(lines[i])), len(lines))
-    key_re = re.compile(r"^\s*([A-Za-z_]+)\s*=")
-    body = [l for l in lines[start + 1:end]
-            if not ((m := key_re.match(l)) and m.group(1) in keys)]
-    return "\n".join(lines[:start + 1] + new + body + lines[end:]) + "\n"
-
-
-def scene_copy(case: Case, quadrature: str) -> tuple[Path, list[str]]:
-    """The pipeline's scene with the study's outputs and quadrature, under WORK; and the
-    names of its sections."""
-    text = (ROOT / "pipelines" / f"{case.scene}.toml").read_text()
-    # The mesh and the output folder come from the command line: drop the scene's paths
-    # (relative to the scene file, they would not resolve from the copy's folder).
-    text = re.sub(r"(?m)^mesh\s*=.*\n", "", text)
-    text = re.sub(r"(?m)^directory\s*=.*\n", "", text)
-    text = set_keys(text, "output", {"history": '"final"', "field": "false", "vtk": "false",
-                                     "operators": "false"})
-    text = set_keys(text, "solve", {"quadrature": f'"{quadrature}"'})
-    parsed = tomllib.loads(text)
-    assert "mesh" not in parsed and "directory" not in parsed["output"], case.name
-    assert parsed["solve"]["quadrature"] == quadrature
-    assert parsed["output"]["field"] is False and parsed["output"]["history"] == "final"
-    original = tomllib.loads((ROOT / "pipelines" / f"{case.scene}.toml").read_text())
-    for key in ("body", "boundary", "interface", "plane"):
-        assert parsed.get(key) == original.get(key), f"{case.name}: {key} changed"
-    path = WORK / case.name / f"{case.scene}.{quadrature}.toml"
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(text)
-    sections = [s["name"] for s in parsed["output"].get("section", [])]
-    return path, sections
+def scene_sets(case: Case, quadrature: str) -> tuple[Path, list[str], list[str]]:
+    """The pipeline's scene as it is, the `--set` overrides that give the study's outputs
+    and quadrature (validated by sgbem like the file), and the names of its sections. The
+    mesh and the output folder come from --mesh and --out."""
+    path = ROOT / "pipelines" / f"{case.scene}.toml"
+    sets = ["output.history=final", "output.field=false", "output.vtk=false",
+            "output.operators=false", f"solve.quadrature={quadrature}"]
+    parsed = tomllib.loads(path.read_text())
+    sections = [s["name"] for s in parsed.get("output", {}).get("section", [])]
+    return path, sets, sections
 
 
 def mesh(case: Case, level: Level) -> Path:
@@ -356,19 +324,21 @@ class Run:
     out: Path
 
 
-def run(scene: Path, msh: Path, out: Path) -> Run:
+def run(scene: Path, sets: list[str], msh: Path, out: Path) -> Run:
     times, walls, notes, code, summary = [], [], "", 0, {}
     while True:
         if out.exists():
             shutil.rmtree(out)
         t0 = time.perf_counter()
         p = subprocess.run([str(SGBEM), "run", str(scene), "--mesh", str(msh), "--out",
-                            str(out), "--quiet"], capture_output=True, text=True)
+                            str(out), "--quiet", *(a for x in sets for a in ("--set", x))],
+                           capture_output=True, text=True)
         walls.append(time.perf_counter() - t0)
         code = p.returncode
         if code == 2 or (code != 0 and not (out / "summary.json").exists()):
             sys.exit(f"accuracy: sgbem run {scene} --mesh {msh} failed ({code}): {p.stderr}")
         this = json.loads((out / "summary.json").read_text())
+        this["timings"] = json.loads((out / "timings.json").read_text())["stages"]
         times.append(this["timings"]["total"])
         if times[-1] == min(times):
             summary = this          # the stage timings of the fastest repeat
@@ -529,13 +499,13 @@ def main() -> None:
                      f" from the working tree at {git or 'unknown commit'}")
     rows: list[dict] = []
     for case in all_cases:
-        scenes = {q: scene_copy(case, q) for q in QUADRATURES}
+        scenes = {q: scene_sets(case, q) for q in QUADRATURES}
         for level in case.levels:
             msh = mesh(case, level)
             for q in QUADRATURES:
-                scene, sections = scenes[q]
+                scene, sets, sections = scenes[q]
                 out = WORK / case.name / f"{level.label.replace('=', '')}_{q}"
-                r = run(scene, msh, out)
+                r = run(scene, sets, msh, out)
                 counts = r.summary.get("counts", {})
                 row = dict(case=case.name, level=level.label, h=level.h,
                            elements=counts.get("boundary_elements", 0), quadrature=q,
@@ -811,7 +781,7 @@ def write_markdown(all_cases, rows, elapsed):
             r["error_both"] = max(r["error_u"], r["error_sigma"])
     md = ["# Accuracy against run time", "",
           "Written by `make accuracy` (`pipelines/accuracy.py`); every number is in "
-          "`accuracy.csv`. Times are `timings.total` of summary.json, the minimum over "
+          "`accuracy.csv`. Times are `stages.total` of timings.json, the minimum over "
           f"{REPEATS} repeats for runs under {REPEAT_BELOW:g} s ({REPEATS_SHORT} under "
           f"{SHORT:g} s), on a shared 2-core machine (other jobs ran too: times of a few "
           "hundredths of a second are mostly noise). Each run writes only what the study "

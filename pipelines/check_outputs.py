@@ -27,8 +27,10 @@ import pyvista
 
 BOUNDARY_DATA = {"displacement": 3, "traction": 3, "normal": 3, "contact_status": 1,
                  "normal_traction": 1, "normal_opening": 1, "body": 1}
-FIELD_DATA = {"displacement": 3, "stress": 3, "von_mises": 1, "principal_stress": 3, "body": 1}
+FIELD_DATA = {"displacement": 3, "stress": 6, "sxx": 1, "syy": 1, "szz": 1, "sxy": 1, "von_mises": 1,
+              "principal_stress": 3, "body": 1}
 REL = 1e-9
+TITLE = [""]   # the run's title, from summary.json
 
 
 class Checker:
@@ -67,8 +69,11 @@ def segment_lengths(x, elements):
 def check_archive(c, h5, summary):
     a = h5.attrs
     c.ok(text(a.get("format", "")) == "sgbem-archive", "archive: root attribute format is not sgbem-archive")
-    for key in ["format_version", "tool_version", "created", "scene", "mesh_sha256", "units"]:
+    for key in ["format_version", "tool_version", "scene", "mesh_sha256", "units"]:
         c.ok(key in a, f"archive: root attribute {key} missing")
+    # The date lives with the timings, out of the deterministic part of the archive.
+    c.ok("created" not in a, "archive: root attribute created (a date) should be in /timings")
+    c.ok("created" in h5["timings"].attrs, "archive: /timings has no created attribute")
     digest = text(a.get("mesh_sha256", ""))
     c.ok(digest == "" or (len(digest) == 64 and all(ch in "0123456789abcdef" for ch in digest)),
          f"archive: mesh_sha256 {digest!r} is not a SHA-256 digest")
@@ -223,13 +228,18 @@ def check_history(c, h5, ifaces):
                     float(lengths.sum()) or 1.0)
 
 
-def check_timings(c, h5, summary):
-    t = summary.get("timings", {})
+def check_timings(c, h5, run):
+    c.ok("timings" not in json.loads((run / "summary.json").read_text()),
+         "summary.json holds timings (they belong in timings.json)")
+    path = run / "timings.json"
+    if not c.ok(path.exists(), f"{path} is missing"):
+        return
+    t = json.loads(path.read_text()).get("stages", {})
     for stage in names(h5["timings"]):
-        if not c.ok(stage in t, f"timing stage {stage} is in the archive but not in summary.json"):
+        if not c.ok(stage in t, f"timing stage {stage} is in the archive but not in timings.json"):
             continue
         if stage not in ("write", "total"):
-            c.close(h5["timings"][stage][()], t[stage], f"timing of stage {stage}: archive vs summary.json", 1e-6)
+            c.close(h5["timings"][stage][()], t[stage], f"timing of stage {stage}: archive vs timings.json", 1e-6)
 
 
 def check_csv(c, run, h5, ifaces):
@@ -294,11 +304,21 @@ def check_vtk(c, run, h5, bodies, count):
     bt = times.get("boundary", [])
     c.ok(len(bt) == count, f"{pvd}: {len(bt)} boundary files for {count} archived states")
     c.ok(all(a < b for a, b in zip(bt, bt[1:])), f"{pvd}: boundary times do not increase: {bt}")
+    # Times: the states of load step s (from 0) with n states at s + j/n, j = 1..n.
+    steps = [int(h5["states"][f"{k:04d}"].attrs["load_step"]) for k in range(count)]
+    expect = []
+    for k, s in enumerate(steps):
+        n = steps.count(s)
+        expect.append(s + (k - steps.index(s) + 1) / n)
+    c.close(bt, expect, f"{pvd}: times vs load step + iteration within the step / iterations")
+    ft = times.get("field", [])
+    if ft:
+        # ParaView reads a part only when it is listed at every time.
+        c.ok(ft == bt, f"{pvd}: the field part is not listed at every time")
+        check_pvd_pyvista(c, pvd, bt)
     states = h5["states"]
     for k in range(count):
         st = states[f"{k:04d}"]
-        c.ok(float(st.attrs["iteration"]) == (bt[k] if k < len(bt) else -1),
-             f"{pvd}: time of state {k} is not its iteration {st.attrs['iteration']}")
         path = vtk / f"boundary_{k:04d}.vtu"
         if not c.ok(path.exists(), f"{path} is missing"):
             continue
@@ -333,6 +353,33 @@ def check_vtk(c, run, h5, bodies, count):
             c.ok(not fpath.exists(), f"{fpath} exists though state {k} has no interior values")
 
 
+def check_pvd_pyvista(c, pvd, times):
+    """The series as pyvista reads it: at every time a boundary and a field block, the field
+    with the 6-component stress tensor, the scalars sxx, syy, sxy and the title as field data."""
+    reader = pyvista.get_reader(str(pvd))
+    c.close(reader.time_values, times, f"{pvd}: pyvista's times")
+    for t in reader.time_values:
+        reader.set_active_time_value(t)
+        data = reader.read()
+        blocks = [b for b in data if b is not None]
+        fields = [b for b in blocks if "stress" in b.point_data]
+        if not c.ok(len(blocks) == 2 and len(fields) == 1, f"{pvd} at time {t}: pyvista reads "
+                    f"{len(blocks)} blocks, {len(fields)} with stress; want a boundary and a field"):
+            continue
+        f = fields[0]
+        s = f.point_data["stress"]
+        if c.ok(s.shape == (f.n_points, 6), f"{pvd} at time {t}: stress shape {s.shape}"):
+            for col, name in [(0, "sxx"), (1, "syy"), (2, "szz"), (3, "sxy")]:
+                c.ok(name in f.point_data and np.array_equal(f.point_data[name], s[:, col]),
+                     f"{pvd} at time {t}: {name} differs from stress column {col}")
+            c.ok(np.all(s[:, 4:] == 0), f"{pvd} at time {t}: stress yz, xz are not 0")
+        for b in blocks:
+            # Text field data: UTF-8 bytes in UInt8 arrays.
+            title = bytes(np.asarray(b.field_data.get("title", []), dtype=np.uint8)).decode()
+            c.ok(title == TITLE[0], f"{pvd} at time {t}: title field data {title!r}, summary.json {TITLE[0]!r}")
+            c.ok("load_factor" in b.field_data, f"{pvd} at time {t}: no load_factor field data")
+
+
 def main():
     if len(sys.argv) != 2:
         sys.exit("usage: check_outputs.py RUN_DIR")
@@ -342,11 +389,12 @@ def main():
         if not (run / f).exists():
             sys.exit(f"check_outputs: {run / f} is missing: run `sgbem run SCENE --out {run}` first")
     summary = json.loads((run / "summary.json").read_text())
+    TITLE[0] = summary.get("title", "")
     with h5py.File(run / "archive.h5", "r") as h5:
         bodies, ifaces = check_archive(c, h5, summary)
         count = check_solution(c, h5, summary, bodies, ifaces)
         check_history(c, h5, ifaces)
-        check_timings(c, h5, summary)
+        check_timings(c, h5, run)
         if count:
             check_csv(c, run, h5, ifaces)
         check_vtk(c, run, h5, bodies, count)

@@ -98,7 +98,12 @@ def load_runs(out_dir):
             print(f"results: {d}: no summary.json: skipped")
             continue
         try:
-            runs[d.name] = (d, json.loads(f.read_text()))
+            summary = json.loads(f.read_text())
+            # Timings live in timings.json (summary.json is the same for identical runs).
+            t = d / "timings.json"
+            if t.exists():
+                summary["timings"] = json.loads(t.read_text()).get("stages", {})
+            runs[d.name] = (d, summary)
         except Exception as e:
             print(f"results: {f}: unreadable ({e}): skipped")
     return runs

@@ -1,8 +1,10 @@
 #!/usr/bin/env python3
 """The paper's example 3 (depressed vault on two piers): our results beside its Tables 3 and 4.
 
-Reads OUT/vault_c<c>/summary.json (and sections/s<k>.csv when present) for the cohesion
-sweep c = 0.4, 0.3, 0.2, 0.1, 0 MPa made by `make vault`, and writes
+Reads OUT/vault/sweep/cohesion=<c in daN/cm², one decimal>/summary.json (and
+sections/s<k>.csv when present), the folders of the cohesion sweep c = 0.4, 0.3, 0.2, 0.1,
+0 MPa made by `make vault` (`sgbem sweep pipelines/vault_c0.toml --set
+'interface.*.cohesion=4.0,3.0,2.0,1.0,0.0'`), and writes
 
   OUT/vault/table3.md  detached length (cm) per section group 1-5, 2-4, 3 for every cohesion
   OUT/vault/table4.md  largest compressive stress (MPa) per group for c = 0.4 and c = 0
@@ -22,7 +24,7 @@ import math
 import os
 import sys
 
-COHESIONS = ["0.4", "0.3", "0.2", "0.1", "0"]  # MPa, as in the scene names
+COHESIONS = ["0.4", "0.3", "0.2", "0.1", "0"]  # MPa
 GROUPS = [("1-5", ["s1", "s5"]), ("2-4", ["s2", "s4"]), ("3", ["s3"])]
 
 # The paper's Table 3: detachment lengths (cm) by iterative LCP.
@@ -41,9 +43,14 @@ DAN_CM2_PER_MPA = 10.0
 JOINT_ELEMENT = 50.0 / 17.0  # cm: every joint is 50 cm deep with 17 elements
 
 
+def run_dir(out, c):
+    """The sweep folder of cohesion c (MPa, text): named from the swept value in daN/cm²."""
+    return os.path.join(out, "vault", "sweep", f"cohesion={float(c) * DAN_CM2_PER_MPA:.1f}")
+
+
 def load(out, c):
     """The summary of one run, or None if it is missing."""
-    path = os.path.join(out, f"vault_c{c}", "summary.json")
+    path = os.path.join(run_dir(out, c), "summary.json")
     try:
         with open(path) as f:
             return json.load(f)
@@ -51,9 +58,18 @@ def load(out, c):
         return None
 
 
+def load_timings(out, c):
+    """The stage timings of one run (timings.json), or {} if missing."""
+    try:
+        with open(os.path.join(run_dir(out, c), "timings.json")) as f:
+            return json.load(f).get("stages", {})
+    except (OSError, ValueError):
+        return {}
+
+
 def section_min_hoop(out, c, name):
     """Most negative hoop stress (daN/cm²) on a radial section, or None."""
-    path = os.path.join(out, f"vault_c{c}", "sections", f"{name}.csv")
+    path = os.path.join(run_dir(out, c), "sections", f"{name}.csv")
     try:
         with open(path, newline="") as f:
             rows = [r for r in csv.DictReader(f)]
@@ -127,14 +143,14 @@ def main():
             lines.append(f"| c = {c} | missing | | |")
             continue
         it = s.get("contact", {}).get("iterations", "")
-        t = s.get("timings", {}).get("total")
+        t = load_timings(out, c).get("total")
         lines.append(
             f"| c = {c} | {s.get('status')} | {it} | "
             + (f"{t:.2f}" if isinstance(t, (int, float)) else "")
             + " |"
         )
     if missing:
-        lines += ["", "Missing runs: " + ", ".join(f"vault_c{c}" for c in missing)]
+        lines += ["", "Missing runs: " + ", ".join(run_dir(out, c) for c in missing)]
     with open(os.path.join(dest, "table3.md"), "w") as f:
         f.write("\n".join(lines) + "\n")
 

@@ -24,3 +24,4 @@ pub mod plan;
 pub mod post;
 pub mod report;
 pub mod solution;
+pub mod sweep;

@@ -23,15 +23,38 @@ pub struct Loaded {
 /// Reads the scene and its mesh (`mesh_override` replaces the scene's `mesh`), builds the
 /// model and the plan.
 pub fn load(scene_path: &Path, mesh_override: Option<&Path>) -> Result<Loaded> {
+    load_with(
+        scene_path,
+        &LoadOptions {
+            mesh: mesh_override.map(Path::to_path_buf),
+            ..LoadOptions::default()
+        },
+    )
+}
+
+/// What `load_with` applies to the scene file.
+#[derive(Debug, Clone, Default)]
+pub struct LoadOptions {
+    /// Replaces the scene's `mesh`.
+    pub mesh: Option<PathBuf>,
+    /// `--set KEY=VALUE` overrides, applied to the TOML document before validation.
+    pub sets: Vec<String>,
+    /// Where a `.geo` mesh is meshed; by default the `mesh` folder of the scene's output
+    /// directory.
+    pub mesh_dir: Option<PathBuf>,
+}
+
+/// [`load`] with `--set` overrides; a `.geo` mesh is meshed with gmsh first.
+pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     if !scene_path.is_file() {
         return Err(Error::input(
             scene_path,
             "no such scene file: give the path of a .toml scene",
         ));
     }
-    let scene = scene::read_scene(scene_path)?;
-    let mesh_path: PathBuf = match (mesh_override, &scene.mesh) {
-        (Some(m), _) => m.to_path_buf(),
+    let scene = scene::read_scene_with(scene_path, &opts.sets)?;
+    let mut mesh_path: PathBuf = match (&opts.mesh, &scene.mesh) {
+        (Some(m), _) => m.clone(),
         (None, Some(m)) => m.clone(),
         (None, None) => {
             return Err(Error::input(
@@ -40,6 +63,13 @@ pub fn load(scene_path: &Path, mesh_override: Option<&Path>) -> Result<Loaded> {
             ))
         }
     };
+    if crate::input::gmsh::is_geo(&mesh_path) {
+        let dir = opts
+            .mesh_dir
+            .clone()
+            .unwrap_or_else(|| scene.output.directory.join("mesh"));
+        mesh_path = crate::input::gmsh::mesh_geo(&mesh_path, &scene.mesh_parameters, &dir)?;
+    }
     if !mesh_path.is_file() {
         return Err(Error::input(
             &mesh_path,
@@ -64,6 +94,8 @@ pub struct RunOptions {
     pub out: Option<PathBuf>,
     pub method: Option<crate::input::scene::Method>,
     pub quiet: bool,
+    /// `--set KEY=VALUE` overrides of the scene.
+    pub sets: Vec<String>,
 }
 
 /// What a run produced, for the caller to report.
@@ -145,8 +177,12 @@ pub fn solve_loaded_with(
     let Loaded {
         scene, model, plan, ..
     } = loaded;
-    let stage = progress.spinner("assemble");
+    // Two steps per body (assembly, condensation); each message starts the next.
+    let stage = progress.bar("assemble", 2 * model.bodies.len() as u64);
+    let started = std::cell::Cell::new(0u64);
     let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
+        stage.set_position(started.get());
+        started.set(started.get() + 1);
         stage.set_message(m.to_string())
     })?;
     stage.finish();
@@ -203,11 +239,7 @@ pub fn solve_loaded_with(
             checks.push(Solver::Lemke);
         }
     }
-    let stage = progress.spinner(if main == Solver::Qp {
-        "contact (QP)"
-    } else {
-        "contact (evolutive LCP)"
-    });
+    let stage = progress.contact(factors.len());
     let mut state = session.initial();
     let mut iterations = 0;
     let mut converged = true;
@@ -217,7 +249,6 @@ pub fn solve_loaded_with(
     let mut cross = Vec::new();
     let mut qp_block = None;
     for (step, &f) in factors.iter().enumerate() {
-        stage.set_message(format!("load step {} of {}", step + 1, factors.len()));
         let t = Instant::now();
         let full = scene.output.history == crate::input::scene::History::Full;
         let mut r = session.solve_step(&state, main, tol, maxit, step, f, full);
@@ -265,6 +296,22 @@ pub fn solve_loaded_with(
         residual = residual.max(r.residual);
         notes.extend(r.notes.iter().cloned());
         history.rows.extend(r.rows);
+        if let Some(row) = history.rows.last() {
+            let status = row.status.iter().flatten();
+            stage.contact_tick(&crate::output::progress::ContactTick {
+                load_step: step,
+                load_steps: factors.len(),
+                iteration: row.iteration,
+                max_iterations: maxit,
+                open_pairs: status
+                    .clone()
+                    .filter(|s| **s == crate::solution::PairStatus::Open)
+                    .count(),
+                pairs: status.count(),
+                detached_length: row.detached_length.iter().sum(),
+                step_done: true,
+            });
+        }
         states.extend(r.states);
         if main == Solver::Qp && step == last {
             qp_block = Some(serde_json::json!({
@@ -368,12 +415,19 @@ fn body_inputs<'a>(
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
     use crate::output::{csv, summary, write_atomic};
-    use crate::post::{evaluate_points, field_at_nodes, section_points};
+    use crate::post::{evaluate_points, section_points};
     use std::time::Instant;
 
     let mut timings = Timings::default();
     let t0 = Instant::now();
-    let mut loaded = load(scene_path, opts.mesh.as_deref())?;
+    let mut loaded = load_with(
+        scene_path,
+        &LoadOptions {
+            mesh: opts.mesh.clone(),
+            sets: opts.sets.clone(),
+            mesh_dir: opts.out.as_ref().map(|o| o.join("mesh")),
+        },
+    )?;
     if let Some(m) = opts.method {
         loaded.scene.solve.method = m;
     }
@@ -450,9 +504,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let mut field_nodes = 0usize;
     let mut interior = Vec::new();
     if scene.output.field {
-        let stage = progress.spinner("interior field");
+        let total: usize = model.bodies.iter().map(crate::post::field_node_count).sum();
+        let stage = progress.bar("field points", total as u64);
         for input in &inputs {
-            let values = field_at_nodes(input, &settings, &loaded.mesh.nodes);
+            let values =
+                crate::post::field_at_nodes_with(input, &settings, &loaded.mesh.nodes, &|n| {
+                    stage.inc(n)
+                });
             field_nodes += values.len();
             interior.push(crate::output::record::InteriorRecord::from_values(&values));
         }
@@ -519,7 +577,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             "min_pivot_ratio": pivot,
         },
         "notes": notes,
-        "timings": timings.json(),
+        "overrides": scene.overrides,
     });
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
@@ -585,10 +643,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     }
     stage.finish();
     timings.add("write", t4.elapsed().as_secs_f64());
-    summary["timings"] = timings.json();
-    let text = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
-    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    // Dates and timings in their own file: summary.json stays byte-identical between runs.
+    let timing_text = serde_json::to_string_pretty(&serde_json::json!({
+        "created": rec.created,
+        "stages": timings.json(),
+    }))
+    .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
+    write_atomic(&out_dir.join("timings.json"), timing_text.as_bytes())?;
     if let Some(f) = result.failure {
         return Err(f);
     }

@@ -22,6 +22,17 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
         scene.path.display(),
         scene.title
     );
+    if !scene.overrides.is_empty() {
+        let _ = writeln!(o, "overrides --set {}", scene.overrides.join(" --set "));
+    }
+    if !scene.mesh_parameters.is_empty() {
+        let p: Vec<String> = scene
+            .mesh_parameters
+            .iter()
+            .map(|(k, v)| format!("{k} = {v}"))
+            .collect();
+        let _ = writeln!(o, "meshed    by gmsh with {}", p.join(", "));
+    }
     let _ = writeln!(
         o,
         "mesh      {} (MSH 4.1 {})",

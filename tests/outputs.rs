@@ -249,7 +249,11 @@ fn archive_layout_attributes_and_shapes() {
     let v: i64 = f.attr("format_version").unwrap().read_scalar().unwrap();
     assert_eq!(v, FORMAT_VERSION);
     assert_eq!(attr_string(&f, "tool_version"), env!("CARGO_PKG_VERSION"));
-    assert_eq!(attr_string(&f, "created"), "2025-01-31T12:00:00Z");
+    // The date sits with the timings, the only parts that differ between identical runs.
+    assert!(f.attr("created").is_err(), "created is a root attribute");
+    let timings = f.group("timings").unwrap();
+    assert_eq!(attr_string(&timings, "created"), "2025-01-31T12:00:00Z");
+    assert_eq!(attr_string(&f, "overrides"), "[]");
     assert_eq!(attr_string(&f, "scene"), rec.scene_text);
     assert_eq!(attr_string(&f, "mesh_sha256"), rec.mesh_sha256);
     let units: serde_json::Value = serde_json::from_str(&attr_string(&f, "units")).unwrap();
@@ -548,21 +552,81 @@ fn vtk_content() {
     ] {
         assert!(fld.contains(&format!("Name=\"{name}\"")), "{name} missing");
     }
-    let pvd = std::fs::read_to_string(dir.join("history.pvd")).unwrap();
-    for (t, f) in [
-        (0, "boundary_0000"),
-        (1, "boundary_0001"),
-        (2, "boundary_0002"),
-        (2, "field_0002"),
-    ] {
-        assert!(
-            pvd.contains(&format!("timestep=\"{t}\"")) && pvd.contains(f),
-            "{pvd}"
-        );
+    // The stress tensor as ParaView orders a symmetric tensor, with component names, and
+    // the scalars beside it.
+    let stress = fld.split("Name=\"stress\"").nth(1).unwrap();
+    assert!(
+        stress.starts_with(
+            " NumberOfComponents=\"6\" ComponentName0=\"XX\" ComponentName1=\"YY\" \
+             ComponentName2=\"ZZ\" ComponentName3=\"XY\" ComponentName4=\"YZ\" \
+             ComponentName5=\"XZ\""
+        ),
+        "{stress}"
+    );
+    assert!(fld.contains("Tensors=\"stress\""), "{fld}");
+    for name in ["sxx", "syy", "szz", "sxy"] {
+        assert!(fld.contains(&format!("Name=\"{name}\"")), "{name} missing");
     }
+    // Title and units as field data (UTF-8 bytes), and the state.
+    let bytes = |s: &str| {
+        s.bytes()
+            .map(|b| b.to_string())
+            .collect::<Vec<_>>()
+            .join(" ")
+    };
+    for text in [&b, &fld] {
+        assert!(
+            text.contains(&format!(
+                "Name=\"title\" NumberOfTuples=\"22\" format=\"ascii\">{}</DataArray>",
+                bytes("Two blocks, fabricated")
+            )),
+            "{text}"
+        );
+        assert!(text.contains(&format!(
+            "format=\"ascii\">{}</DataArray>",
+            bytes("daN/cm^2")
+        )));
+    }
+    assert!(b.contains("Name=\"iteration\" NumberOfTuples=\"1\" format=\"ascii\">1.0<"));
+    // Both parts at every time (ParaView reads a part only when it is listed at every
+    // time); the field, computed for the last state only, repeated. Times: one load step
+    // of three states at 1/3, 2/3, 1.
+    let pvd = std::fs::read_to_string(dir.join("history.pvd")).unwrap();
+    let entries: Vec<&str> = pvd.lines().filter(|l| l.contains("<DataSet")).collect();
+    let t = ["0.3333333333333333", "0.6666666666666666", "1"];
+    let mut want = Vec::new();
+    for (k, t) in t.iter().enumerate() {
+        want.push(format!(
+            "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"boundary_000{k}.vtu\"/>"
+        ));
+        want.push(format!(
+            "    <DataSet timestep=\"{t}\" group=\"\" part=\"1\" file=\"field_0002.vtu\"/>"
+        ));
+    }
+    assert_eq!(entries, want);
     // A second write leaves no temporary files behind.
     write_vtk(&dir, &rec).expect("vtk");
     assert!(files(&dir).keys().all(|n| !n.starts_with('.')));
+}
+
+#[test]
+fn state_times_are_load_step_plus_iteration_fraction() {
+    // Two load steps: two states in the first, three in the second.
+    let mut rec = fabricated(3);
+    let extra = rec.states[..2].to_vec();
+    rec.states.extend(extra);
+    for (k, st) in rec.states.iter_mut().enumerate() {
+        st.load_step = usize::from(k >= 2);
+    }
+    let t = sgbem::output::vtk::state_times(&rec);
+    let want = [0.5, 1.0, 1.0 + 1.0 / 3.0, 1.0 + 2.0 / 3.0, 2.0];
+    assert_eq!(t.len(), want.len());
+    for (a, b) in t.iter().zip(want) {
+        assert!((a - b).abs() < 1e-15, "{t:?}");
+    }
+    // Only the final state kept (history = "final"): the end of its load step.
+    rec.states.drain(..4);
+    assert_eq!(sgbem::output::vtk::state_times(&rec), [2.0]);
 }
 
 #[test]
@@ -919,12 +983,16 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             "field_nodes": last.interior.iter().map(|i| i.mesh_nodes.len()).sum::<usize>(),
         },
         "interfaces": sgbem::output::summary::interfaces(&model.interfaces, &last.interfaces, 1.0),
-        "timings": {"read": 0.25, "write": 0.5, "total": 0.75},
     });
     rec.summary_json = summary.to_string();
     let run = dir.join("run");
     std::fs::create_dir_all(run.join("interfaces")).unwrap();
     std::fs::write(run.join("summary.json"), rec.summary_json.as_bytes()).unwrap();
+    let timings = serde_json::json!({
+        "created": rec.created,
+        "stages": {"read": 0.25, "write": 0.5, "total": 0.75},
+    });
+    std::fs::write(run.join("timings.json"), timings.to_string()).unwrap();
     std::fs::write(
         run.join("interfaces").join("joint.csv"),
         sgbem::output::csv::interface_table(&model.interfaces[0], &last.interfaces[0]),

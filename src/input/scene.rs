@@ -228,8 +228,14 @@ pub struct Scene {
     /// Its text, kept for the archive.
     pub text: String,
     pub title: String,
-    /// The mesh file, if the scene names one (`--mesh` overrides it).
+    /// The mesh file, if the scene names one (`--mesh` overrides it): a `.msh`, or a
+    /// `.geo` that the pipeline meshes with gmsh.
     pub mesh: Option<PathBuf>,
+    /// gmsh `-setnumber NAME VALUE` parameters for a `.geo` mesh (the `[mesh]` table's keys
+    /// other than `file`), in file order.
+    pub mesh_parameters: Vec<(String, f64)>,
+    /// The `--set KEY=VALUE` overrides applied to the file's text, in order.
+    pub overrides: Vec<String>,
     pub plane: Plane,
     pub thickness: f64,
     pub units: Units,
@@ -255,9 +261,147 @@ impl Scene {
 
 /// Reads and validates a scene file.
 pub fn read_scene(path: &Path) -> Result<Scene> {
+    read_scene_with(path, &[])
+}
+
+/// Reads a scene file, applies the `--set KEY=VALUE` overrides to its TOML document and
+/// validates the result exactly like a file.
+pub fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::io(path, format!("cannot read the scene file: {e}")))?;
-    parse_scene(&text, path)
+    parse_scene_with(&text, path, sets)
+}
+
+/// One `--set KEY=VALUE`: the dotted key path and the value. The value is read as a TOML
+/// value (number, string, boolean, array, inline table); anything that is not one is taken
+/// as a bare string, so `--set solve.method=qp` works without quotes.
+pub fn parse_set(set: &str) -> std::result::Result<(Vec<String>, toml::Value), String> {
+    let Some((key, value)) = set.split_once('=') else {
+        return Err(format!(
+            "--set {set}: expected KEY=VALUE, e.g. --set interface.joint.cohesion=2.0"
+        ));
+    };
+    let key = key.trim();
+    let path: Vec<String> = key.split('.').map(|k| k.trim().to_string()).collect();
+    if path.iter().any(|k| k.is_empty()) {
+        return Err(format!(
+            "--set {set}: `{key}` is not a dotted key path such as solve.method"
+        ));
+    }
+    let value = value.trim();
+    let parsed = format!("v = {value}")
+        .parse::<toml::Table>()
+        .ok()
+        .and_then(|mut t| t.remove("v"));
+    Ok((
+        path,
+        parsed.unwrap_or_else(|| toml::Value::String(value.to_string())),
+    ))
+}
+
+/// Applies one override to a TOML document, creating the tables on its path (`*` matches
+/// every key of a table). A top-level `mesh = "FILE"` becomes `[mesh] file = "FILE"` when a
+/// mesh parameter is set.
+fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result<(), String> {
+    let (path, value) = parse_set(set)?;
+    if path.len() > 1 && path[0] == "mesh" {
+        if let Some(toml::Value::String(file)) = doc.get("mesh") {
+            let mut t = toml::Table::new();
+            t.insert("file".into(), toml::Value::String(file.clone()));
+            doc.insert("mesh".into(), toml::Value::Table(t));
+        }
+    }
+    set_path(doc, &path, 0, &value, set)
+}
+
+/// Sets `path[i..]` below `table` (the keys before `i` already walked). A `*` segment stands
+/// for every existing key of its table, e.g. `interface.*.cohesion`.
+fn set_path(
+    table: &mut toml::Table,
+    path: &[String],
+    i: usize,
+    value: &toml::Value,
+    set: &str,
+) -> std::result::Result<(), String> {
+    let k = &path[i];
+    let last = i + 1 == path.len();
+    if k == "*" {
+        if last {
+            return Err(format!(
+                "--set {set}: `*` stands for a table's keys, not a value"
+            ));
+        }
+        if table.is_empty() {
+            return Err(format!(
+                "--set {set}: `{}` has no entries for `*` to match",
+                path[..i].join(".")
+            ));
+        }
+        for (name, v) in table.iter_mut() {
+            match v {
+                toml::Value::Table(t) => set_path(t, path, i + 1, value, set)?,
+                _ => {
+                    return Err(format!(
+                        "--set {set}: `{}.{name}` is not a table",
+                        path[..i].join(".")
+                    ))
+                }
+            }
+        }
+        return Ok(());
+    }
+    if last {
+        table.insert(k.clone(), value.clone());
+        return Ok(());
+    }
+    let entry = table
+        .entry(k.clone())
+        .or_insert_with(|| toml::Value::Table(toml::Table::new()));
+    match entry {
+        toml::Value::Table(t) => set_path(t, path, i + 1, value, set),
+        _ => Err(format!(
+            "--set {set}: `{}` is not a table, so it has no key `{}`",
+            path[..=i].join("."),
+            path[i + 1]
+        )),
+    }
+}
+
+/// [`parse_scene`] with `--set KEY=VALUE` overrides applied to the document first. An error
+/// that only the overrides cause names the first `--set` that causes it.
+pub fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scene> {
+    if sets.is_empty() {
+        return parse_scene(text, path);
+    }
+    let doc = parse_doc(text, path)?;
+    let with = |n: usize| -> Result<Scene> {
+        let mut d = doc.clone();
+        for set in &sets[..n] {
+            apply_set(&mut d, set).map_err(|m| Error::input(path, m))?;
+        }
+        let mut scene = validate(&d, text, path)?;
+        scene.overrides = sets[..n].to_vec();
+        Ok(scene)
+    };
+    match with(sets.len()) {
+        Ok(scene) => Ok(scene),
+        Err(e) => {
+            if validate(&doc, text, path).is_err() {
+                return Err(e);
+            }
+            // The file alone is valid: name the first override that breaks it.
+            for k in 1..=sets.len() {
+                if let Err(e) = with(k) {
+                    let m = e.message();
+                    if m.starts_with("--set ") {
+                        return Err(e);
+                    }
+                    return Err(Error::input(path, format!("--set {}: {m}", sets[k - 1])));
+                }
+            }
+            Err(e)
+        }
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -376,14 +520,26 @@ const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
 /// Parses and validates scene text; `path` locates relative paths and names the file in
 /// messages.
 pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
+    validate(&parse_doc(text, path)?, text, path)
+}
+
+fn parse_doc(text: &str, path: &Path) -> Result<toml::Table> {
+    text.parse().map_err(|e: toml::de::Error| {
+        Error::input(
+            path,
+            format!(
+                "not valid TOML: {}",
+                e.to_string().trim_end().replace('\n', "\n  ")
+            ),
+        )
+    })
+}
+
+/// Validates a TOML document (the file's, overrides applied); `text` is kept for the archive.
+fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     let err = |msg: String| Error::input(path, msg);
-    let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-        err(format!(
-            "not valid TOML: {}",
-            e.to_string().trim_end().replace('\n', "\n  ")
-        ))
-    })?;
-    check_keys(&doc, path)?;
+    check_keys(doc, path)?;
+    let doc = doc.clone();
     let dir = path.parent().map(Path::to_path_buf).unwrap_or_default();
     let stem = path
         .file_stem()
@@ -394,10 +550,7 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         Some(v) => typed::<String>(v, "title", path)?,
         None => stem.clone(),
     };
-    let mesh = match doc.get("mesh") {
-        Some(v) => Some(dir.join(typed::<String>(v, "mesh", path)?)),
-        None => None,
-    };
+    let (mesh, mesh_parameters) = mesh_spec(doc.get("mesh"), &dir, path)?;
     let plane = match doc.get("plane") {
         None => {
             return Err(err(
@@ -515,6 +668,8 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         text: text.to_string(),
         title,
         mesh,
+        mesh_parameters,
+        overrides: Vec::new(),
         plane,
         thickness,
         units,
@@ -524,6 +679,65 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
         solve,
         output,
     })
+}
+
+/// The mesh file and its gmsh parameters.
+type MeshSpec = (Option<PathBuf>, Vec<(String, f64)>);
+
+/// `mesh = "FILE"`, or a `[mesh]` table: `file` and gmsh parameters (numbers) for a `.geo`.
+fn mesh_spec(v: Option<&toml::Value>, dir: &Path, path: &Path) -> Result<MeshSpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let t = match v {
+        None => return Ok((None, Vec::new())),
+        Some(toml::Value::String(f)) => return Ok((Some(dir.join(f)), Vec::new())),
+        Some(toml::Value::Table(t)) => t,
+        Some(_) => {
+            return Err(err(
+                "`mesh` must be a file name (mesh = \"beam.msh\") or a table \
+                 ([mesh] with file = \"beam.geo\" and gmsh parameters such as h = 2.0)"
+                    .into(),
+            ))
+        }
+    };
+    let file =
+        match t.get("file") {
+            Some(toml::Value::String(f)) => dir.join(f),
+            Some(_) => return Err(err("`mesh.file` must be a file name".into())),
+            None => return Err(err(
+                "`mesh.file` is missing: the [mesh] table names the .geo with file = \"NAME.geo\""
+                    .into(),
+            )),
+        };
+    let mut params = Vec::new();
+    for (k, v) in t {
+        if k == "file" {
+            continue;
+        }
+        let x = match v {
+            toml::Value::Float(x) => *x,
+            toml::Value::Integer(i) => *i as f64,
+            _ => {
+                return Err(err(format!(
+                    "`mesh.{k}` must be a number (a gmsh -setnumber parameter of the .geo)"
+                )))
+            }
+        };
+        if !x.is_finite() {
+            return Err(err(format!("`mesh.{k}` = {x} must be a finite number")));
+        }
+        params.push((k.clone(), x));
+    }
+    let is_geo = file
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("geo"));
+    if !params.is_empty() && !is_geo {
+        return Err(err(format!(
+            "`mesh.{}`: mesh parameters apply to a .geo file only, and `mesh.file` is {}",
+            params[0].0,
+            file.display()
+        )));
+    }
+    Ok((Some(file), params))
 }
 
 /// Rejects unknown keys anywhere in the document, suggesting the nearest valid one.

@@ -60,6 +60,14 @@ impl Progress {
         Stage { bar }
     }
 
+    /// A bar for the contact stage: its length is the number of load steps; the message
+    /// shows the latest [`ContactTick`] (iteration, open pairs, detached length).
+    pub fn contact(&self, load_steps: usize) -> Stage {
+        let stage = self.bar("contact", load_steps as u64);
+        stage.set_message("load step 1");
+        stage
+    }
+
     /// A spinner for a stage of unknown length (contact iterations), labelled `stage`.
     pub fn spinner(&self, stage: &str) -> Stage {
         if !self.enabled {
@@ -74,6 +82,31 @@ impl Progress {
         Stage { bar }
     }
 }
+
+/// What the contact solver reports after an iteration, for [`Stage::contact_tick`].
+#[derive(Debug, Clone, Copy, Default)]
+pub struct ContactTick {
+    /// Load step, counted from 0, and the number of steps.
+    pub load_step: usize,
+    pub load_steps: usize,
+    /// Iteration within the load step, counted from 1.
+    pub iteration: usize,
+    pub max_iterations: usize,
+    /// Open pairs and all pairs, over every interface.
+    pub open_pairs: usize,
+    pub pairs: usize,
+    /// Detached length summed over the interfaces.
+    pub detached_length: f64,
+    /// Whether the load step is finished (converged or given up).
+    pub step_done: bool,
+}
+
+/// The callback the contact solver calls after each iteration: `&dyn Fn(&ContactTick)`.
+/// Make one with [`Stage::contact_callback`]; [`no_contact_progress`] ignores the ticks.
+pub type ContactProgress<'a> = &'a (dyn Fn(&ContactTick) + Sync);
+
+/// A contact callback that does nothing (tests, benches).
+pub fn no_contact_progress(_: &ContactTick) {}
 
 /// One stage's bar. Cloning shares the bar (for parallel loops); every method is a no-op
 /// when progress is hidden.
@@ -113,6 +146,18 @@ impl Stage {
         self.bar.position()
     }
 
+    /// Shows a contact iteration: position = finished load steps, message = iteration,
+    /// open pairs, detached length.
+    pub fn contact_tick(&self, t: &ContactTick) {
+        self.set_position((t.load_step + usize::from(t.step_done)) as u64);
+        self.set_message(contact_message(t));
+    }
+
+    /// A closure for the contact solver that forwards each tick to this bar.
+    pub fn contact_callback(&self) -> impl Fn(&ContactTick) + Sync + '_ {
+        move |t| self.contact_tick(t)
+    }
+
     /// Removes the bar from the terminal.
     pub fn finish(&self) {
         self.bar.finish_and_clear();
@@ -125,5 +170,48 @@ impl Stage {
         } else {
             self.bar.println(line);
         }
+    }
+}
+
+/// The text of a contact tick: `step 1/2, iteration 7/100, open 12/105 pairs, detached 33.8`.
+pub fn contact_message(t: &ContactTick) -> String {
+    format!(
+        "step {}/{}, iteration {}/{}, open {}/{} pairs, detached {:.4}",
+        t.load_step + 1,
+        t.load_steps,
+        t.iteration,
+        t.max_iterations,
+        t.open_pairs,
+        t.pairs,
+        t.detached_length
+    )
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn contact_ticks_move_a_hidden_bar_and_read_well() {
+        let stage = Stage::hidden();
+        let tick = ContactTick {
+            load_step: 1,
+            load_steps: 2,
+            iteration: 7,
+            max_iterations: 100,
+            open_pairs: 12,
+            pairs: 105,
+            detached_length: 33.85,
+            step_done: true,
+        };
+        let cb = stage.contact_callback();
+        let f: ContactProgress = &cb;
+        f(&tick);
+        assert_eq!(stage.position(), 2);
+        assert_eq!(
+            contact_message(&tick),
+            "step 2/2, iteration 7/100, open 12/105 pairs, detached 33.8500"
+        );
+        no_contact_progress(&tick);
     }
 }

@@ -414,6 +414,8 @@ pub struct RunRecord {
     pub title: String,
     /// The scene file's text.
     pub scene_text: String,
+    /// The `--set KEY=VALUE` overrides applied to the scene, in command-line order.
+    pub overrides: Vec<String>,
     /// SHA-256 of the mesh file, lowercase hex (empty when unknown).
     pub mesh_sha256: String,
     pub units: Units,
@@ -445,6 +447,7 @@ impl RunRecord {
         RunRecord {
             title: title.into(),
             scene_text: String::new(),
+            overrides: Vec::new(),
             mesh_sha256: String::new(),
             units: Units::default(),
             plane,
@@ -469,6 +472,7 @@ impl RunRecord {
     pub fn from_model(scene: &Scene, mesh: &Mesh, model: &Model) -> Result<RunRecord> {
         let mut r = RunRecord::empty(&scene.title, scene.plane);
         r.scene_text = scene.text.clone();
+        r.overrides = scene.overrides.clone();
         r.mesh_sha256 = sha256_file(&model.mesh_path)?;
         r.units = scene.units.clone();
         r.thickness = scene.thickness;
@@ -716,6 +720,9 @@ impl RunRecord {
             "written by  sgbem {} on {}",
             self.tool_version, self.created
         );
+        if !self.overrides.is_empty() {
+            let _ = writeln!(o, "overrides   --set {}", self.overrides.join(" --set "));
+        }
         let _ = writeln!(
             o,
             "plane       {}, thickness {}, units: length {}, force {}",

@@ -1,33 +1,42 @@
 //! VTK files for ParaView, pyvista and meshio (SPEC.md "Outputs"): per archived state
 //! `boundary_NNNN.vtu` (the boundary lines of every body) and, where interior values exist,
-//! `field_NNNN.vtu` (the triangles of every body), and `history.pvd`, which gives each file
-//! its iteration number as its time.
+//! `field_NNNN.vtu` (the triangles of every body), and `history.pvd`, the time series.
 //!
 //! Place in the flow: [`RunRecord`] → **`vtk`**. Everything is computed from the record
 //! alone, so that `sgbem export` rebuilds the same bytes from the archive. Files are XML
-//! unstructured grids (binary, base64, little-endian, UInt64 headers) written by vtkio, each
-//! written atomically.
+//! unstructured grids (binary, base64, little-endian, UInt64 headers), each written
+//! atomically; the bytes depend on the record alone (no dates, no timings).
+//!
+//! `history.pvd` lists two parts at every time: part 0 the boundary file of the state,
+//! part 1 the field file of the latest state at or before that time that has one (the
+//! first one before it exists). ParaView's PVD reader reads a part only when it is listed at
+//! every time, so the field is repeated rather than left out; each file's field data
+//! (`iteration`, `load_step`, `load_factor`) says which state it holds. Times: the states of
+//! load step s (counted from 1) with n recorded states lie at s − 1 + j/n, j = 1..n, so
+//! the last state of step s is at time s (see [`state_times`]).
 //!
 //! Points sit at their reference positions; `displacement` has three components (z = 0) so
 //! that ParaView's Warp By Vector shows the strained shape. Nodes are per body: an interface
 //! node appears once for each of its two bodies, so that opening shows as a gap.
+//!
+//! Field data of every file: `title`, `length_unit`, `force_unit`, `stress_unit` (text as
+//! UTF-8 bytes in UInt8 arrays, since meshio reads no string arrays; left out when empty),
+//! `iteration`, `load_step` (from 0), `load_factor`, `time` (the state's time in
+//! `history.pvd`).
 //!
 //! Boundary point data: `displacement`, `traction` (average of the element-end values at
 //! the node), `normal` (unit, average of the adjacent element normals), `contact_status`
 //! (1 closed, 0 open, −1 not an interface node), `normal_traction` (interface nodes: the
 //! pair's normal traction, tension positive; elsewhere the average of t·n over the adjacent
 //! element ends), `normal_opening` (interface nodes: gap + normal jump where open, 0 where
-//! closed; elsewhere 0), `body` (index). Field point data: `displacement`, `stress` (xx, yy,
-//! xy), `von_mises`, `principal_stress` (σ1 ≥ σ2 in plane, then σzz), `principal_direction`
-//! (unit vector of σ1), `body`.
+//! closed; elsewhere 0), `body` (index). Field point data: `displacement`, `stress` (the
+//! symmetric tensor as ParaView orders it: xx, yy, zz, xy, yz, xz, with component names;
+//! zz is the out-of-plane stress, yz = xz = 0), `sxx`, `syy`, `szz`, `sxy`, `von_mises`,
+//! `principal_stress` (σ1 ≥ σ2 in plane, then σzz), `principal_direction` (unit vector of
+//! σ1), `body`.
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-
-use vtkio::model::{
-    Attribute, Attributes, ByteOrder, CellType, Cells, DataSet, UnstructuredGridPiece, Version,
-    VertexNumbers, Vtk,
-};
 
 use super::record::RunRecord;
 use super::write_atomic;
@@ -45,6 +54,25 @@ pub fn field_name(k: usize) -> String {
     format!("field_{k:04}.vtu")
 }
 
+/// The time of every state in `history.pvd`: the states of load step s (from 1) with n
+/// recorded states at s − 1 + j/n, j = 1..n (the last state of step s at time s).
+pub fn state_times(rec: &RunRecord) -> Vec<f64> {
+    let mut times = Vec::with_capacity(rec.states.len());
+    let mut i = 0;
+    while i < rec.states.len() {
+        let step = rec.states[i].load_step;
+        let n = rec.states[i..]
+            .iter()
+            .take_while(|s| s.load_step == step)
+            .count();
+        for j in 1..=n {
+            times.push(step as f64 + j as f64 / n as f64);
+        }
+        i += n;
+    }
+    times
+}
+
 /// Writes every VTK file of `rec` into `dir` (created if needed); returns the paths written,
 /// `history.pvd` last.
 pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
@@ -54,30 +82,44 @@ pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
             format!("cannot write the VTK files: the run record is inconsistent: {m}"),
         )
     })?;
+    let times = state_times(rec);
     let mut written = Vec::new();
+    let mut field_of = Vec::with_capacity(rec.states.len());
+    for (k, st) in rec.states.iter().enumerate() {
+        let meta = |rec: &RunRecord| state_meta(rec, k, times[k]);
+        let path = dir.join(boundary_name(k));
+        write_atomic(&path, &grid_xml(&boundary_grid(rec, k), &meta(rec)))?;
+        written.push(path);
+        if !st.interior.is_empty() {
+            let path = dir.join(field_name(k));
+            write_atomic(&path, &grid_xml(&field_grid(rec, k), &meta(rec)))?;
+            written.push(path);
+            field_of.push(Some(k));
+        } else {
+            field_of.push(None);
+        }
+    }
+    // The field part at each time: the latest field at or before it, else the first one.
+    let first_field = field_of.iter().flatten().next().copied();
     let mut pvd = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
          byte_order=\"LittleEndian\">\n  <Collection>\n",
     );
-    for (k, st) in rec.states.iter().enumerate() {
-        let name = boundary_name(k);
-        let path = dir.join(&name);
-        write_atomic(&path, &to_xml(boundary_grid(rec, k), &path)?)?;
-        written.push(path);
+    let mut latest = first_field;
+    for (k, t) in times.iter().enumerate() {
+        if field_of[k].is_some() {
+            latest = field_of[k];
+        }
         let _ = writeln!(
             pvd,
-            "    <DataSet timestep=\"{}\" group=\"\" part=\"0\" file=\"{name}\"/>",
-            st.iteration
+            "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{}\"/>",
+            boundary_name(k)
         );
-        if !st.interior.is_empty() {
-            let name = field_name(k);
-            let path = dir.join(&name);
-            write_atomic(&path, &to_xml(field_grid(rec, k), &path)?)?;
-            written.push(path);
+        if let Some(f) = latest {
             let _ = writeln!(
                 pvd,
-                "    <DataSet timestep=\"{}\" group=\"\" part=\"1\" file=\"{name}\"/>",
-                st.iteration
+                "    <DataSet timestep=\"{t}\" group=\"\" part=\"1\" file=\"{}\"/>",
+                field_name(f)
             );
         }
     }
@@ -94,31 +136,215 @@ pub fn export(archive: &Path, dir: &Path) -> Result<Vec<PathBuf>> {
     write_vtk(dir, &rec)
 }
 
-fn to_xml(piece: UnstructuredGridPiece, path: &Path) -> Result<Vec<u8>> {
-    let vtk = Vtk {
-        version: Version::new_xml(1, 0),
-        byte_order: ByteOrder::LittleEndian,
-        title: String::new(),
-        file_path: None,
-        data: DataSet::inline(piece),
-    };
-    let mut bytes = Vec::new();
-    vtk.write_xml(&mut bytes)
-        .map_err(|e| Error::io(path, format!("cannot encode the VTK file: {e}")))?;
-    bytes.push(b'\n');
-    Ok(bytes)
+// ---------------------------------------------------------------------------------------
+// The XML writer: an unstructured grid with inline base64 binary arrays.
+
+enum Values {
+    F64(Vec<f64>),
+    I32(Vec<i32>),
+    U64(Vec<u64>),
+    U8(Vec<u8>),
 }
 
-fn cells(conn: Vec<u64>, per_cell: usize, kind: CellType) -> Cells {
-    let n = conn.len().checked_div(per_cell).unwrap_or(0);
-    Cells {
-        cell_verts: VertexNumbers::XML {
-            offsets: (1..=n).map(|i| (i * per_cell) as u64).collect(),
-            connectivity: conn,
-        },
-        types: vec![kind; n],
+impl Values {
+    fn type_name(&self) -> &'static str {
+        match self {
+            Values::F64(_) => "Float64",
+            Values::I32(_) => "Int32",
+            Values::U64(_) => "UInt64",
+            Values::U8(_) => "UInt8",
+        }
+    }
+    fn bytes(&self) -> Vec<u8> {
+        match self {
+            Values::F64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Values::I32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Values::U64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
+            Values::U8(v) => v.clone(),
+        }
+    }
+    fn as_f64(&self) -> Vec<f64> {
+        match self {
+            Values::F64(v) => v.clone(),
+            Values::I32(v) => v.iter().map(|&x| f64::from(x)).collect(),
+            Values::U64(v) => v.iter().map(|&x| x as f64).collect(),
+            Values::U8(v) => v.iter().map(|&x| f64::from(x)).collect(),
+        }
     }
 }
+
+/// One named point-data (or grid) array.
+struct DataArray {
+    name: &'static str,
+    components: usize,
+    component_names: &'static [&'static str],
+    values: Values,
+}
+
+fn array(name: &'static str, components: usize, values: Values) -> DataArray {
+    DataArray {
+        name,
+        components,
+        component_names: &[],
+        values,
+    }
+}
+
+/// Field data: strings and numbers describing the whole file.
+enum FieldValue {
+    Text(String),
+    Number(f64),
+}
+
+struct Grid {
+    points: Vec<f64>,
+    connectivity: Vec<u64>,
+    per_cell: usize,
+    cell_type: u8,
+    point_data: Vec<DataArray>,
+    /// Attribute names for `<PointData>`: scalars, vectors, tensors.
+    active: [&'static str; 3],
+}
+
+fn state_meta(rec: &RunRecord, k: usize, time: f64) -> Vec<(&'static str, FieldValue)> {
+    let st = &rec.states[k];
+    let (l, f) = (&rec.units.length, &rec.units.force);
+    let stress_unit = if l.is_empty() && f.is_empty() {
+        String::new()
+    } else {
+        format!("{f}/{l}^2")
+    };
+    vec![
+        ("title", FieldValue::Text(rec.title.clone())),
+        ("length_unit", FieldValue::Text(l.clone())),
+        ("force_unit", FieldValue::Text(f.clone())),
+        ("stress_unit", FieldValue::Text(stress_unit)),
+        ("iteration", FieldValue::Number(st.iteration as f64)),
+        ("load_step", FieldValue::Number(st.load_step as f64)),
+        ("load_factor", FieldValue::Number(st.load_factor)),
+        ("time", FieldValue::Number(time)),
+    ]
+}
+
+const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+
+fn base64(bytes: &[u8]) -> String {
+    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
+    for chunk in bytes.chunks(3) {
+        let b = [
+            chunk[0],
+            chunk.get(1).copied().unwrap_or(0),
+            chunk.get(2).copied().unwrap_or(0),
+        ];
+        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
+        for (i, shift) in [18u32, 12, 6, 0].into_iter().enumerate() {
+            if i <= chunk.len() {
+                out.push(B64[((n >> shift) & 63) as usize] as char);
+            } else {
+                out.push('=');
+            }
+        }
+    }
+    out
+}
+
+fn write_data_array(o: &mut String, a: &DataArray) {
+    let _ = write!(
+        o,
+        "<DataArray type=\"{}\" Name=\"{}\"",
+        a.values.type_name(),
+        a.name
+    );
+    if a.components != 1 {
+        let _ = write!(o, " NumberOfComponents=\"{}\"", a.components);
+    }
+    for (i, c) in a.component_names.iter().enumerate() {
+        let _ = write!(o, " ComponentName{i}=\"{c}\"");
+    }
+    o.push_str(" format=\"binary\"");
+    if a.components == 1 {
+        let v = a.values.as_f64();
+        if !v.is_empty() {
+            let lo = v.iter().copied().fold(f64::INFINITY, f64::min);
+            let hi = v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            if lo.is_finite() && hi.is_finite() {
+                let _ = write!(o, " RangeMin=\"{lo}\" RangeMax=\"{hi}\"");
+            }
+        }
+    }
+    let body = a.values.bytes();
+    let mut payload = (body.len() as u64).to_le_bytes().to_vec();
+    payload.extend(body);
+    let _ = writeln!(o, ">{}</DataArray>", base64(&payload));
+}
+
+fn grid_xml(g: &Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
+    let n_points = g.points.len() / 3;
+    let n_cells = g.connectivity.len().checked_div(g.per_cell).unwrap_or(0);
+    let mut o = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
+         byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n<FieldData>\n",
+    );
+    for (name, v) in meta {
+        match v {
+            FieldValue::Text(s) => {
+                // UTF-8 bytes in a UInt8 array: meshio reads no string arrays.
+                if s.is_empty() {
+                    continue;
+                }
+                let codes: Vec<String> = s.bytes().map(|b| b.to_string()).collect();
+                let _ = writeln!(
+                    o,
+                    "<DataArray type=\"UInt8\" Name=\"{name}\" NumberOfTuples=\"{}\" \
+                     format=\"ascii\">{}</DataArray>",
+                    codes.len(),
+                    codes.join(" ")
+                );
+            }
+            FieldValue::Number(x) => {
+                let _ = writeln!(
+                    o,
+                    "<DataArray type=\"Float64\" Name=\"{name}\" NumberOfTuples=\"1\" \
+                     format=\"ascii\">{x:?}</DataArray>"
+                );
+            }
+        }
+    }
+    o.push_str("</FieldData>\n");
+    let _ = writeln!(
+        o,
+        "<Piece NumberOfPoints=\"{n_points}\" NumberOfCells=\"{n_cells}\">"
+    );
+    let [s, v, t] = g.active;
+    let mut attrs = String::new();
+    for (key, name) in [("Scalars", s), ("Vectors", v), ("Tensors", t)] {
+        if !name.is_empty() {
+            let _ = write!(attrs, " {key}=\"{name}\"");
+        }
+    }
+    let _ = writeln!(o, "<PointData{attrs}>");
+    for a in &g.point_data {
+        write_data_array(&mut o, a);
+    }
+    o.push_str("</PointData>\n<Points>\n");
+    write_data_array(&mut o, &array("Points", 3, Values::F64(g.points.clone())));
+    o.push_str("</Points>\n<Cells>\n");
+    write_data_array(
+        &mut o,
+        &array("connectivity", 1, Values::U64(g.connectivity.clone())),
+    );
+    let offsets = (1..=n_cells).map(|i| (i * g.per_cell) as u64).collect();
+    write_data_array(&mut o, &array("offsets", 1, Values::U64(offsets)));
+    write_data_array(
+        &mut o,
+        &array("types", 1, Values::U8(vec![g.cell_type; n_cells])),
+    );
+    o.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
+    o.into_bytes()
+}
+
+const VTK_LINE: u8 = 3;
+const VTK_TRIANGLE: u8 = 5;
 
 fn vec3(v: &[[f64; 2]]) -> Vec<f64> {
     v.iter().flat_map(|a| [a[0], a[1], 0.0]).collect()
@@ -134,7 +360,7 @@ fn unit(v: [f64; 2]) -> [f64; 2] {
 }
 
 /// The boundary lines of every body in state `k`.
-fn boundary_grid(rec: &RunRecord, k: usize) -> UnstructuredGridPiece {
+fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
     let st = &rec.states[k];
     let (mut pts, mut disp, mut trac, mut normal) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
@@ -198,29 +424,30 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> UnstructuredGridPiece {
         body.extend(std::iter::repeat_n(bi as i32, n));
         offset += n;
     }
-    UnstructuredGridPiece {
-        points: pts.into(),
-        cells: cells(conn, 2, CellType::Line),
-        data: Attributes {
-            point: vec![
-                Attribute::vectors("displacement").with_data(disp),
-                Attribute::vectors("traction").with_data(trac),
-                Attribute::normals("normal").with_data(normal),
-                Attribute::scalars("contact_status", 1).with_data(status),
-                Attribute::scalars("normal_traction", 1).with_data(tn),
-                Attribute::scalars("normal_opening", 1).with_data(opening),
-                Attribute::scalars("body", 1).with_data(body),
-            ],
-            cell: Vec::new(),
-        },
+    Grid {
+        points: pts,
+        connectivity: conn,
+        per_cell: 2,
+        cell_type: VTK_LINE,
+        point_data: vec![
+            array("displacement", 3, Values::F64(disp)),
+            array("traction", 3, Values::F64(trac)),
+            array("normal", 3, Values::F64(normal)),
+            array("contact_status", 1, Values::I32(status)),
+            array("normal_traction", 1, Values::F64(tn)),
+            array("normal_opening", 1, Values::F64(opening)),
+            array("body", 1, Values::I32(body)),
+        ],
+        active: ["contact_status", "displacement", ""],
     }
 }
 
 /// The triangles of every body in state `k`, with the interior values at their nodes.
-fn field_grid(rec: &RunRecord, k: usize) -> UnstructuredGridPiece {
+fn field_grid(rec: &RunRecord, k: usize) -> Grid {
     let st = &rec.states[k];
     let (mut pts, mut disp, mut stress, mut vm) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut principal, mut direction, mut body) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut sxx, mut syy, mut szz, mut sxy) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let mut conn = Vec::new();
     let mut offset = 0usize;
     for (bi, (b, f)) in rec.bodies.iter().zip(&st.interior).enumerate() {
@@ -241,9 +468,13 @@ fn field_grid(rec: &RunRecord, k: usize) -> UnstructuredGridPiece {
             pts.extend([x[0], x[1], 0.0]);
             disp.extend([f.u[i][0], f.u[i][1], 0.0]);
             let [xx, yy, xy] = f.sigma[i];
-            stress.extend([xx, yy, xy]);
             let s = [[xx, xy], [xy, yy]];
             let zz = out_of_plane_stress(&s, rec.plane, b.poisson);
+            stress.extend([xx, yy, zz, xy, 0.0, 0.0]);
+            sxx.push(xx);
+            syy.push(yy);
+            szz.push(zz);
+            sxy.push(xy);
             vm.push(von_mises(&s, zz));
             let (p, angle) = principal_stresses(&s);
             principal.extend([p[0], p[1], zz]);
@@ -252,19 +483,33 @@ fn field_grid(rec: &RunRecord, k: usize) -> UnstructuredGridPiece {
         }
         offset += f.mesh_nodes.len();
     }
-    UnstructuredGridPiece {
-        points: pts.into(),
-        cells: cells(conn, 3, CellType::Triangle),
-        data: Attributes {
-            point: vec![
-                Attribute::vectors("displacement").with_data(disp),
-                Attribute::generic("stress", 3).with_data(stress),
-                Attribute::scalars("von_mises", 1).with_data(vm),
-                Attribute::generic("principal_stress", 3).with_data(principal),
-                Attribute::generic("principal_direction", 3).with_data(direction),
-                Attribute::scalars("body", 1).with_data(body),
-            ],
-            cell: Vec::new(),
-        },
+    Grid {
+        points: pts,
+        connectivity: conn,
+        per_cell: 3,
+        cell_type: VTK_TRIANGLE,
+        point_data: vec![
+            array("displacement", 3, Values::F64(disp)),
+            DataArray {
+                name: "stress",
+                components: 6,
+                component_names: &["XX", "YY", "ZZ", "XY", "YZ", "XZ"],
+                values: Values::F64(stress),
+            },
+            array("sxx", 1, Values::F64(sxx)),
+            array("syy", 1, Values::F64(syy)),
+            array("szz", 1, Values::F64(szz)),
+            array("sxy", 1, Values::F64(sxy)),
+            array("von_mises", 1, Values::F64(vm)),
+            DataArray {
+                name: "principal_stress",
+                components: 3,
+                component_names: &["1", "2", "zz"],
+                values: Values::F64(principal),
+            },
+            array("principal_direction", 3, Values::F64(direction)),
+            array("body", 1, Values::I32(body)),
+        ],
+        active: ["von_mises", "displacement", "stress"],
     }
 }

@@ -736,6 +736,25 @@ pub fn field_at_nodes(
     settings: &QuadratureSettings,
     mesh_nodes: &[Vec2],
 ) -> Vec<NodeValue> {
+    field_at_nodes_with(input, settings, mesh_nodes, &|_| {})
+}
+
+/// The number of nodes [`field_at_nodes`] evaluates for a body (its triangles' nodes).
+pub fn field_node_count(body: &crate::input::model::Body) -> usize {
+    let mut ids: Vec<usize> = body.triangles.iter().flatten().copied().collect();
+    ids.sort_unstable();
+    ids.dedup();
+    ids.len()
+}
+
+/// [`field_at_nodes`] calling `done(1)` after each node (from the worker threads), for a
+/// progress bar.
+pub fn field_at_nodes_with(
+    input: &BodyInput,
+    settings: &QuadratureSettings,
+    mesh_nodes: &[Vec2],
+    done: &(dyn Fn(u64) + Sync),
+) -> Vec<NodeValue> {
     let prepared = input.prepare();
     let nodal = &prepared.nodal;
     let mut on_boundary: HashMap<usize, usize> = HashMap::new();
@@ -751,6 +770,7 @@ pub fn field_at_nodes(
                 Some(&n) => (input.field.u[n], nodal[n]),
                 None => prepared.interior(settings, mesh_nodes[mn]),
             };
+            done(1);
             NodeValue {
                 mesh_node: mn,
                 u,

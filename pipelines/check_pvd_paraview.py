@@ -1,0 +1,101 @@
+"""Loads a run's vtk/history.pvd in ParaView (pvpython) and checks what a ParaView user sees.
+
+Usage: xvfb-run -a pvpython pipelines/check_pvd_paraview.py RUN_DIR
+
+Checks, at every time of the series: two blocks (boundary, interior field); the field block
+has `stress` as a 6-component symmetric tensor (components XX YY ZZ XY YZ XZ) and the
+scalars sxx, syy, sxy that equal its components; both blocks carry the title and units as
+field data; the boundary's `iteration` field data increases with time; the times increase.
+Prints one line per check group; exits 1 on the first failure.
+"""
+import os
+import sys
+
+from paraview import servermanager
+from paraview.simple import PVDReader
+from vtkmodules.util.numpy_support import vtk_to_numpy
+
+
+def fail(msg):
+    print(f"check_pvd_paraview: FAIL: {msg}")
+    sys.exit(1)
+
+
+def text(block, name):
+    """Text field data: UTF-8 bytes in a UInt8 array."""
+    arr = block.GetFieldData().GetArray(name)
+    if arr is None:
+        fail(f"field data `{name}` missing")
+    return bytes(int(arr.GetValue(i)) for i in range(arr.GetNumberOfTuples())).decode()
+
+
+def number(block, name):
+    arr = block.GetFieldData().GetArray(name)
+    if arr is None:
+        fail(f"field data `{name}` missing")
+    return arr.GetValue(0)
+
+
+def leaves(obj):
+    if obj is None:
+        return []
+    if obj.IsA("vtkMultiBlockDataSet"):
+        out = []
+        for i in range(obj.GetNumberOfBlocks()):
+            out.extend(leaves(obj.GetBlock(i)))
+        return out
+    return [obj]
+
+
+def main():
+    run = sys.argv[1]
+    pvd = os.path.join(run, "vtk", "history.pvd")
+    reader = PVDReader(FileName=pvd)
+    reader.UpdatePipelineInformation()
+    times = list(reader.TimestepValues)
+    if not times:
+        fail("no times in the series")
+    if any(b <= a for a, b in zip(times, times[1:])):
+        fail(f"times do not increase: {times}")
+    last_iteration = -1.0
+    for t in times:
+        reader.UpdatePipeline(t)
+        blocks = leaves(servermanager.Fetch(reader))
+        kinds = {}
+        for b in blocks:
+            pd = b.GetPointData()
+            kinds["field" if pd.GetArray("stress") is not None else "boundary"] = b
+        if set(kinds) != {"boundary", "field"}:
+            fail(f"time {t}: blocks {sorted(kinds)}, want boundary and field")
+        for kind, b in kinds.items():
+            if not text(b, "title"):
+                fail(f"time {t}: {kind} has an empty title")
+            if not text(b, "length_unit") or not text(b, "stress_unit"):
+                fail(f"time {t}: {kind} has no units")
+        it = number(kinds["boundary"], "iteration")
+        if it <= last_iteration:
+            fail(f"time {t}: iteration {it} after {last_iteration}")
+        last_iteration = it
+        f = kinds["field"]
+        if f.GetNumberOfPoints() == 0 or f.GetNumberOfCells() == 0:
+            fail(f"time {t}: empty field block")
+        s = f.GetPointData().GetArray("stress")
+        if s.GetNumberOfComponents() != 6:
+            fail(f"time {t}: stress has {s.GetNumberOfComponents()} components, want 6")
+        names = [s.GetComponentName(i) for i in range(6)]
+        if names != ["XX", "YY", "ZZ", "XY", "YZ", "XZ"]:
+            fail(f"time {t}: stress component names {names}")
+        tensor = vtk_to_numpy(s)
+        for col, name in [(0, "sxx"), (1, "syy"), (3, "sxy")]:
+            arr = f.GetPointData().GetArray(name)
+            if arr is None:
+                fail(f"time {t}: scalar {name} missing")
+            if (vtk_to_numpy(arr) != tensor[:, col]).any():
+                fail(f"time {t}: {name} differs from stress component {col}")
+        if not (abs(tensor[:, 0]).max() > 0.0):
+            fail(f"time {t}: stress is zero everywhere")
+    print(f"check_pvd_paraview: {pvd}: {len(times)} times from {times[0]:g} to {times[-1]:g}, "
+          f"boundary and field blocks at every time, stress a named 6-component tensor: ok")
+
+
+main()

@@ -1,0 +1,85 @@
+//! Meshing a `.geo` scene mesh with gmsh (`gmsh -2 -format msh41 [-setnumber P V ...]`).
+//!
+//! Place in the flow: before [`super::mesh::read_msh`], when the scene's `mesh` names a
+//! `.geo`. The gmsh program is `$GMSH` or `gmsh` on the PATH.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::error::{Error, Result};
+
+/// Whether `path` names a gmsh geometry file (`.geo`).
+pub fn is_geo(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("geo"))
+}
+
+/// Meshes `geo` into `dir/<stem>.msh` (MSH 4.1, 2D) with the given `-setnumber`
+/// parameters (gmsh's log is not kept: it holds timings). Returns the mesh path. A missing
+/// gmsh or a failing one is bad input (exit 2) with gmsh's message.
+pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<PathBuf> {
+    if !geo.is_file() {
+        return Err(Error::input(
+            geo,
+            "no such .geo file: check the scene's `mesh`",
+        ));
+    }
+    std::fs::create_dir_all(dir)
+        .map_err(|e| Error::io(dir, format!("cannot create the mesh folder: {e}")))?;
+    let stem = geo
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_else(|| "mesh".into());
+    let out = dir.join(format!("{stem}.msh"));
+    let tmp = dir.join(format!(".{stem}.{}.tmp.msh", std::process::id()));
+    let program = std::env::var_os("GMSH").unwrap_or_else(|| "gmsh".into());
+    let mut cmd = Command::new(&program);
+    cmd.arg("-2").arg("-format").arg("msh41");
+    for (name, value) in params {
+        cmd.arg("-setnumber").arg(name).arg(format!("{value}"));
+    }
+    cmd.arg(geo).arg("-o").arg(&tmp);
+    let shown = format!(
+        "{} -2 -format msh41{} {} -o {}",
+        program.to_string_lossy(),
+        params
+            .iter()
+            .map(|(n, v)| format!(" -setnumber {n} {v}"))
+            .collect::<String>(),
+        geo.display(),
+        out.display()
+    );
+    let output = cmd.output().map_err(|e| {
+        Error::input(
+            geo,
+            format!(
+                "cannot run gmsh to mesh this .geo ({e}): install gmsh (apt-get install gmsh), \
+                 set GMSH=/path/to/gmsh, or mesh it yourself and name the .msh in the scene"
+            ),
+        )
+    })?;
+    let log = [output.stdout.as_slice(), output.stderr.as_slice()].concat();
+    // gmsh reports some errors with exit status 0: judge by its "Error" lines too.
+    let text = String::from_utf8_lossy(&log);
+    let mut errors: Vec<&str> = Vec::new();
+    for l in text.lines().filter(|l| l.contains("Error")) {
+        if !errors.contains(&l) && errors.len() < 5 {
+            errors.push(l);
+        }
+    }
+    if !output.status.success() || !errors.is_empty() || !tmp.is_file() {
+        let _ = std::fs::remove_file(&tmp);
+        let detail = if errors.is_empty() {
+            text.lines().rev().take(5).collect::<Vec<_>>().join("\n  ")
+        } else {
+            errors.join("\n  ")
+        };
+        return Err(Error::input(
+            geo,
+            format!("gmsh failed to mesh this .geo ({shown}):\n  {detail}"),
+        ));
+    }
+    std::fs::rename(&tmp, &out)
+        .map_err(|e| Error::io(&out, format!("cannot write the mesh: {e}")))?;
+    Ok(out)
+}

@@ -1,0 +1,287 @@
+//! `sgbem sweep`: one run per point of a parameter grid, in child processes, and a table
+//! of headline results (`sweep.csv`, `sweep.md`).
+//!
+//! Place in the flow: above the pipeline; each point is `sgbem run SCENE --set ... --out
+//! DIR/<point> --quiet`, so that a point that fails (exit 3) leaves the others alone.
+
+use std::fmt::Write as _;
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use crate::error::{Error, Result};
+use crate::input::scene;
+
+/// One swept key and its values (the text after `=`, split at top-level commas).
+#[derive(Debug, Clone)]
+pub struct Axis {
+    pub key: String,
+    pub values: Vec<String>,
+}
+
+/// Splits `KEY=V1,V2,...` at the commas outside brackets, braces and quotes.
+pub fn parse_axis(set: &str) -> std::result::Result<Axis, String> {
+    let Some((key, values)) = set.split_once('=') else {
+        return Err(format!(
+            "--set {set}: expected KEY=V1,V2,..., e.g. --set interface.joint.cohesion=0,1,2"
+        ));
+    };
+    let mut out = Vec::new();
+    let (mut depth, mut quote, mut cur) = (0i32, None::<char>, String::new());
+    for ch in values.chars() {
+        match (quote, ch) {
+            (Some(q), c) if c == q => quote = None,
+            (Some(_), _) => {}
+            (None, '"' | '\'') => quote = Some(ch),
+            (None, '[' | '{') => depth += 1,
+            (None, ']' | '}') => depth -= 1,
+            (None, ',') if depth == 0 => {
+                out.push(std::mem::take(&mut cur).trim().to_string());
+                continue;
+            }
+            _ => {}
+        }
+        cur.push(ch);
+    }
+    out.push(cur.trim().to_string());
+    if out.iter().any(String::is_empty) {
+        return Err(format!("--set {set}: an empty value in the list"));
+    }
+    Ok(Axis {
+        key: key.trim().to_string(),
+        values: out,
+    })
+}
+
+/// A point of the grid: its folder name (`label=value` joined by `_`) and its `--set
+/// KEY=VALUE` list.
+#[derive(Debug, Clone)]
+pub struct Point {
+    pub name: String,
+    pub sets: Vec<String>,
+    pub values: Vec<String>,
+}
+
+/// The folder-name label of a key: its last segment, or the whole key when two swept
+/// keys share the last segment.
+fn labels(axes: &[Axis]) -> Vec<String> {
+    let last = |k: &str| k.rsplit('.').next().unwrap_or(k).to_string();
+    axes.iter()
+        .map(|a| {
+            let l = last(&a.key);
+            if axes.iter().filter(|b| last(&b.key) == l).count() > 1 {
+                a.key.replace('*', "all")
+            } else {
+                l
+            }
+        })
+        .collect()
+}
+
+fn clean(v: &str) -> String {
+    v.chars()
+        .map(|c| {
+            if c.is_ascii_alphanumeric() || "._+-".contains(c) {
+                c
+            } else {
+                '_'
+            }
+        })
+        .collect()
+}
+
+/// The grid: every combination of the axes' values, the first axis varying slowest.
+pub fn points(axes: &[Axis]) -> Vec<Point> {
+    let labels = labels(axes);
+    let mut pts = vec![Point {
+        name: String::new(),
+        sets: Vec::new(),
+        values: Vec::new(),
+    }];
+    for (a, label) in axes.iter().zip(&labels) {
+        let mut next = Vec::new();
+        for p in &pts {
+            for v in &a.values {
+                let mut q = p.clone();
+                if !q.name.is_empty() {
+                    q.name.push('_');
+                }
+                q.name += &format!("{label}={}", clean(v));
+                q.sets.push(format!("{}={v}", a.key));
+                q.values.push(v.clone());
+                next.push(q);
+            }
+        }
+        pts = next;
+    }
+    pts
+}
+
+/// Runs the sweep: validates every point's scene first (exit 2 before any run), then runs
+/// the points `jobs` at a time and writes `out/sweep.csv` and `out/sweep.md`. Returns the
+/// table's path and the number of points that failed.
+pub fn sweep(
+    scene_path: &Path,
+    sets: &[String],
+    jobs: usize,
+    out: &Path,
+) -> Result<(PathBuf, usize)> {
+    if !scene_path.is_file() {
+        return Err(Error::input(
+            scene_path,
+            "no such scene file: give the path of a .toml scene",
+        ));
+    }
+    let axes: Vec<Axis> = sets
+        .iter()
+        .map(|s| parse_axis(s).map_err(|m| Error::input(scene_path, m)))
+        .collect::<Result<_>>()?;
+    if axes.is_empty() {
+        return Err(Error::input(
+            scene_path,
+            "nothing to sweep: give at least one --set KEY=V1,V2,...",
+        ));
+    }
+    let pts = points(&axes);
+    for p in &pts {
+        scene::read_scene_with(scene_path, &p.sets)?;
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
+    let exe = std::env::current_exe()
+        .map_err(|e| Error::io(scene_path, format!("cannot find the sgbem program: {e}")))?;
+    let jobs = jobs.max(1);
+    // Each child gets its share of the cores, unless the caller chose.
+    let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
+    let threads = (cores / jobs).max(1).to_string();
+    let mut codes = vec![None; pts.len()];
+    let mut next = 0;
+    let mut running: Vec<(usize, std::process::Child)> = Vec::new();
+    while next < pts.len() || !running.is_empty() {
+        while running.len() < jobs && next < pts.len() {
+            let p = &pts[next];
+            let mut cmd = Command::new(&exe);
+            cmd.arg("run").arg(scene_path);
+            for s in &p.sets {
+                cmd.arg("--set").arg(s);
+            }
+            cmd.arg("--out").arg(out.join(&p.name)).arg("--quiet");
+            if std::env::var_os("RAYON_NUM_THREADS").is_none() {
+                cmd.env("RAYON_NUM_THREADS", &threads);
+            }
+            eprintln!("sweep: {} of {}: {}", next + 1, pts.len(), p.name);
+            let child = cmd
+                .spawn()
+                .map_err(|e| Error::io(&exe, format!("cannot start a run: {e}")))?;
+            running.push((next, child));
+            next += 1;
+        }
+        let mut finished = None;
+        for (i, (k, child)) in running.iter_mut().enumerate() {
+            if let Ok(Some(status)) = child.try_wait() {
+                codes[*k] = Some(status.code().unwrap_or(-1));
+                finished = Some(i);
+                break;
+            }
+        }
+        match finished {
+            Some(i) => {
+                running.remove(i);
+            }
+            None => std::thread::sleep(std::time::Duration::from_millis(50)),
+        }
+    }
+    let (csv, md, failed) = table(&axes, &pts, &codes, out);
+    super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
+    let path = out.join("sweep.csv");
+    super::output::write_atomic(&path, csv.as_bytes())?;
+    Ok((path, failed))
+}
+
+/// The headline table: per point the swept values, exit code, status, contact iterations
+/// and per interface the detached length and normal resultant (from its summary.json).
+fn table(
+    axes: &[Axis],
+    pts: &[Point],
+    codes: &[Option<i32>],
+    out: &Path,
+) -> (String, String, usize) {
+    let summaries: Vec<Option<serde_json::Value>> = pts
+        .iter()
+        .map(|p| {
+            std::fs::read_to_string(out.join(&p.name).join("summary.json"))
+                .ok()
+                .and_then(|t| serde_json::from_str(&t).ok())
+        })
+        .collect();
+    // Interfaces in the order of the first summary that has them.
+    let names: Vec<String> = summaries
+        .iter()
+        .flatten()
+        .find_map(|s| {
+            s["interfaces"]
+                .as_object()
+                .map(|m| m.keys().cloned().collect())
+        })
+        .unwrap_or_default();
+    let mut head: Vec<String> = vec!["point".into()];
+    head.extend(axes.iter().map(|a| a.key.clone()));
+    head.extend(["exit_code", "status", "contact_iterations"].map(String::from));
+    for n in &names {
+        head.push(format!("{n}.detached_length"));
+        head.push(format!("{n}.normal_resultant"));
+    }
+    let mut rows = Vec::new();
+    let mut failed = 0;
+    for ((p, code), s) in pts.iter().zip(codes).zip(&summaries) {
+        let code = code.unwrap_or(-1);
+        if code != 0 {
+            failed += 1;
+        }
+        let mut row = vec![p.name.clone()];
+        row.extend(p.values.iter().cloned());
+        row.push(code.to_string());
+        let num = |v: &serde_json::Value| v.as_f64().map(|x| format!("{x}")).unwrap_or_default();
+        match s {
+            Some(s) => {
+                row.push(s["status"].as_str().unwrap_or("").to_string());
+                row.push(num(&s["contact"]["iterations"]));
+                for n in &names {
+                    row.push(num(&s["interfaces"][n]["detached_length"]));
+                    row.push(num(&s["interfaces"][n]["normal_resultant"]));
+                }
+            }
+            None => {
+                row.push("no summary".into());
+                row.extend(std::iter::repeat_n(String::new(), 1 + 2 * names.len()));
+            }
+        }
+        rows.push(row);
+    }
+    let quote = |c: &String| {
+        if c.contains([',', '"', '\n']) {
+            format!("\"{}\"", c.replace('"', "\"\""))
+        } else {
+            c.clone()
+        }
+    };
+    let mut csv = String::new();
+    for r in std::iter::once(&head).chain(&rows) {
+        let _ = writeln!(csv, "{}", r.iter().map(quote).collect::<Vec<_>>().join(","));
+    }
+    let mut md = String::new();
+    let cell = |c: &String| c.replace('|', "\\|");
+    let _ = writeln!(
+        md,
+        "| {} |",
+        head.iter().map(cell).collect::<Vec<_>>().join(" | ")
+    );
+    let _ = writeln!(md, "|{}", "---|".repeat(head.len()));
+    for r in &rows {
+        let _ = writeln!(
+            md,
+            "| {} |",
+            r.iter().map(cell).collect::<Vec<_>>().join(" | ")
+        );
+    }
+    (csv, md, failed)
+}

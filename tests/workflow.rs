@@ -1,0 +1,433 @@
+//! The user's workflow around a scene: `--set` overrides, `.geo` meshes through gmsh,
+//! byte-identical reruns, sweeps.
+
+mod support;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use support::*;
+
+/// The two-blocks example meshed from its .geo: `[mesh]` names the file and `n`.
+fn geo_scene(dir: &Path, extra: &str) -> PathBuf {
+    let geo = root().join("geo").join("two_blocks.geo");
+    let text = format!(
+        r#"title = "Two blocks from a .geo"
+plane = "strain"
+units = {{ length = "m", force = "kN" }}
+[mesh]
+file = "{}"
+n = 4
+[body.lower]
+young = 1000.0
+poisson = 0.3
+[body.upper]
+young = 1000.0
+poisson = 0.3
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[boundary.top]
+ty = -1.0
+[interface.joint]
+model = "unilateral"
+initial = "closed"
+{extra}"#,
+        geo.display()
+    );
+    write(dir, "scene.toml", &text)
+}
+
+fn summary(dir: &Path) -> serde_json::Value {
+    serde_json::from_str(&std::fs::read_to_string(dir.join("summary.json")).expect("summary"))
+        .expect("summary.json is JSON")
+}
+
+fn run(args: &[&str]) -> (i32, String, String) {
+    let mut a = vec!["run"];
+    a.extend_from_slice(args);
+    a.push("--quiet");
+    sgbem(&a)
+}
+
+/// Every file under `dir` (relative path → bytes).
+fn tree(dir: &Path) -> BTreeMap<String, Vec<u8>> {
+    let mut out = BTreeMap::new();
+    let mut stack = vec![dir.to_path_buf()];
+    while let Some(d) = stack.pop() {
+        for e in std::fs::read_dir(&d).expect("read dir") {
+            let p = e.expect("entry").path();
+            if p.is_dir() {
+                stack.push(p);
+            } else {
+                let rel = p.strip_prefix(dir).unwrap().to_string_lossy().into_owned();
+                out.insert(rel, std::fs::read(&p).expect("read"));
+            }
+        }
+    }
+    out
+}
+
+#[test]
+fn set_overrides_change_the_run_and_are_recorded() {
+    let dir = tmpdir("workflow-set");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    let base = dir.join("base");
+    let (code, _, err) = run(&[s, "--out", base.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let doubled = dir.join("doubled");
+    let sets = [
+        "boundary.top.ty=-2.0",        // a number
+        "solve.method=\"qp\"",         // a quoted string
+        "output.vtk=false",            // a boolean
+        "solve.load_factors=[0.5, 1]", // an array
+        "title=Overridden",            // a bare string
+    ];
+    let mut args = vec![s, "--out", doubled.to_str().unwrap()];
+    for x in &sets {
+        args.extend(["--set", x]);
+    }
+    let (code, _, err) = run(&args);
+    assert_eq!(code, 0, "{err}");
+    let (a, b) = (summary(&base), summary(&doubled));
+    let ra = a["interfaces"]["joint"]["normal_resultant"]
+        .as_f64()
+        .unwrap();
+    let rb = b["interfaces"]["joint"]["normal_resultant"]
+        .as_f64()
+        .unwrap();
+    // Top traction −1 kN/m on a 1 m wide block: resultant −1 (to the mesh's accuracy), and
+    // twice that with the override; the problem is linear while the joint stays closed.
+    assert!((ra + 1.0).abs() < 5e-3, "{ra}");
+    assert!((rb - 2.0 * ra).abs() < 1e-9 * ra.abs(), "{ra} {rb}");
+    assert_eq!(b["method"], "qp");
+    assert_eq!(b["title"], "Overridden");
+    assert_eq!(b["contact"]["load_steps"], 2);
+    assert!(
+        !doubled.join("vtk").exists(),
+        "output.vtk = false was not applied"
+    );
+    assert_eq!(a["overrides"], serde_json::json!([]));
+    assert_eq!(b["overrides"], serde_json::json!(sets));
+    // The archive keeps them too (root attribute `overrides`, shown by inspect).
+    let (code, out, err) = sgbem(&["inspect", doubled.join("archive.h5").to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("overrides   --set boundary.top.ty=-2.0 --set solve.method=\"qp\""),
+        "{out}"
+    );
+    // check shows them.
+    let (code, out, err) = sgbem(&["check", s, "--set", "boundary.top.ty=-2.0"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("overrides --set boundary.top.ty=-2.0"),
+        "{out}"
+    );
+}
+
+#[test]
+fn set_errors_name_the_override() {
+    let dir = tmpdir("workflow-set-errors");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    let cases: [(&str, &[&str]); 6] = [
+        (
+            "interface.joint.cohesin=2.0",
+            &[
+                "--set interface.joint.cohesin=2.0",
+                "unknown key",
+                "cohesion",
+            ],
+        ),
+        (
+            "solve.method=fast",
+            &["--set solve.method=fast", "\"lcp\", \"qp\", \"both\""],
+        ),
+        (
+            "solve.tolerance=abc",
+            &["--set solve.tolerance=abc", "tolerance"],
+        ),
+        ("title.x=1", &["--set title.x=1", "`title` is not a table"]),
+        ("solve", &["--set solve", "KEY=VALUE"]),
+        ("body..young=1", &["--set body..young=1", "dotted key path"]),
+    ];
+    for (set, culprits) in cases {
+        for cmd in ["check", "run"] {
+            let out = dir.join("out");
+            let (code, _, err) = sgbem(
+                &[cmd, s, "--set", set, "--out", out.to_str().unwrap()]
+                    [..if cmd == "check" { 4 } else { 6 }],
+            );
+            assert_eq!(code, 2, "{cmd} --set {set}: {err}");
+            assert!(!err.contains("panicked"), "{err}");
+            for c in culprits {
+                assert!(
+                    err.contains(c),
+                    "{cmd} --set {set}: should name {c:?}: {err}"
+                );
+            }
+            assert!(!out.exists(), "{cmd} --set {set} wrote {}", out.display());
+        }
+    }
+    // An error of the file itself is reported as such, even with overrides.
+    let broken = write(&dir, "broken.toml", "plane = \"strain\"\nyoung = 1\n");
+    let (code, _, err) = sgbem(&["check", broken.to_str().unwrap(), "--set", "title=x"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("unknown key `young`") && !err.contains("--set title"),
+        "{err}"
+    );
+    // An override may also repair the file: the merged document is what is validated.
+    let (code, _, err) = sgbem(&[
+        "check",
+        scene.to_str().unwrap(),
+        "--set",
+        "interface.joint.model=bonded",
+    ]);
+    assert_eq!(code, 0, "{err}");
+}
+
+#[test]
+fn geo_meshes_are_made_with_gmsh() {
+    let dir = tmpdir("workflow-geo");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    // check meshes into a temporary folder; the element count follows `n`.
+    let elements = |out: &str| -> usize {
+        // the body lines: "..., 1 loop (outer counter-clockwise), 12 elements, ..."
+        out.lines()
+            .filter(|l| l.contains(" loop") && l.contains(" elements,"))
+            .filter_map(|l| {
+                l.split(" elements,")
+                    .next()?
+                    .rsplit(' ')
+                    .next()?
+                    .parse::<usize>()
+                    .ok()
+            })
+            .sum()
+    };
+    let (code, out4, err) = sgbem(&["check", s]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out4.contains("meshed    by gmsh with n = 4"), "{out4}");
+    let (code, out8, err) = sgbem(&["check", s, "--set", "mesh.n=8"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out8.contains("n = 8"), "{out8}");
+    // Per body: 4 n boundary elements at n elements per unit length (1 × 0.5 block).
+    assert_eq!(elements(&out4), 2 * 12, "{out4}");
+    assert_eq!(elements(&out8), 2 * 24, "{out8}");
+    // run meshes into the output folder.
+    let out = dir.join("run");
+    let (code, _, err) = run(&[s, "--out", out.to_str().unwrap(), "--set", "mesh.n=6"]);
+    assert_eq!(code, 0, "{err}");
+    let msh = std::fs::read_to_string(out.join("mesh").join("two_blocks.msh")).unwrap();
+    assert!(msh.starts_with("$MeshFormat\n4.1"), "{}", &msh[..40]);
+    assert_eq!(summary(&out)["counts"]["boundary_elements"], 2 * 18);
+    // A top-level `mesh = "x.geo"` takes parameters from --set too.
+    let plain = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replace("[mesh]\nfile = ", "mesh = ")
+        .replace("n = 4\n", "");
+    let plain = write(&dir, "plain.toml", &plain);
+    let (code, out, err) = sgbem(&["check", plain.to_str().unwrap(), "--set", "mesh.n=8"]);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(elements(&out), 2 * 24, "{out}");
+    // gmsh failing, gmsh missing, parameters on a .msh, a parameter that is no number.
+    let broken = write(&dir, "broken.geo", "Point(1) = {0, 0, 0;\n");
+    let set = format!("mesh.file={}", broken.display());
+    let (code, _, err) = sgbem(&["check", s, "--set", &set]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("gmsh failed") && err.contains("broken.geo"),
+        "{err}"
+    );
+    assert!(
+        err.contains("Error"),
+        "gmsh's message should be shown: {err}"
+    );
+    let o = std::process::Command::new(env!("CARGO_BIN_EXE_sgbem"))
+        .args(["check", s])
+        .env("GMSH", dir.join("no-such-gmsh"))
+        .output()
+        .unwrap();
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("cannot run gmsh") && err.contains("install gmsh"),
+        "{err}"
+    );
+    let (code, _, err) = sgbem(&["check", s, "--set", "mesh.file=m.msh"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("`mesh.n`") && err.contains(".geo file only"),
+        "{err}"
+    );
+    let (code, _, err) = sgbem(&["check", s, "--set", "mesh.n=\"fine\""]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("`mesh.n` must be a number"), "{err}");
+}
+
+#[test]
+fn identical_runs_give_identical_files() {
+    let dir = tmpdir("workflow-identical");
+    // A contact problem with history, sections and the interior field.
+    let scene = geo_scene(
+        &dir,
+        r#"[boundary.top]
+tx = "0.6 * (x - 0.5)"
+[solve]
+method = "both"
+[output]
+history = "full"
+field = true
+[[output.section]]
+name = "mid"
+from = [0.5, 0.0]
+to = [0.5, 1.0]
+points = 5
+"#,
+    );
+    // [boundary.top] appears twice above: keep the second one only.
+    let text = std::fs::read_to_string(&scene)
+        .unwrap()
+        .replacen("[boundary.top]\nty = -1.0\n", "", 1)
+        .replace("tx = \"0.6", "ty = -1.0\ntx = \"0.6");
+    std::fs::write(&scene, text).unwrap();
+    let s = scene.to_str().unwrap();
+    let (a, b) = (dir.join("a"), dir.join("b"));
+    for out in [&a, &b] {
+        let (code, _, err) = run(&[s, "--out", out.to_str().unwrap()]);
+        assert_eq!(code, 0, "{err}");
+    }
+    let (ta, tb) = (tree(&a), tree(&b));
+    assert_eq!(ta.keys().collect::<Vec<_>>(), tb.keys().collect::<Vec<_>>());
+    let mut compared = 0;
+    for (name, bytes) in &ta {
+        if name == "archive.h5" || name == "timings.json" {
+            continue;
+        }
+        assert!(tb[name] == *bytes, "{name} differs between identical runs");
+        compared += 1;
+    }
+    // summary, interface and section tables, mesh, several VTK files and the pvd.
+    assert!(compared >= 8, "{:?}", ta.keys().collect::<Vec<_>>());
+    for f in [
+        "summary.json",
+        "interfaces/joint.csv",
+        "sections/mid.csv",
+        "vtk/history.pvd",
+    ] {
+        assert!(
+            ta.contains_key(f),
+            "{f} missing: {:?}",
+            ta.keys().collect::<Vec<_>>()
+        );
+    }
+    // The timings and the date live in timings.json.
+    let s = summary(&a);
+    assert!(s.get("timings").is_none(), "{s}");
+    let t: serde_json::Value =
+        serde_json::from_slice(&ta["timings.json"]).expect("timings.json is JSON");
+    assert!(t["created"].as_str().unwrap().ends_with('Z'), "{t}");
+    let stages = t["stages"].as_object().unwrap();
+    let total = stages["total"].as_f64().unwrap();
+    let sum: f64 = stages
+        .iter()
+        .filter(|(k, _)| *k != "total")
+        .map(|(_, v)| v.as_f64().unwrap())
+        .sum();
+    assert!((total - sum).abs() <= 1e-9 * total.max(1.0), "{t}");
+    // inspect still shows the timings and the date, from the archive.
+    let (code, out, err) = sgbem(&["inspect", a.join("archive.h5").to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("timings (s)") && out.contains(t["created"].as_str().unwrap()),
+        "{out}"
+    );
+}
+
+#[test]
+fn sweep_runs_every_point_and_tabulates() {
+    let dir = tmpdir("workflow-sweep");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    let out = dir.join("sweep");
+    let (code, stdout, err) = sgbem(&[
+        "sweep",
+        s,
+        "--set",
+        "boundary.top.ty=-1,-2,-3",
+        "--set",
+        "interface.*.initial=closed",
+        "--jobs",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(stdout.contains("sweep.csv"), "{stdout}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    assert_eq!(
+        lines[0],
+        "point,boundary.top.ty,interface.*.initial,exit_code,status,contact_iterations,\
+         joint.detached_length,joint.normal_resultant"
+    );
+    assert_eq!(lines.len(), 4, "{csv}");
+    let mut resultants = Vec::new();
+    for (line, ty) in lines[1..].iter().zip([-1.0, -2.0, -3.0]) {
+        let c: Vec<&str> = line.split(',').collect();
+        let name = format!("ty={ty}_initial=closed");
+        assert_eq!(c[0], name, "{csv}");
+        assert_eq!(&c[3..5], ["0", "converged"], "{csv}");
+        assert_eq!(c[6], "0", "{csv}");
+        // Each point's folder is a whole run whose summary gives the table's figures.
+        let sm = summary(&out.join(&name));
+        let r: f64 = c[7].parse().unwrap();
+        assert_eq!(
+            r,
+            sm["interfaces"]["joint"]["normal_resultant"]
+                .as_f64()
+                .unwrap()
+        );
+        assert_eq!(
+            sm["overrides"],
+            serde_json::json!([
+                format!("boundary.top.ty={ty}"),
+                "interface.*.initial=closed"
+            ])
+        );
+        resultants.push(r);
+    }
+    // Linear in the load while the joint stays closed.
+    assert!(
+        (resultants[1] - 2.0 * resultants[0]).abs() < 1e-9,
+        "{resultants:?}"
+    );
+    assert!(
+        (resultants[2] - 3.0 * resultants[0]).abs() < 1e-9,
+        "{resultants:?}"
+    );
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    assert_eq!(md.lines().count(), 5, "{md}");
+    // A bad key fails every point before any runs, naming the override.
+    let out2 = dir.join("bad");
+    let (code, _, err) = sgbem(&[
+        "sweep",
+        s,
+        "--set",
+        "interface.*.cohesin=1,2",
+        "--out",
+        out2.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("--set interface.*.cohesin=1") && err.contains("cohesion"),
+        "{err}"
+    );
+    assert!(!out2.exists());
+    // Values with commas inside brackets stay whole.
+    let a = sgbem::sweep::parse_axis("solve.load_factors=[0.5, 1],[1]").unwrap();
+    assert_eq!(a.values, ["[0.5, 1]", "[1]"]);
+}
