@@ -1,100 +1,147 @@
-//! `make bench` (second part): each contact solver's time on the paper's examples 1 and 2
-//! and on example 2 refined four times, beside the paper's CPU times (LCP 237.7 s and
-//! 984.4 s; QP 4.3 s and 16.2 s). Writes out/bench/contact.csv and prints a table.
+//! `make bench` (second part): the contact stage of every solver on the paper's examples 1
+//! and 2 and on example 2 with its joint refined (104 / 208 / 416 / 832 elements), with the
+//! peak memory of each case. Writes out/bench/contact.csv and prints a table.
+//!
+//! Each solver runs on the same prepared bodies and the same problem (columns of the opening
+//! stiffness computed once per run and shared, as in `sgbem run`): `lcp` is the evolutive
+//! path with every state recorded (compact; expanding the states into body fields is timed
+//! apart as `record`), then the active set, Lemke and the QP from the scene's start.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
 
+use std::time::Instant;
+
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::pipeline::{load, solve_loaded, Timings};
+use sgbem::contact::{solve::prepare, Method, Session};
+use sgbem::pipeline::load;
 use support::*;
 
+/// Peak resident memory (kB) since the last reset.
+fn peak_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
+
 fn main() {
-    let cases: [(&str, &str, &str, &[&str]); 4] = [
+    let mut cases: Vec<(String, &str, &str, Vec<String>)> = vec![
         (
-            "example 1 (stick)",
+            "example 1 (stick)".into(),
             "geo/beam_on_blocks.geo",
             "pipelines/beam_on_blocks.toml",
-            &[],
+            vec![],
         ),
         (
-            "example 1 (slide)",
+            "example 1 (slide)".into(),
             "geo/beam_on_blocks.geo",
             "pipelines/beam_on_blocks_slide.toml",
-            &[],
-        ),
-        (
-            "example 2",
-            "geo/clamped_beam_joint.geo",
-            "pipelines/clamped_beam_joint.toml",
-            &[],
-        ),
-        (
-            "example 2, 4x refined",
-            "geo/clamped_beam_joint.geo",
-            "pipelines/clamped_beam_joint.toml",
-            &["-setnumber", "h", "1", "-setnumber", "n_joint", "416"],
+            vec![],
         ),
     ];
+    for n in [104, 208, 416, 832] {
+        cases.push((
+            format!("example 2, {n} joint el."),
+            "geo/clamped_beam_joint.geo",
+            "pipelines/clamped_beam_joint.toml",
+            vec!["-setnumber".into(), "n_joint".into(), n.to_string()],
+        ));
+    }
     let dir = tmpdir("bench-contact");
     let q = QuadratureSettings::standard();
     println!(
-        "sgbem contact solvers ({} threads), seconds",
+        "sgbem contact solvers ({} threads), seconds; peak memory of the case in MB",
         rayon::current_num_threads()
     );
     println!(
-        "{:<24} {:>6} {:>9} {:>9} {:>9} {:>9} {:>9} {:>9} {:>10}",
-        "case", "pairs", "assemble", "condense", "lcp", "act.set", "qp", "total", "detached"
+        "{:<26} {:>5} {:>8} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>6} {:>9} {:>7}",
+        "case",
+        "pairs",
+        "prepare",
+        "system",
+        "lcp",
+        "record",
+        "act.set",
+        "lemke",
+        "qp",
+        "switch",
+        "differ",
+        "detached",
+        "peak"
     );
     let mut csv = String::from(
-        "case,elements,pairs,assemble_s,condense_s,contact_lcp_s,contact_active_set_s,contact_qp_s,total_s,lcp_iterations,detached_length\n",
+        "case,pairs,prepare_s,interface_system_s,lcp_s,record_s,active_set_s,lemke_s,qp_s,lcp_switches,differing_pairs,detached_length,peak_mb\n",
     );
     for (name, geo, scene, opts) in cases {
-        let msh = gmsh(&root().join(geo), &dir, "m.msh", false, opts);
-        let mut l = load(&root().join(scene), Some(&msh)).expect("scene loads");
-        l.scene.solve.method = sgbem::input::scene::Method::Both;
-        let mut t = Timings::default();
-        let (_, r) = solve_loaded(&l, &q, &mut t).expect("solve");
-        let get = |k: &str| {
-            t.0.iter()
-                .find(|(s, _)| *s == k)
-                .map(|p| p.1)
-                .unwrap_or(0.0)
-        };
-        let total: f64 = t.0.iter().map(|p| p.1).sum();
-        let det: f64 = l
-            .model
-            .interfaces
-            .iter()
-            .zip(&r.interfaces)
-            .map(|(it, ir)| {
-                sgbem::output::summary::interface_figures(it, ir, 1.0)["detached_length"]
-                    .as_f64()
-                    .unwrap_or(0.0)
-            })
+        let o: Vec<&str> = opts.iter().map(|s| s.as_str()).collect();
+        let msh = gmsh(&root().join(geo), &dir, "m.msh", false, &o);
+        let l = load(&root().join(scene), Some(&msh)).expect("scene loads");
+        reset_peak();
+        let t = Instant::now();
+        let prep =
+            prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {}).expect("prepare");
+        let t_prep = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        let mut s = Session::new(&l.model, &prep).expect("interface system");
+        let t_sys = t.elapsed().as_secs_f64();
+        let start = s.initial();
+        let f = *l.scene.solve.load_factors.last().expect("a load factor");
+        let t = Instant::now();
+        let mut e = s.solve_step(&start, Method::Evolutive, 1e-10, 100000, 0, f, true);
+        let t_lcp = t.elapsed().as_secs_f64();
+        let t = Instant::now();
+        s.expand(&mut e);
+        let t_rec = t.elapsed().as_secs_f64();
+        let mut times = Vec::new();
+        let mut differ = 0;
+        for m in [Method::ActiveSet, Method::Lemke, Method::Qp] {
+            let t = Instant::now();
+            let r = s.solve_step(&start, m, 1e-10, 100000, 0, f, false);
+            times.push(t.elapsed().as_secs_f64());
+            differ += sgbem::contact::differing_pairs(&r.interfaces, &e.interfaces);
+            assert!(
+                r.converged,
+                "{name} {m:?}: {:?}",
+                r.failure.as_ref().map(|x| x.message())
+            );
+        }
+        let det: f64 = (0..l.model.interfaces.len())
+            .map(|k| sgbem::contact::detached_length(&l.model, k, &e.interfaces[k]))
             .sum();
+        let peak = peak_kb() as f64 / 1024.0;
         println!(
-            "{:<24} {:>6} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>9.3} {:>10.4}",
+            "{:<26} {:>5} {:>8.3} {:>8.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7} {:>6} {:>9.4} {:>7.0}",
             name,
             l.model.pair_count(),
-            get("assemble"),
-            get("condense"),
-            get("contact_lcp"),
-            get("contact_active_set"),
-            get("contact_qp"),
-            total,
-            det
+            t_prep,
+            t_sys,
+            t_lcp,
+            t_rec,
+            times[0],
+            times[1],
+            times[2],
+            e.iterations,
+            differ,
+            det,
+            peak
         );
         csv += &format!(
-            "{name},{},{},{},{},{},{},{},{total},{},{det}\n",
-            l.model.element_count(),
+            "{name},{},{t_prep},{t_sys},{t_lcp},{t_rec},{},{},{},{},{differ},{det},{peak}\n",
             l.model.pair_count(),
-            get("assemble"),
-            get("condense"),
-            get("contact_lcp"),
-            get("contact_active_set"),
-            get("contact_qp"),
-            r.contact["iterations"]
+            times[0],
+            times[1],
+            times[2],
+            e.iterations
         );
     }
     println!("paper (Karnak.sGbem + MATLAB): example 1 LCP 237.7 s, QP 4.3 s; example 2 LCP 984.4 s, QP 16.2 s");
