@@ -541,6 +541,27 @@ fn a_boundary_crossing_itself_at_a_node_is_refused() {
     m.name(1, 3, "left");
     m.name(2, 1, "tie");
     let msh = m.save(&dir, "bowtie.msh");
+    // The same bow tie with two distinct nodes at (1, 1): no node joins four elements and
+    // no two segments cross properly, yet the boundary crosses itself there.
+    let mut m2 = Msh::default();
+    let a = m2.new_node([0.0, 0.0]);
+    let c1 = m2.new_node(c);
+    let b = m2.new_node([2.0, 2.0]);
+    let bd = m2.new_node([2.0, 1.0]);
+    let d = m2.new_node([2.0, 0.0]);
+    let c2 = m2.new_node(c);
+    let e = m2.new_node([0.0, 2.0]);
+    let ea = m2.new_node([0.0, 1.0]);
+    m2.curves.push((1, vec![a, c1, b], vec![1]));
+    m2.curves.push((2, vec![b, bd, d], vec![2]));
+    m2.curves.push((3, vec![d, c2, e], vec![1]));
+    m2.curves.push((4, vec![e, ea, a], vec![3]));
+    m2.surface(1, &[1, 2, 3, 4], &[1]);
+    m2.name(1, 1, "diagonals");
+    m2.name(1, 2, "right");
+    m2.name(1, 3, "left");
+    m2.name(2, 1, "tie");
+    let msh2 = m2.save(&dir, "bowtie2.msh");
     let sc = write(
         &dir,
         "scene.toml",
@@ -551,6 +572,11 @@ fn a_boundary_crossing_itself_at_a_node_is_refused() {
         &check(&sc, &msh),
         2,
         &["node 2 (1, 1)", "body \"tie\"", "touches itself"],
+    );
+    expect(
+        &check(&sc, &msh2),
+        2,
+        &["body \"tie\" crosses itself at (1, 1)", "nodes coincide"],
     );
 }
 

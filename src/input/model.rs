@@ -1321,7 +1321,7 @@ fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
     // sweep order is reported.
     let n = segs.len();
     let mean = segs.iter().map(|g| norm(sub(g.b, g.a))).sum::<f64>() / n.max(1) as f64;
-    let h = mean.max(scale / 4096.0).max(f64::MIN_POSITIVE);
+    let h = mean.max(1e-12 * scale).max(f64::MIN_POSITIVE);
     let origin = segs.iter().fold([f64::INFINITY; 2], |o, g| {
         [o[0].min(g.xmin), o[1].min(g.a[1].min(g.b[1]))]
     });
@@ -1408,6 +1408,9 @@ fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
             }
         }
     }
+    for body in bodies {
+        check_crossing_at_coincident_nodes(body, mfile, scale)?;
+    }
     // A body entirely inside another: probe a point just inside each body.
     for (bi, body) in bodies.iter().enumerate() {
         let outer = match body.loops.iter().find(|l| !l.is_hole) {
@@ -1437,6 +1440,72 @@ fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
                         body.name, other.name, other.name
                     ),
                 ));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Two distinct nodes of one body at the same point where the boundary passes twice: a
+/// bow tie crosses itself there (the two passages interleave around the point), which the
+/// segment test cannot see since the segments only touch. Passages that touch without
+/// crossing (the two faces of a slit) are left alone.
+fn check_crossing_at_coincident_nodes(body: &Body, mfile: &Path, scale: f64) -> Result<()> {
+    let eps = 1e-10 * scale;
+    let key = |p: [f64; 2]| ((p[0] / eps).round() as i64, (p[1] / eps).round() as i64);
+    let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); body.nodes.len()];
+    for e in &body.elements {
+        neighbours[e.nodes[0]].push(e.nodes[1]);
+        neighbours[e.nodes[1]].push(e.nodes[0]);
+    }
+    let mut cells: HashMap<(i64, i64), Vec<usize>> = HashMap::new();
+    for (n, &p) in body.nodes.iter().enumerate() {
+        if neighbours[n].len() == 2 {
+            cells.entry(key(p)).or_default().push(n);
+        }
+    }
+    let angle = |from: [f64; 2], to: [f64; 2]| (to[1] - from[1]).atan2(to[0] - from[0]);
+    let tau = std::f64::consts::TAU;
+    for (&(kx, ky), here) in &cells {
+        for &n in here {
+            let p = body.nodes[n];
+            for dx in -1..=1 {
+                for dy in -1..=1 {
+                    let Some(others) = cells.get(&(kx + dx, ky + dy)) else {
+                        continue;
+                    };
+                    for &m in others.iter().filter(|&&m| m > n) {
+                        let q = body.nodes[m];
+                        if (p[0] - q[0]).abs() > eps || (p[1] - q[1]).abs() > eps {
+                            continue;
+                        }
+                        // Sector swept counter-clockwise from n's first ray to its second.
+                        let a0 = angle(p, body.nodes[neighbours[n][0]]);
+                        let span = (angle(p, body.nodes[neighbours[n][1]]) - a0).rem_euclid(tau);
+                        let side = |to: usize| {
+                            let d = (angle(p, body.nodes[to]) - a0).rem_euclid(tau);
+                            (
+                                d > 1e-9 && d < span - 1e-9,
+                                d > span + 1e-9 && d < tau - 1e-9,
+                            )
+                        };
+                        let (s1, s2) = (side(neighbours[m][0]), side(neighbours[m][1]));
+                        let crosses = (s1.0 && s2.1) || (s1.1 && s2.0);
+                        if crosses {
+                            return Err(Error::input(
+                                mfile,
+                                format!(
+                                    "the boundary of body \"{}\" crosses itself at {}, where two \
+                                     of its nodes coincide: a body's boundary must be simple \
+                                     loops; split the bow tie into two surfaces (or fix the \
+                                     curves there)",
+                                    body.name,
+                                    fmt_point(p)
+                                ),
+                            ));
+                        }
+                    }
+                }
             }
         }
     }
