@@ -393,6 +393,52 @@ fn a_signal_during_a_run_leaves_the_previous_folder_whole() {
 }
 
 #[test]
+fn a_killed_run_leaves_the_previous_folder_and_the_next_run_cleans_up() {
+    let dir = tmpdir("rb-kill");
+    let (sc, msh) = stacked(&dir, STACKED_SCENE, 3);
+    let out = dir.join("out");
+    let (code, _, err) = run(&sc, &msh, &out);
+    assert_eq!(code, 0, "{err}");
+    let before = std::fs::read(out.join("summary.json")).expect("summary");
+    let slow = stacked_blocks(60).save(&dir, "fine.msh");
+    let mut child = bin()
+        .args([
+            "run",
+            s(&sc),
+            "--mesh",
+            s(&slow),
+            "--out",
+            s(&out),
+            "--quiet",
+        ])
+        .spawn()
+        .expect("run");
+    let t = Instant::now();
+    while !listing(&dir).iter().any(|n| n.starts_with(".out.staging-"))
+        && t.elapsed() < Duration::from_secs(20)
+    {
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    child.kill().expect("SIGKILL");
+    let _ = child.wait();
+    // SIGKILL cannot be handled: the staging folder and the lock stay, the folder is whole.
+    let left = listing(&dir);
+    assert!(
+        left.iter().any(|n| n.starts_with(".out.staging-")),
+        "{left:?}"
+    );
+    assert!(left.contains(&".out.lock".to_string()), "{left:?}");
+    assert_eq!(
+        std::fs::read(out.join("summary.json")).expect("summary"),
+        before
+    );
+    // The next run takes the stale lock over and removes what the killed one left.
+    let (code, _, err) = run(&sc, &msh, &out);
+    assert_eq!(code, 0, "{err}");
+    assert_eq!(listing(&dir), ["fine.msh", "m.msh", "out", "scene.toml"]);
+}
+
+#[test]
 fn names_that_become_file_names_are_checked() {
     let dir = tmpdir("rb-names");
     let msh = stacked_blocks(2).save(&dir, "m.msh");

@@ -5,7 +5,8 @@
 //! aside, then removed), so an interrupted run leaves the previous folder untouched and a
 //! re-run leaves no stale file of an older one. A lock file beside the target
 //! (`.NAME.lock`, holding the process id) refuses a second run into the same folder while
-//! the first is alive; a lock whose process is gone is taken over. SIGINT and SIGTERM
+//! the first is alive; a lock whose process is gone is taken over, and the staging folders
+//! such a process left (SIGKILL) are removed. SIGINT and SIGTERM
 //! remove the staging folder and the lock before the process ends (exit 130).
 
 use std::io::Write;
@@ -44,6 +45,30 @@ fn install_signal_cleanup() {
             std::process::exit(130);
         });
     });
+}
+
+/// Removes the staging and set-aside folders of runs into `target` whose process is gone
+/// (killed with SIGKILL, or the machine stopped); the caller holds the lock.
+fn remove_leftovers(target: &Path, parent: &Path) {
+    let name = target
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    let Ok(entries) = std::fs::read_dir(parent) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let file = entry.file_name().to_string_lossy().into_owned();
+        let pid = [".staging-", ".old-"].iter().find_map(|kind| {
+            file.strip_prefix(&format!(".{name}{kind}"))
+                .and_then(|p| p.parse::<u32>().ok())
+        });
+        if let Some(pid) = pid {
+            if pid == std::process::id() || !process_alive(pid) {
+                remove_path(&entry.path());
+            }
+        }
+    }
 }
 
 /// A run folder being written.
@@ -140,6 +165,7 @@ impl RunFolder {
             ));
         }
         cleanup_list().push(lock.clone());
+        remove_leftovers(&target, &parent);
         let staging = beside(&target, &format!("staging-{pid}"));
         remove_path(&staging);
         cleanup_list().push(staging.clone());
