@@ -684,3 +684,42 @@ fn damaged_archives_end_in_a_message() {
     // The header and the truncation at least are always caught.
     assert!(refused >= 4, "{refused} refusals");
 }
+
+/// The estimate's unknown counts are those the assembly numbers (up to the rigid-mode
+/// unknowns, at most 3 per loop), on bodies with clamped, loaded, free and interface parts.
+#[test]
+fn the_estimate_counts_the_unknowns_the_assembly_numbers() {
+    use sgbem::bem::quadrature::QuadratureSettings;
+    let dir = tmpdir("rb-estimate");
+    for (scene, n) in [
+        (STACKED_SCENE.to_string(), 5),
+        (
+            STACKED_SCENE.replace(
+                "ux = 0.0\nuy = 0.0\n",
+                "uy = 0.0\n[boundary.sides]\nux = 0.0\n",
+            ),
+            3,
+        ),
+        (STACKED_SCENE.replace("\"unilateral\"", "\"bonded\""), 4),
+    ] {
+        let (sc, msh) = stacked(&dir, &scene, n);
+        let l = sgbem::pipeline::load(&sc, Some(&msh)).unwrap_or_else(|e| panic!("{e}"));
+        let q = QuadratureSettings::standard();
+        let p = sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {})
+            .unwrap_or_else(|e| panic!("{e}"));
+        let est = sgbem::estimate::estimate(&l.model, l.scene.solve.quadrature);
+        for ((b, sys), size) in l.model.bodies.iter().zip(&p.systems).zip(&est.bodies) {
+            assert_eq!(size.n_x0, sys.n_x0(), "body {}", b.name);
+            assert!(
+                size.n_x >= sys.n_x && size.n_x <= sys.n_x + 3 * b.loops.len(),
+                "body {}: estimated {} of {}",
+                b.name,
+                size.n_x,
+                sys.n_x
+            );
+            assert_eq!(size.elements, b.elements.len());
+        }
+        let dense: f64 = p.systems.iter().map(|s| 8.0 * (s.n() * s.n()) as f64).sum();
+        assert!(est.peak_bytes > dense, "the peak holds every G");
+    }
+}
