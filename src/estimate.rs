@@ -28,11 +28,12 @@
 //! program itself with its mesh. Time: the Galerkin pair loop costs about
 //! `c_q` per element pair (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
 //! one core of a 2020s machine), and the LU condensation `(2/3) n_x³ + 2 n_x² n_x0` flops at
-//! about 1 Gflop/s. Both are rough: they are there to tell minutes from days.
+//! about 1 Gflop/s; post-processing about 8 µs per (interior-field node or section point,
+//! boundary element). All are rough: they are there to tell minutes from days.
 
 use crate::error::{Error, Result};
 use crate::input::model::{DofClass, Model, Role};
-use crate::input::scene::{Condition, Quadrature};
+use crate::input::scene::{Condition, Quadrature, Scene};
 
 /// Unknown counts of one body.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -50,6 +51,8 @@ pub struct Estimate {
     pub peak_bytes: f64,
     /// Assembly and condensation time in seconds.
     pub seconds: f64,
+    /// Interior field and sections, in seconds.
+    pub post_seconds: f64,
 }
 
 /// Bytes the program needs besides the dense operators.
@@ -98,8 +101,9 @@ pub fn body_sizes(model: &Model) -> Vec<BodySize> {
         .collect()
 }
 
-/// Estimates peak memory and time of assembling and condensing `model` (formula above).
-pub fn estimate(model: &Model, quadrature: Quadrature) -> Estimate {
+/// Estimates peak memory and time of a run of `scene` on `model` (formula above).
+pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
+    let quadrature = scene.solve.quadrature;
     let bodies = body_sizes(model);
     let mut kept = 0.0;
     let mut work = 0.0f64;
@@ -119,10 +123,28 @@ pub fn estimate(model: &Model, quadrature: Quadrature) -> Estimate {
         Quadrature::Standard => 10e-6,
         Quadrature::Accurate => 30e-6,
     };
+    // Post-processing: every interior-field node and section point meets every boundary
+    // element of its body (about 8 µs each; all elements, for a section).
+    let total_elements: f64 = bodies.iter().map(|b| b.elements as f64).sum();
+    let mut evaluations: f64 = scene
+        .output
+        .sections
+        .iter()
+        .map(|s| s.points as f64 * total_elements)
+        .sum();
+    if scene.output.field {
+        for (b, size) in model.bodies.iter().zip(&bodies) {
+            let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
+            v.sort_unstable();
+            v.dedup();
+            evaluations += v.len() as f64 * size.elements as f64;
+        }
+    }
     Estimate {
         bodies,
         peak_bytes: kept + work + 8.0 * ni * ni + BASE_BYTES,
         seconds: pairs * per_pair + flops / 1e9,
+        post_seconds: evaluations * 8e-6,
     }
 }
 
@@ -225,9 +247,10 @@ impl Estimate {
     /// One line for `sgbem check`.
     pub fn line(&self) -> String {
         format!(
-            "about {} peak memory, about {} to assemble and condense",
+            "about {} peak memory, about {} to assemble and condense, {} to post-process",
             fmt_bytes(self.peak_bytes),
-            fmt_seconds(self.seconds)
+            fmt_seconds(self.seconds),
+            fmt_seconds(self.post_seconds)
         )
     }
 }

@@ -431,7 +431,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     }
     timings.add("read", t0.elapsed().as_secs_f64());
     // Refuse what cannot fit before allocating any of it.
-    crate::estimate::estimate(&loaded.model, loaded.scene.solve.quadrature)
+    crate::estimate::estimate(&loaded.model, &loaded.scene)
         .check_fits(&loaded.model, scene_path)?;
     // The run writes into a staging folder, swapped in when complete (output/folder.rs).
     let folder = crate::output::folder::RunFolder::acquire(&loaded.scene.output.directory)?;

@@ -210,7 +210,7 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     for (name, what) in &plan.stages {
         let _ = writeln!(o, "    {name:<12} {what}");
     }
-    let cost = crate::estimate::estimate(model, scene.solve.quadrature);
+    let cost = crate::estimate::estimate(model, scene);
     let unknowns: usize = cost.bodies.iter().map(|b| b.n_x + b.n_x0).sum();
     let _ = writeln!(o, "  cost:    {} ({unknowns} unknowns)", cost.line());
     if let Some((avail, source)) = crate::estimate::available_memory() {
