@@ -286,6 +286,31 @@ fn a_rerun_replaces_the_whole_folder_and_leaves_nothing_beside_it() {
 }
 
 #[test]
+fn a_folder_that_is_not_a_run_folder_is_never_replaced() {
+    let dir = tmpdir("rb-foreign");
+    let (sc, msh) = stacked(&dir, STACKED_SCENE, 3);
+    // `--out` the folder holding the scene and the mesh: refused, everything kept.
+    let r = run(&sc, &msh, &dir);
+    expect(
+        &r,
+        2,
+        &["holds `m.msh`", "no sgbem run", "new or former run folder"],
+    );
+    assert_eq!(listing(&dir), ["m.msh", "scene.toml"]);
+    let r = output(bin().current_dir(&dir).args([
+        "run",
+        "scene.toml",
+        "--mesh",
+        "m.msh",
+        "--out",
+        ".",
+        "--quiet",
+    ]));
+    expect(&r, 2, &["holds `m.msh`"]);
+    assert_eq!(listing(&dir), ["m.msh", "scene.toml"]);
+}
+
+#[test]
 fn a_second_run_into_a_locked_folder_is_refused() {
     let dir = tmpdir("rb-lock");
     let (sc, msh) = stacked(&dir, STACKED_SCENE, 3);

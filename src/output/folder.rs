@@ -3,7 +3,8 @@
 //! A run writes into a staging folder beside the target (`.NAME.staging-PID`) and, when
 //! every file is complete, swaps it in place of the target (the old folder is renamed
 //! aside, then removed), so an interrupted run leaves the previous folder untouched and a
-//! re-run leaves no stale file of an older one. A lock file beside the target
+//! re-run leaves no stale file of an older one. An existing folder holding anything a run
+//! does not write is refused (input error), never replaced. A lock file beside the target
 //! (`.NAME.lock`, holding the process id) refuses a second run into the same folder while
 //! the first is alive; a lock whose process is gone is taken over, and the staging folders
 //! such a process left (SIGKILL) are removed. SIGINT and SIGTERM
@@ -45,6 +46,27 @@ fn install_signal_cleanup() {
             std::process::exit(130);
         });
     });
+}
+
+/// Names a run writes into its folder.
+const RUN_ENTRIES: [&str; 5] = [
+    "summary.json",
+    "archive.h5",
+    "vtk",
+    "interfaces",
+    "sections",
+];
+
+/// The first entry of an existing `target` that a run does not write (so the folder is not
+/// a run folder, and replacing it would lose data); None for a new, empty or run folder.
+fn foreign_entry(target: &Path) -> Option<String> {
+    let entries = std::fs::read_dir(target).ok()?;
+    entries
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .find(|n| {
+            !(RUN_ENTRIES.contains(&n.as_str()) || (n.starts_with('.') && n.ends_with(".tmp")))
+        })
 }
 
 /// Removes the staging and set-aside folders of runs into `target` whose process is gone
@@ -105,6 +127,16 @@ impl RunFolder {
             return Err(Error::io(
                 &target,
                 "the output path is a file, not a folder: remove it or choose another --out",
+            ));
+        }
+        if let Some(stranger) = foreign_entry(&target) {
+            return Err(Error::input(
+                &target,
+                format!(
+                    "the output folder exists and holds `{stranger}`, which no sgbem run \
+                     writes: a run replaces its whole folder, so give --out (or \
+                     output.directory) a new or former run folder"
+                ),
             ));
         }
         let parent = match target.parent() {
