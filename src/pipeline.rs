@@ -103,6 +103,9 @@ pub struct RunResult {
     pub load_factor: f64,
     pub fields: Vec<crate::solution::BodyField>,
     pub interfaces: Vec<crate::solution::InterfaceResult>,
+    /// Nodal normal contact force of each interface pair (on the second body, compression
+    /// positive): the force the complementarity conditions hold.
+    pub nodal_force: Vec<Vec<f64>>,
     pub history: crate::solution::History,
     pub states: Vec<crate::contact::RecordedState>,
     pub contact: serde_json::Value,
@@ -133,8 +136,8 @@ pub fn solve_loaded_with(
     timings: &mut Timings,
     progress: &crate::output::progress::Progress,
 ) -> Result<(crate::contact::solve::Prepared, RunResult)> {
-    use crate::contact::solve::{prepare, solve_status_scaled};
-    use crate::contact::{initial_cohesion, initial_status, solve_contact, Iteration};
+    use crate::contact::solve::prepare;
+    use crate::contact::{differing_pairs, Method as Solver, Session};
     use crate::input::scene::Method;
     use crate::plan::ContactProblem;
     use std::time::Instant;
@@ -154,21 +157,29 @@ pub fn solve_loaded_with(
     let mut notes = Vec::new();
     let mut history = crate::solution::History::default();
     let mut states = Vec::new();
-    let mut status = initial_status(model);
-    let mut cohesion = initial_cohesion(model);
     let method = scene.solve.method;
     let tol = scene.solve.tolerance;
     let maxit = scene.solve.max_iterations;
 
+    let t = Instant::now();
+    let mut session = Session::new(model, &prepared)?;
+    timings.add("interface_system", t.elapsed().as_secs_f64());
     if plan.problem == ContactProblem::None {
         let t = Instant::now();
-        let sol = solve_status_scaled(model, &prepared, &status, factors[last])?;
+        let start = session.initial();
+        let f = factors[last];
+        let n = session.problem.n_open_rows;
+        let (fields, interfaces, nodal_force) =
+            session
+                .problem
+                .state(model, &prepared, f, &vec![0.0; n], &start.open);
         timings.add("solve", t.elapsed().as_secs_f64());
         let result = RunResult {
             status: "solved".into(),
-            load_factor: factors[last],
-            fields: sol.fields,
-            interfaces: sol.interfaces,
+            load_factor: f,
+            fields,
+            interfaces,
+            nodal_force,
             history,
             states,
             contact: serde_json::json!({"solver": "linear (no unilateral interface)"}),
@@ -179,174 +190,113 @@ pub fn solve_loaded_with(
         return Ok((prepared, result));
     }
 
-    let run_lcp = matches!(method, Method::Lcp | Method::Both);
+    // The main solver gives the answer and the history; the others cross-check it on the
+    // same problem (statuses compared pair by pair).
+    let main = match method {
+        Method::Qp => Solver::Qp,
+        _ => Solver::Evolutive,
+    };
+    let mut checks = vec![Solver::ActiveSet];
+    if method == Method::Both {
+        checks.push(Solver::Qp);
+        if session.problem.n_open_rows <= 2000 {
+            checks.push(Solver::Lemke);
+        }
+    }
+    let stage = progress.spinner(if main == Solver::Qp {
+        "contact (QP)"
+    } else {
+        "contact (evolutive LCP)"
+    });
+    let mut state = session.initial();
     let mut iterations = 0;
     let mut converged = true;
     let mut failure = None;
-    let mut final_sol = None;
     let mut residual = 0.0f64;
-    let mut solver = "lcp";
-    let mut active = Vec::new();
-    let lcp_stage = if run_lcp {
-        progress.spinner("contact (evolutive LCP)")
-    } else {
-        crate::output::progress::Stage::hidden()
-    };
-    for (step, &f) in factors.iter().enumerate() {
-        lcp_stage.set_message(format!("load step {} of {}", step + 1, factors.len()));
-        if run_lcp {
-            let t = Instant::now();
-            let r = solve_contact(
-                model,
-                &prepared,
-                status.clone(),
-                cohesion.clone(),
-                Iteration::Evolutive,
-                tol,
-                maxit,
-                step,
-                f,
-                true,
-            )?;
-            timings.add("contact_lcp", t.elapsed().as_secs_f64());
-            // Cross-check: the active-set iteration from the same starting state.
-            let t = Instant::now();
-            let a = solve_contact(
-                model,
-                &prepared,
-                status.clone(),
-                cohesion.clone(),
-                Iteration::ActiveSet,
-                tol,
-                maxit,
-                step,
-                f,
-                false,
-            )?;
-            timings.add("contact_active_set", t.elapsed().as_secs_f64());
-            let differing: usize = a
-                .status
-                .iter()
-                .zip(&r.status)
-                .map(|(x, y)| x.iter().zip(y).filter(|(p, q)| p[1] != q[1]).count())
-                .sum();
-            active.push(serde_json::json!({
-                "load_step": step, "iterations": a.iterations, "converged": a.converged,
-                "differing_pairs": differing, "solver": a.solver,
-            }));
-            iterations += r.iterations;
-            residual = residual.max(r.residual);
-            notes.extend(r.notes.iter().cloned());
-            let failed = r.failure();
-            history.rows.extend(r.rows);
-            states.extend(r.states);
-            solver = r.solver;
-            if failed.is_some() {
-                converged = false;
-                failure = failed;
-                final_sol = Some((f, r.solution));
-                status = r.status;
-                break;
-            }
-            status = r.status;
-            cohesion = r.cohesion;
-            final_sol = Some((f, r.solution));
-        }
-    }
-    lcp_stage.finish();
-    // The QP (paper §3.2): one stationary problem at the final load factor.
+    let mut final_sol = None;
+    let mut cross = Vec::new();
     let mut qp_block = None;
-    let mut qp_final = None;
-    if matches!(method, Method::Qp | Method::Both) {
-        let f = factors[last];
+    for (step, &f) in factors.iter().enumerate() {
+        stage.set_message(format!("load step {} of {}", step + 1, factors.len()));
         let t = Instant::now();
-        let q = crate::contact::qp::solve_qp(
-            model,
-            &prepared,
-            f,
-            &initial_cohesion(model),
-            tol,
-            &initial_status(model),
-        )?;
-        let qsol = solve_status_scaled(model, &prepared, &q.status, f)?;
-        let polished = solve_contact(
-            model,
-            &prepared,
-            q.status.clone(),
-            initial_cohesion(model),
-            Iteration::ActiveSet,
-            tol,
-            maxit,
-            last,
-            f,
-            false,
-        )?;
-        timings.add("contact_qp", t.elapsed().as_secs_f64());
-        let diff = |a: &crate::contact::Status, b: &crate::contact::Status| -> usize {
-            a.iter()
-                .zip(b)
-                .map(|(x, y)| x.iter().zip(y).filter(|(p, q)| p[1] != q[1]).count())
-                .sum()
-        };
-        let psol = solve_status_scaled(model, &prepared, &polished.status, f)?;
-        let vs_lcp = final_sol.as_ref().map(|_| diff(&polished.status, &status));
-        if final_sol.is_none() {
-            // The QP alone: its polished state is the answer, judged like the LCP's.
-            iterations = polished.iterations;
-            residual = polished.residual;
-            notes.extend(polished.notes.iter().cloned());
-            if let Some(f) = polished.failure() {
-                converged = false;
-                failure = Some(f);
+        let full = scene.output.history == crate::input::scene::History::Full;
+        let mut r = session.solve_step(&state, main, tol, maxit, step, f, full);
+        timings.add(
+            if main == Solver::Qp {
+                "contact_qp"
+            } else {
+                "contact_lcp"
+            },
+            t.elapsed().as_secs_f64(),
+        );
+        let t = Instant::now();
+        session.expand(&mut r);
+        timings.add("contact_record", t.elapsed().as_secs_f64());
+        for &c in &checks {
+            let t = Instant::now();
+            let x = session.solve_step(&state, c, tol, maxit, step, f, false);
+            timings.add(
+                match c {
+                    Solver::ActiveSet => "contact_active_set",
+                    Solver::Qp => "contact_qp",
+                    Solver::Lemke => "contact_lemke",
+                    Solver::Evolutive => "contact_lcp",
+                },
+                t.elapsed().as_secs_f64(),
+            );
+            let differing = differing_pairs(&x.interfaces, &r.interfaces);
+            cross.push(serde_json::json!({
+                "solver": c.name(), "load_step": step, "iterations": x.iterations,
+                "outer_iterations": x.outer_iterations, "converged": x.converged,
+                "differing_pairs": differing, "info": x.info,
+                "failure": x.failure.as_ref().map(|e| e.message()),
+            }));
+            if c == Solver::Qp && step == last {
+                qp_block = Some(serde_json::json!({
+                    "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
+                    "interfaces": crate::output::summary::interfaces(&model.interfaces, &x.interfaces, scene.thickness),
+                    "converged": x.converged,
+                    "differing_pairs_from_lcp": differing,
+                    "info": x.info,
+                }));
             }
         }
-        qp_block = Some(serde_json::json!({
-            "form": q.form,
-            "interfaces": crate::output::summary::interfaces(&model.interfaces, &psol.interfaces, scene.thickness),
-            "iterations": q.iterations,
-            "solver_status": q.solver_status,
-            "variables": q.variables,
-            "constraints": q.constraints,
-            "objective": q.objective,
-            "lemke": q.lemke.as_ref().map(|(st, pivots)| serde_json::json!({
-                "pivots": pivots,
-                "differing_pairs_from_clarabel": diff(st, &q.status),
-            })),
-            "polishing_iterations": polished.iterations,
-            "polished_converged": polished.converged,
-            "differing_pairs_from_lcp": vs_lcp,
-            "raw": {
-                "interfaces": crate::output::summary::interfaces(&model.interfaces, &qsol.interfaces, scene.thickness),
-                "differing_pairs_from_polished": diff(&q.status, &polished.status),
-            },
-        }));
-        if cohesion.iter().flatten().any(|c| *c > 0.0) {
-            notes.push(
-                "the QP keeps the cohesion of a detached pair (plastic, not brittle): it agrees \
-                 with the LCP only where cohesion is 0"
-                    .into(),
-            );
+        iterations += r.iterations;
+        residual = residual.max(r.residual);
+        notes.extend(r.notes.iter().cloned());
+        history.rows.extend(r.rows);
+        states.extend(r.states);
+        if main == Solver::Qp && step == last {
+            qp_block = Some(serde_json::json!({
+                "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
+                "interfaces": crate::output::summary::interfaces(&model.interfaces, &r.interfaces, scene.thickness),
+                "converged": r.converged,
+                "info": r.info,
+            }));
         }
-        qp_final = Some((f, psol));
+        state = r.state;
+        final_sol = Some((f, r.fields, r.interfaces, r.nodal_force));
+        if let Some(e) = r.failure {
+            converged = false;
+            failure = Some(e);
+            break;
+        }
     }
-    if final_sol.is_none() {
-        final_sol = qp_final;
-        solver = "qp";
-    }
+    stage.finish();
     let contact = serde_json::json!({
-        "solver": solver,
+        "solver": main.name(),
+        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP)",
         "iterations": iterations,
         "converged": converged,
         "complementarity_residual": residual,
         "load_steps": factors.len(),
-        "active_set": active,
+        "opening_stiffness_columns": session.cols.computed(),
+        "interface_system_size": session.problem.base_size(),
+        "cross_checks": cross,
     });
-    let (load_factor, sol) = match final_sol {
+    let (load_factor, fields, interfaces, nodal_force) = match final_sol {
         Some(x) => x,
-        None => {
-            let f = factors[last];
-            (f, solve_status_scaled(model, &prepared, &status, f)?)
-        }
+        None => return Err(Error::numerical("the contact stage produced no state")),
     };
     let result = RunResult {
         status: if converged {
@@ -355,8 +305,9 @@ pub fn solve_loaded_with(
             "not converged".into()
         },
         load_factor,
-        fields: sol.fields,
-        interfaces: sol.interfaces,
+        fields,
+        interfaces,
+        nodal_force,
         history,
         states,
         contact,
@@ -368,7 +319,7 @@ pub fn solve_loaded_with(
 }
 
 /// The status of the final state (closed where the interface result says so).
-fn final_status(model: &Model, result: &RunResult) -> crate::contact::Status {
+fn final_status(model: &Model, result: &RunResult) -> Vec<Vec<[crate::solution::PairStatus; 2]>> {
     use crate::solution::PairStatus;
     model
         .interfaces
@@ -637,17 +588,21 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         rec.set_operators(&prepared.systems, &prepared.condensed);
         let final_status = final_status(model, &result);
         let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
-        let (k, l) = crate::contact::interface::assemble_scaled(
-            &layout,
-            &prepared.condensed,
-            result.load_factor,
-        );
-        rec.contact_operators = Some(
-            crate::contact::interface::reduced_operators(&layout, &k, &l)
-                .into_iter()
-                .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
-                .collect(),
-        );
+        // The paper's mixed interface operators of the final status (dense over every
+        // interface): archived for scenes of up to 3000 interface unknowns only.
+        if layout.n <= 3000 {
+            let (k, l) = crate::contact::interface::assemble_scaled(
+                &layout,
+                &prepared.condensed,
+                result.load_factor,
+            );
+            rec.contact_operators = Some(
+                crate::contact::interface::reduced_operators(&layout, &k, &l)
+                    .into_iter()
+                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
+                    .collect(),
+            );
+        }
     }
     let mut states: Vec<crate::output::record::StateRecord> = Vec::new();
     if scene.output.history == crate::input::scene::History::Full {

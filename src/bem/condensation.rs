@@ -134,14 +134,13 @@ impl Condensed {
 
     /// X = R X0 + factor·r (loads scaled by `factor`).
     pub fn recover_x_scaled(&self, x0: &[f64], factor: f64) -> Vec<f64> {
-        let nx = self.recover.nrows();
-        (0..nx)
-            .map(|i| {
-                factor * self.recover_load[i]
-                    + (0..x0.len())
-                        .map(|j| self.recover[(i, j)] * x0[j])
-                        .sum::<f64>()
-            })
+        if self.recover.nrows() == 0 {
+            return Vec::new();
+        }
+        let rx = &self.recover * faer::ColRef::from_slice(x0);
+        rx.iter()
+            .zip(&self.recover_load)
+            .map(|(v, r)| v + factor * r)
             .collect()
     }
 }

@@ -1,8 +1,8 @@
 //! Lemke's complementary pivoting for the linear complementarity problem
 //! `w = M z + q, w ≥ 0, z ≥ 0, wᵀz = 0` (Cottle–Pang–Stone 1992; formulation §6.4).
 //!
-//! Place in the flow: a solver of plain matrices, used by `qp` for the contact LCP obtained
-//! from the QP's optimality conditions. For a P-matrix (every SPD matrix is one) Lemke's
+//! Place in the flow: `lcp` (the inner contact problem) → **`lemke`** → `contact`: the exact,
+//! finite cross-check of the other solvers and the fallback of the outer loop. For a P-matrix (every SPD matrix is one) Lemke's
 //! method terminates with the unique solution; the lexicographic ratio test (ties broken by
 //! the rows of the basis inverse) rules out cycling under degeneracy. A secondary ray —
 //! which certifies that no solution exists for a merely copositive M — is reported as an
@@ -146,6 +146,44 @@ pub fn lemke(m: &[f64], q: &[f64], max_pivots: usize) -> Result<LemkeSolution, L
         }
     }
     Ok(LemkeSolution { z, w, pivots })
+}
+
+/// Solves the inner contact LCP (`lcp`) by Lemke's method on its dense form (every column of
+/// the opening stiffness, free rows eliminated). Returns the open statuses of the rows and the
+/// number of pivots; a secondary ray means no equilibrium exists (a mechanism).
+pub fn solve_inner(
+    inner: &crate::contact::lcp::Inner,
+    cols: &mut crate::contact::lcp::Columns,
+) -> Result<(Vec<bool>, usize), String> {
+    let (normal, mut m, mut q) = inner
+        .dense(cols)
+        .ok_or_else(|| "the free tangential openings leave a body free".to_string())?;
+    let n = normal.len();
+    // Jacobi scaling keeps the pivots O(1).
+    let d: Vec<f64> = (0..n)
+        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    for i in 0..n {
+        q[i] *= d[i];
+        for j in 0..n {
+            m[i * n + j] *= d[i] * d[j];
+        }
+    }
+    let sol = lemke(&m, &q, 20 * n + 100).map_err(|f| match f {
+        LemkeFailure::SecondaryRay { pivots } => format!(
+            "Lemke's method ended on a secondary ray after {pivots} pivots: no equilibrium \
+             exists (a mechanism)"
+        ),
+        LemkeFailure::PivotLimit { pivots } => {
+            format!("Lemke's method reached its pivot limit ({pivots} pivots)")
+        }
+    })?;
+    let mut open = inner.free.clone();
+    for (i, &r) in normal.iter().enumerate() {
+        // z is the (scaled) opening, w the force: open where the opening is the positive one.
+        open[r] = sol.z[i] > sol.w[i];
+    }
+    Ok((open, sol.pivots))
 }
 
 #[cfg(test)]

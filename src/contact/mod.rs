@@ -1,89 +1,76 @@
-//! Contact and detachment on unilateral interfaces by status iteration ([paper §3.1],
-//! formulation §6).
+//! Contact and detachment on unilateral interfaces: the driver of load steps and of the outer
+//! loop, over one discrete problem (`problem`) that every solver solves.
 //!
-//! Place in the flow: `solve` (per-body operators, prepared once) → **`contact`** → results.
-//! Conditions per pair j, with the traction t_n on the first body (tension positive), the
-//! cohesion c_j, the initial gap h_j and the current normal distance g_j = h_j + n·(u_B − u_A):
+//! Place in the flow: `bem` (per-body operators, prepared once by `solve::prepare`) →
+//! **`contact`** → results. Conditions per unilateral pair j, with the nodal contact force
+//! λ_j (compression positive, cohesion included) and the nodal gap g_j = h_j + n·(u_B − u_A)
+//! (see `problem` for the pairing):
 //!
-//! * closed (real): g_j = 0 and t_n ≤ c_j — a closed pair in tension beyond c_j violates;
-//! * open (virtual): t_n = 0 and g_j ≥ 0 — an open pair with g_j < 0 (interpenetration)
-//!   violates.
+//! * closed: g_j = 0 and λ_j ≥ 0 (tension up to c_j times the pair's tributary length);
+//! * open: λ_j = 0 and g_j ≥ 0.
 //!
-//! Statuses switch by moving rows and columns of the interface system only (`interface`):
-//! no boundary integral is recomputed. With `tangential = "stick"` (the paper's "no friction
-//! and no sliding") both components of a pair switch together; with `"slide"` the tangential
-//! component is always open (frictionless) and only the normal one switches.
+//! **Outer loop.** Two data of the problem depend on the state itself: the brittle cohesion
+//! of the paper (§3.1.1: a pair that opens loses its cohesion for good) and, with
+//! `tangential = "stick"`, the tangential tie of a pair (tied while closed). The driver fixes
+//! both, solves the inner LCP (unique when the opening stiffness is positive definite), then
+//! drops the cohesion of the pairs found open and ties exactly the closed stick pairs, and
+//! repeats until nothing changes (formulation §6.1). Every solver runs the same outer loop,
+//! so they reach the same statuses:
 //!
-//! Two iterations on the same mixed system:
+//! * `evolutive` — the paper's iterative LCP: one switch per iteration, every state recorded;
+//! * `active_set` — every violator at once (PDAS), falling back to the evolutive iteration;
+//! * `lemke` — complementary pivoting on the dense LCP: exact and finite;
+//! * `qp` — the same LCP as a convex QP (Clarabel).
 //!
-//! * **evolutive** (the paper's iterative LCP): from the initial statuses, switch the one
-//!   most violated pair per iteration (violations measured relative to the traction scale or
-//!   the displacement scale), re-solve, record the state. Opening one pair at a time follows
-//!   the detachment front as it advances, so every intermediate detached length appears in
-//!   the history; it stops when no pair violates its condition;
-//! * **active set** (primal–dual active set, the semismooth Newton method with c → ∞):
-//!   switch every violating pair at once; converges in a few iterations; a repeated status
-//!   set (detected by hashing) is a cycle: the iteration restarts once from the zones of
-//!   Lemke's method on the QP's LCP (`qp`, `lcp`), and a second cycle hands over to the
-//!   evolutive iteration.
-//!
-//! Brittle cohesion [paper §3.1.1]: a pair that opens loses its cohesion for good (c_j := 0);
-//! the active-set solver repeats until no new pair opens (the outer loop of formulation §6.1).
+//! A repeated outer state is a stick edge cycle (a pair at the contact edge that opens once
+//! untied and closes once tied): reported, not hidden.
 
+pub mod active_set;
+pub mod evolutive;
 pub mod interface;
+pub mod lcp;
 pub mod lemke;
+pub mod problem;
 pub mod qp;
 pub mod solve;
 
 use std::collections::HashSet;
 
-use crate::contact::solve::{solve_status_scaled, Prepared, StatusSolution};
-use crate::error::{Error, Result};
+use crate::error::Error;
 use crate::input::model::Model;
-use crate::input::scene::{InterfaceModel, Tangential};
-use crate::solution::{HistoryRow, PairStatus};
+use crate::input::scene::InterfaceModel;
+use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
+use lcp::{Columns, Inner, InnerState};
+use problem::{Problem, RowKind};
+use solve::Prepared;
 
-/// Largest relative violation accepted when the iteration cycles between states that differ
-/// at the contact edge only (see [`solve_contact`]).
-pub const CYCLE_ACCEPT: f64 = 1e-3;
-
-/// Statuses `[k][j][c]` of every interface pair component (c = 0 tangential, 1 normal).
-pub type Status = Vec<Vec<[PairStatus; 2]>>;
-
-/// Which iteration.
+/// Which solver.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Iteration {
+pub enum Method {
     Evolutive,
     ActiveSet,
+    Lemke,
+    Qp,
 }
 
-impl Iteration {
+impl Method {
     pub fn name(self) -> &'static str {
         match self {
-            Iteration::Evolutive => "lcp",
-            Iteration::ActiveSet => "active-set",
+            Method::Evolutive => "lcp",
+            Method::ActiveSet => "active-set",
+            Method::Lemke => "lemke",
+            Method::Qp => "qp",
         }
     }
 }
 
-/// The outcome of a contact solve.
-pub struct ContactResult {
-    pub status: Status,
-    pub solution: StatusSolution,
-    /// Number of status changes (iterations) made.
-    pub iterations: usize,
-    pub converged: bool,
-    /// Which iteration produced the final state (after any fallback).
-    pub solver: &'static str,
-    /// Largest violation left, relative to its scale: max over pairs of
-    /// (t_n − c)/T on closed pairs, −g/U on open ones, and |t_n|·g/(T·U) (complementarity).
-    pub residual: f64,
-    /// Cohesion left at each pair (zero where a pair has opened).
+/// The state carried from one load step (and outer iteration) to the next: open rows,
+/// tangential ties of stick rows, and the cohesion left at each pair.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepState {
+    /// Per row that can open: open (normal rows) or untied (stick rows).
+    pub open: Vec<bool>,
     pub cohesion: Vec<Vec<f64>>,
-    pub rows: Vec<HistoryRow>,
-    /// With `record`: the boundary solution of every iteration (iteration, fields, interfaces).
-    pub states: Vec<RecordedState>,
-    pub notes: Vec<String>,
 }
 
 /// The solution after one iteration, kept for output.
@@ -92,144 +79,402 @@ pub struct RecordedState {
     pub load_step: usize,
     pub load_factor: f64,
     pub iteration: usize,
-    pub fields: Vec<crate::solution::BodyField>,
-    pub interfaces: Vec<crate::solution::InterfaceResult>,
+    pub fields: Vec<BodyField>,
+    pub interfaces: Vec<InterfaceResult>,
 }
 
-/// The initial status of every pair from the interfaces' `initial` and `tangential`.
-pub fn initial_status(model: &Model) -> Status {
-    model
-        .interfaces
-        .iter()
-        .map(|it| {
-            let closed = match it.spec.model {
-                InterfaceModel::Bonded => true,
-                InterfaceModel::Unilateral => {
-                    it.spec.initial == crate::input::scene::InitialState::Closed
-                }
-            };
-            let n = if closed {
-                PairStatus::Closed
-            } else {
-                PairStatus::Open
-            };
-            let t = tangential_status(it, n);
-            vec![[t, n]; it.pairs.len()]
+/// The outcome of one load step.
+pub struct ContactResult {
+    pub state: StepState,
+    pub fields: Vec<BodyField>,
+    pub interfaces: Vec<InterfaceResult>,
+    /// Nodal normal force of each pair (on B, compression positive).
+    pub nodal_force: Vec<Vec<f64>>,
+    /// Status switches made (inner iterations summed over the outer loop).
+    pub iterations: usize,
+    pub outer_iterations: usize,
+    pub converged: bool,
+    pub solver: &'static str,
+    /// Largest relative complementarity violation left.
+    pub residual: f64,
+    pub rows: Vec<HistoryRow>,
+    pub states: Vec<RecordedState>,
+    pub notes: Vec<String>,
+    pub failure: Option<Error>,
+    /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
+    pub info: serde_json::Value,
+    /// The states of the evolutive path in compact form (iteration, open rows, openings),
+    /// expanded into `rows` and `states` by [`Session::expand`].
+    pub recorded: Vec<(usize, Vec<bool>, Vec<f64>)>,
+    pub load_step: usize,
+    pub load_factor: f64,
+}
+
+/// A contact run: the problem and the columns of its opening stiffness, shared by every
+/// solver and load step.
+pub struct Session<'a> {
+    pub model: &'a Model,
+    pub prepared: &'a Prepared,
+    pub problem: Problem,
+    pub cols: Columns,
+}
+
+impl<'a> Session<'a> {
+    pub fn new(model: &'a Model, prepared: &'a Prepared) -> crate::error::Result<Self> {
+        Ok(Session {
+            model,
+            prepared,
+            problem: Problem::new(model, prepared)?,
+            cols: Columns::default(),
         })
-        .collect()
-}
-
-fn tangential_status(it: &crate::input::model::Interface, normal: PairStatus) -> PairStatus {
-    match (it.spec.model, it.spec.tangential) {
-        (InterfaceModel::Unilateral, Tangential::Slide) => PairStatus::Open,
-        _ => normal,
     }
-}
 
-/// Normal distance `g = h + n·(u_B − u_A)` of an open pair (0 for a closed one).
-fn gap_of(model: &Model, k: usize, j: usize, sol: &StatusSolution, status: PairStatus) -> f64 {
-    match status {
-        PairStatus::Closed => 0.0,
-        PairStatus::Open => model.interfaces[k].pairs[j].gap + sol.interfaces[k].pairs[j].jump[1],
+    /// The scene's initial statuses and cohesions.
+    pub fn initial(&self) -> StepState {
+        let open = self.problem.rows[..self.problem.n_open_rows]
+            .iter()
+            .map(|r| {
+                let it = &self.model.interfaces[r.iface];
+                it.spec.model == InterfaceModel::Unilateral
+                    && it.spec.initial == crate::input::scene::InitialState::Open
+            })
+            .collect();
+        let cohesion = self
+            .model
+            .interfaces
+            .iter()
+            .map(|it| it.pairs.iter().map(|p| p.cohesion).collect())
+            .collect();
+        StepState { open, cohesion }
     }
-}
 
-/// Scales for relative violations: the largest interface traction and displacement.
-fn scales(sol: &StatusSolution) -> (f64, f64) {
-    let t = sol
-        .interfaces
-        .iter()
-        .flat_map(|i| i.pairs.iter())
-        .map(|p| p.traction[0].abs().max(p.traction[1].abs()))
-        .fold(0.0, f64::max);
-    let u = sol
-        .fields
-        .iter()
-        .flat_map(|f| f.u.iter())
-        .map(|u| u[0].abs().max(u[1].abs()))
-        .fold(0.0, f64::max);
-    (t.max(f64::MIN_POSITIVE), u.max(f64::MIN_POSITIVE))
-}
-
-/// Violations `(k, j, relative size)` of the unilateral pairs, largest first.
-fn violations(
-    model: &Model,
-    sol: &StatusSolution,
-    status: &Status,
-    cohesion: &[Vec<f64>],
-    tol: f64,
-) -> Vec<(usize, usize, f64)> {
-    let (ts, us) = scales(sol);
-    let mut v = Vec::new();
-    for (k, it) in model.interfaces.iter().enumerate() {
-        if it.spec.model != InterfaceModel::Unilateral {
-            continue;
+    /// Whether pair (k, j)'s normal row is open in `open`.
+    fn pair_open(&self, open: &[bool], k: usize, j: usize) -> bool {
+        match self.problem.row_of[k][j][1] {
+            Some(r) if r < self.problem.n_open_rows => open[r],
+            _ => false,
         }
-        for j in 0..it.pairs.len() {
-            let s = status[k][j][1];
-            let size = match s {
-                PairStatus::Closed => {
-                    (sol.interfaces[k].pairs[j].traction[1] - cohesion[k][j]) / ts
-                }
-                PairStatus::Open => -gap_of(model, k, j, sol, s) / us,
+    }
+
+    /// Solves one load step from `start` with `method`.
+    #[allow(clippy::too_many_arguments)]
+    pub fn solve_step(
+        &mut self,
+        start: &StepState,
+        method: Method,
+        tol: f64,
+        max_iterations: usize,
+        load_step: usize,
+        factor: f64,
+        record: bool,
+    ) -> ContactResult {
+        let n = self.problem.n_open_rows;
+        let mut st = start.clone();
+        let mut notes = Vec::new();
+        let mut compact: Vec<(usize, Vec<bool>, Vec<f64>)> = Vec::new();
+        let mut edge_slip = vec![false; n];
+        let mut slipping = 0;
+        let mut seen: HashSet<Vec<bool>> = HashSet::new();
+        let mut iterations = 0;
+        let mut outer = 0;
+        let mut converged = false;
+        let mut failure = None;
+        let mut info = serde_json::json!({});
+        let mut last: Option<(InnerState, f64)> = None;
+        // Outer iterates (state, inner state, stick inconsistency) for a stick edge cycle.
+        let mut iterates: Vec<(StepState, InnerState, f64)> = Vec::new();
+        loop {
+            outer += 1;
+            let base = self.problem.base(factor, &st.cohesion);
+            let free: Vec<bool> = (0..n)
+                .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r])
+                .collect();
+            let inner = Inner {
+                problem: &self.problem,
+                base: &base,
+                free,
+                tol,
             };
-            if size > tol {
-                v.push((k, j, size));
+            let start_open = st.open.clone();
+            let it0 = iterations;
+            let outcome: Result<evolutive::Outcome, String> = match method {
+                Method::Evolutive => {
+                    let mut k = it0;
+                    let first = compact.is_empty();
+                    let out = evolutive::solve(
+                        &inner,
+                        &mut self.cols,
+                        &start_open,
+                        max_iterations.saturating_sub(it0),
+                        &mut |s: &InnerState| {
+                            if record && (first || k > it0 || compact.is_empty()) {
+                                compact.push((k, s.open.clone(), s.s.clone()));
+                            }
+                            k += 1;
+                        },
+                    );
+                    Ok(out)
+                }
+                Method::ActiveSet => Ok(active_set::solve(
+                    &inner,
+                    &mut self.cols,
+                    &start_open,
+                    max_iterations.saturating_sub(it0),
+                )),
+                Method::Lemke => {
+                    lemke::solve_inner(&inner, &mut self.cols).and_then(|(open, pivots)| {
+                        info = serde_json::json!({ "pivots": pivots });
+                        exact_state(&inner, &mut self.cols, &open)
+                    })
+                }
+                Method::Qp => qp::solve(&inner, &mut self.cols, tol).and_then(|q| {
+                    info = serde_json::json!({
+                        "iterations": q.iterations, "solver_status": q.solver_status,
+                        "objective": q.objective, "variables": q.variables,
+                        "constraints": q.constraints,
+                    });
+                    exact_state(&inner, &mut self.cols, &q.open)
+                }),
+            };
+            let outcome = match outcome {
+                Ok(o) => o,
+                Err(e) => {
+                    failure = Some(Error::numerical(format!(
+                        "the contact solver ({}) failed at load step {}: {e}",
+                        method.name(),
+                        load_step + 1
+                    )));
+                    break;
+                }
+            };
+            iterations += outcome.iterations;
+            notes.extend(outcome.notes.iter().cloned());
+            let residual = inner.residual(&outcome.state);
+            let ok = outcome.converged;
+            let state = outcome.state;
+            if !ok {
+                let closed: Vec<bool> = state.open.iter().map(|o| !o).collect();
+                let _ = closed;
+                let hint = if notes.iter().any(|n| n.contains("free")) {
+                    self.mechanism(&state.open, &inner)
+                } else {
+                    String::new()
+                };
+                failure = Some(Error::numerical(format!(
+                    "the contact solver ({}) did not converge at load step {} (largest \
+                     violation {residual:.1e} of its scale): {}{}",
+                    method.name(),
+                    load_step + 1,
+                    notes.join("; "),
+                    hint
+                )));
+                last = Some((state, residual));
+                break;
+            }
+            // Outer update: brittle cohesion and stick ties.
+            let mut next = st.clone();
+            for r in 0..n {
+                let row = self.problem.rows[r];
+                let pair_open = self.pair_open(&state.open, row.iface, row.pair);
+                next.open[r] = match row.kind {
+                    RowKind::Normal => state.open[r],
+                    _ => pair_open || edge_slip[r],
+                };
+                if row.kind == RowKind::Normal && pair_open {
+                    next.cohesion[row.iface][row.pair] = 0.0;
+                }
+            }
+            iterates.push((st.clone(), state.clone(), 0.0));
+            last = Some((state, residual));
+            if next == st {
+                converged = true;
+                break;
+            }
+            if !seen.insert(next.open.clone()) {
+                // A stick edge cycle: a pair at the contact edge opens once tied and closes
+                // once untied. Such a pair is closed and slipping (the μ → ∞ limit of Coulomb
+                // friction where the normal force vanishes): keep it untied from now on.
+                let k0 = iterates
+                    .iter()
+                    .position(|(s0, _, _)| s0.open == next.open)
+                    .unwrap_or(0);
+                let cycle = &iterates[k0..];
+                let flipping: Vec<usize> = (0..n)
+                    .filter(|&r| {
+                        self.problem.rows[r].kind == RowKind::Stick
+                            && !edge_slip[r]
+                            && cycle.iter().any(|(s0, _, _)| s0.open[r] != next.open[r])
+                    })
+                    .collect();
+                if flipping.is_empty() || outer > 200 {
+                    failure = Some(Error::numerical(format!(
+                        "the stick ties cycle at the contact edge after {outer} outer \
+                         iterations: tangential = \"stick\" has no consistent state there; use \
+                         \"slide\", or friction when available"
+                    )));
+                    st = next;
+                    break;
+                }
+                for &r in &flipping {
+                    edge_slip[r] = true;
+                    next.open[r] = true;
+                }
+                slipping += flipping.len();
+                seen.clear();
+                iterates.clear();
+            }
+            st = next;
+        }
+        let (final_state, residual) = last.unwrap_or_else(|| (unreachable_state(n), f64::INFINITY));
+        if slipping > 0 {
+            notes.push(format!(
+                "{slipping} stick pair(s) at the contact edge neither stay tied (they open) nor \
+                 stay open once untied (they close): kept closed and slipping (tangentially \
+                 free), the μ → ∞ limit of Coulomb friction where the normal force vanishes"
+            ));
+        }
+        let (fields, interfaces, nodal_force) = self.problem.state(
+            self.model,
+            self.prepared,
+            factor,
+            &final_state.s,
+            &final_state.open,
+        );
+        let mut rows = Vec::new();
+        let mut states = Vec::new();
+        if !record || compact.is_empty() {
+            rows.push(history_row(
+                self.model,
+                &interfaces,
+                load_step,
+                factor,
+                iterations,
+                method.name(),
+            ));
+            if record {
+                states.push(RecordedState {
+                    load_step,
+                    load_factor: factor,
+                    iteration: iterations,
+                    fields: fields.clone(),
+                    interfaces: interfaces.clone(),
+                });
             }
         }
-    }
-    v.sort_by(|a, b| b.2.total_cmp(&a.2));
-    v
-}
-
-/// Complementarity residual of a state (see [`ContactResult::residual`]).
-pub fn complementarity(
-    model: &Model,
-    sol: &StatusSolution,
-    status: &Status,
-    cohesion: &[Vec<f64>],
-) -> f64 {
-    let (ts, us) = scales(sol);
-    let mut r = 0.0f64;
-    for (k, it) in model.interfaces.iter().enumerate() {
-        if it.spec.model != InterfaceModel::Unilateral {
-            continue;
-        }
-        for j in 0..it.pairs.len() {
-            let s = status[k][j][1];
-            let tn = sol.interfaces[k].pairs[j].traction[1];
-            let g = gap_of(model, k, j, sol, s);
-            let lambda = cohesion[k][j] - tn; // ≥ 0
-            r = r
-                .max(-lambda / ts)
-                .max(-g / us)
-                .max((lambda.max(0.0) * g.max(0.0)) / (ts * us));
-            if s == PairStatus::Open {
-                r = r.max(tn.abs() / ts);
+        // The final state of the step: the statuses found (even when not converged).
+        let mut out_state = st.clone();
+        for r in 0..n {
+            if self.problem.rows[r].kind == RowKind::Normal {
+                out_state.open[r] = final_state.open[r];
             }
         }
+        ContactResult {
+            state: out_state,
+            fields,
+            interfaces,
+            nodal_force,
+            iterations,
+            outer_iterations: outer,
+            converged: converged && failure.is_none(),
+            solver: method.name(),
+            residual,
+            rows,
+            states,
+            notes,
+            failure,
+            info,
+            recorded: compact,
+            load_step,
+            load_factor: factor,
+        }
     }
-    r
+
+    /// Expands the compact states of an evolutive path into history rows and boundary
+    /// solutions of every body (one sparse solve and one recovery per body each).
+    pub fn expand(&self, result: &mut ContactResult) {
+        let (step, factor) = (result.load_step, result.load_factor);
+        for (it, open, s) in std::mem::take(&mut result.recorded) {
+            let (f, i, _) = self
+                .problem
+                .state(self.model, self.prepared, factor, &s, &open);
+            result
+                .rows
+                .push(history_row(self.model, &i, step, factor, it, result.solver));
+            result.states.push(RecordedState {
+                load_step: step,
+                load_factor: factor,
+                iteration: it,
+                fields: f,
+                interfaces: i,
+            });
+        }
+    }
+
+    /// " (body X is free to move ...)" for a state whose open rows leave a body free.
+    fn mechanism(&self, open: &[bool], inner: &Inner) -> String {
+        let v = inner.violations(&InnerState {
+            open: open.to_vec(),
+            s: vec![0.0; open.len()],
+            lambda: vec![0.0; open.len()],
+        });
+        let _ = v;
+        let rows: Vec<problem::Row> = self
+            .problem
+            .rows
+            .iter()
+            .enumerate()
+            .filter(|(r, _)| *r >= self.problem.n_open_rows || !open[*r])
+            .map(|(_, row)| *row)
+            .collect();
+        let h = problem::mechanism_hint(
+            self.model,
+            &self.problem.ops,
+            &rows,
+            &self.problem.dof_start,
+        );
+        format!("; {h}")
+    }
 }
 
-fn switch(model: &Model, status: &mut Status, cohesion: &mut [Vec<f64>], k: usize, j: usize) {
-    let it = &model.interfaces[k];
-    let n = match status[k][j][1] {
-        PairStatus::Closed => {
-            // Brittle cohesion: a pair that detaches loses its strength for good.
-            cohesion[k][j] = 0.0;
-            PairStatus::Open
-        }
-        PairStatus::Open => PairStatus::Closed,
-    };
-    status[k][j] = [tangential_status(it, n), n];
+/// Largest stick mismatch accepted when the outer loop cycles at the contact edge.
+pub const CYCLE_ACCEPT: f64 = 1e-3;
+
+fn unreachable_state(n: usize) -> InnerState {
+    InnerState {
+        open: vec![false; n],
+        s: vec![0.0; n],
+        lambda: vec![0.0; n],
+    }
+}
+
+/// The exact state of the statuses `open` found by a solver that does not pivot (Lemke, QP).
+fn exact_state(
+    inner: &Inner,
+    cols: &mut Columns,
+    open: &[bool],
+) -> Result<evolutive::Outcome, String> {
+    let (o, refused) = inner.factor(cols, open);
+    let state = inner.state(cols, &o);
+    let converged = refused.is_empty() && inner.violations(&state).is_empty();
+    let mut notes = Vec::new();
+    if !refused.is_empty() {
+        notes.push(format!(
+            "{} pair(s) found open would leave a body free",
+            refused.len()
+        ));
+    }
+    Ok(evolutive::Outcome {
+        state,
+        iterations: 0,
+        converged,
+        notes,
+    })
 }
 
 /// A history row of a state.
 pub fn history_row(
     model: &Model,
-    sol: &StatusSolution,
-    status: &Status,
+    interfaces: &[InterfaceResult],
     load_step: usize,
     load_factor: f64,
     iteration: usize,
@@ -240,20 +485,20 @@ pub fn history_row(
     let mut op = Vec::new();
     let mut det = Vec::new();
     for (k, it) in model.interfaces.iter().enumerate() {
-        st.push(status[k].iter().map(|s| s[1]).collect());
-        tn.push(
-            sol.interfaces[k]
-                .pairs
-                .iter()
-                .map(|p| p.traction[1])
-                .collect(),
-        );
+        let r = &interfaces[k];
+        st.push(r.pairs.iter().map(|p| p.status).collect());
+        tn.push(r.pairs.iter().map(|p| p.traction[1]).collect());
         op.push(
-            (0..it.pairs.len())
-                .map(|j| gap_of(model, k, j, sol, status[k][j][1]))
+            r.pairs
+                .iter()
+                .zip(&it.pairs)
+                .map(|(p, pr)| match p.status {
+                    PairStatus::Closed => 0.0,
+                    PairStatus::Open => pr.gap + p.jump[1],
+                })
                 .collect(),
         );
-        det.push(detached_length(model, k, status));
+        det.push(detached_length(model, k, r));
     }
     HistoryRow {
         load_step,
@@ -268,11 +513,15 @@ pub fn history_row(
 }
 
 /// Length of the elements of interface k whose two end pairs are open.
-pub fn detached_length(model: &Model, k: usize, status: &Status) -> f64 {
+pub fn detached_length(model: &Model, k: usize, r: &InterfaceResult) -> f64 {
     let it = &model.interfaces[k];
     it.elements
         .iter()
-        .filter(|e| e.pairs.iter().all(|&j| status[k][j][1] == PairStatus::Open))
+        .filter(|e| {
+            e.pairs
+                .iter()
+                .all(|&j| r.pairs[j].status == PairStatus::Open)
+        })
         .map(|e| {
             let (a, b) = (it.pairs[e.pairs[0]].x, it.pairs[e.pairs[1]].x);
             (b[0] - a[0]).hypot(b[1] - a[1])
@@ -280,254 +529,16 @@ pub fn detached_length(model: &Model, k: usize, status: &Status) -> f64 {
         .sum()
 }
 
-/// Solves contact and detachment from `status` with the given iteration; `cohesion[k][j]`
-/// is the strength left at each pair on entry.
-#[allow(clippy::too_many_arguments)]
-pub fn solve_contact(
-    model: &Model,
-    prepared: &Prepared,
-    mut status: Status,
-    mut cohesion: Vec<Vec<f64>>,
-    iteration: Iteration,
-    tol: f64,
-    max_iterations: usize,
-    load_step: usize,
-    load_factor: f64,
-    record: bool,
-) -> Result<ContactResult> {
-    let mut notes = Vec::new();
-    let mut rows = Vec::new();
-    let mut seen: HashSet<Vec<u8>> = HashSet::new();
-    let key = |s: &Status| -> Vec<u8> {
-        s.iter()
-            .flat_map(|i| i.iter().map(|p| (p[1] == PairStatus::Closed) as u8))
-            .collect()
-    };
-    let mut mode = iteration;
-    let solve = |s: &Status| solve_status_scaled(model, prepared, s, load_factor);
-    let mut states = Vec::new();
-    let keep = |sol: &StatusSolution, it: usize, states: &mut Vec<RecordedState>| {
-        states.push(RecordedState {
-            load_step,
-            load_factor,
-            iteration: it,
-            fields: sol.fields.clone(),
-            interfaces: sol.interfaces.clone(),
-        })
-    };
-    let record_state = |sol: &StatusSolution,
-                        status: &Status,
-                        it: usize,
-                        mode: Iteration,
-                        rows: &mut Vec<HistoryRow>,
-                        states: &mut Vec<RecordedState>| {
-        rows.push(history_row(
-            model,
-            sol,
-            status,
-            load_step,
-            load_factor,
-            it,
-            mode.name(),
-        ));
-        keep(sol, it, states);
-    };
-    let mut sol = match solve(&status) {
-        Ok(s) => s,
-        Err(e) if e.exit_code() == 3 => {
-            // Bodies held only by open interfaces float: start from first contact instead,
-            // closing the pairs of smallest gap (then, if that is not enough, every pair).
-            let open: Vec<(usize, usize, f64)> = model
-                .interfaces
+/// Number of unilateral pairs whose statuses differ between two results.
+pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
+    a.iter()
+        .zip(b)
+        .map(|(x, y)| {
+            x.pairs
                 .iter()
-                .enumerate()
-                .filter(|(_, it)| it.spec.model == InterfaceModel::Unilateral)
-                .flat_map(|(k, it)| it.pairs.iter().enumerate().map(move |(j, p)| (k, j, p.gap)))
-                .filter(|&(k, j, _)| status[k][j][1] == PairStatus::Open)
-                .collect();
-            let hmin = open.iter().map(|o| o.2).fold(f64::INFINITY, f64::min);
-            let hmax = open.iter().map(|o| o.2).fold(0.0, f64::max);
-            for &(k, j, h) in &open {
-                if h <= hmin + 1e-9 * hmax.max(f64::MIN_POSITIVE) {
-                    switch(model, &mut status, &mut cohesion, k, j);
-                }
-            }
-            notes.push(
-                "the initial status leaves a body held by open interfaces only; the iteration \
-                 started from first contact (the pairs of smallest gap closed)"
-                    .into(),
-            );
-            match solve(&status) {
-                Ok(s) => s,
-                Err(e2) if e2.exit_code() == 3 => {
-                    for &(k, j, _) in &open {
-                        if status[k][j][1] == PairStatus::Open {
-                            switch(model, &mut status, &mut cohesion, k, j);
-                        }
-                    }
-                    solve(&status).map_err(|_| e)?
-                }
-                Err(e2) => return Err(e2),
-            }
-        }
-        Err(e) => return Err(e),
-    };
-    if record {
-        rows.push(history_row(
-            model,
-            &sol,
-            &status,
-            load_step,
-            load_factor,
-            0,
-            mode.name(),
-        ));
-        keep(&sol, 0, &mut states);
-    }
-    seen.insert(key(&status));
-    let mut count = 0;
-    let mut converged = false;
-    // The state of smallest largest-violation met so far: where the iteration cycles (a pair
-    // at the contact edge that carries tension when closed and overlaps slightly when open,
-    // formulation §6.4), it is the answer if its violation is small enough.
-    let mut best: Option<(f64, Status)> = None;
-    let mut lemke_tried = false;
-    while count < max_iterations {
-        let v = violations(model, &sol, &status, &cohesion, tol);
-        if v.is_empty() {
-            converged = true;
-            break;
-        }
-        if best.as_ref().is_none_or(|b| v[0].2 < b.0) {
-            best = Some((v[0].2, status.clone()));
-        }
-        match mode {
-            Iteration::Evolutive => {
-                let (k, j, _) = v[0];
-                switch(model, &mut status, &mut cohesion, k, j);
-            }
-            Iteration::ActiveSet => {
-                for &(k, j, _) in &v {
-                    switch(model, &mut status, &mut cohesion, k, j);
-                }
-            }
-        }
-        count += 1;
-        if !seen.insert(key(&status)) {
-            match mode {
-                Iteration::ActiveSet if !lemke_tried => {
-                    // Fall back to Lemke's pivoting on the QP's LCP with the current status
-                    // as the pre-partition, then resume the active set from its zones.
-                    lemke_tried = true;
-                    match crate::contact::qp::solve_qp(
-                        model,
-                        prepared,
-                        load_factor,
-                        &cohesion,
-                        tol,
-                        &status,
-                    ) {
-                        Ok(q) => {
-                            let (st, pivots) = q.lemke.unwrap_or((q.status, 0));
-                            notes.push(format!(
-                                "the active-set iteration cycled after {count} iterations; \
-                                 restarted from the zones of Lemke's method ({pivots} pivots)"
-                            ));
-                            for (k, it) in st.iter().enumerate() {
-                                for (j, p) in it.iter().enumerate() {
-                                    if p[1] != status[k][j][1] {
-                                        switch(model, &mut status, &mut cohesion, k, j);
-                                    }
-                                }
-                            }
-                        }
-                        Err(e) => notes.push(format!(
-                            "the active-set iteration cycled after {count} iterations; Lemke's \
-                             method could not help ({})",
-                            e.message()
-                        )),
-                    }
-                    seen.clear();
-                    seen.insert(key(&status));
-                }
-                Iteration::ActiveSet => {
-                    notes.push(format!(
-                        "the active-set iteration cycled again after {count} iterations; \
-                         continued with the evolutive iteration"
-                    ));
-                    mode = Iteration::Evolutive;
-                    seen.clear();
-                    seen.insert(key(&status));
-                }
-                Iteration::Evolutive => {
-                    let (worst, best_status) =
-                        best.take().unwrap_or((f64::INFINITY, status.clone()));
-                    status = best_status;
-                    sol = solve(&status)?;
-                    converged = worst <= CYCLE_ACCEPT;
-                    notes.push(format!(
-                        "the status iteration returned to an earlier status after {count} \
-                         iterations (pairs at the contact edge switch back and forth); kept the \
-                         state of smallest violation, {worst:.1e} of its scale{}",
-                        if converged {
-                            " (above solve.tolerance, below the 1e-3 accepted for such cycles)"
-                        } else {
-                            ": too large, not converged"
-                        }
-                    ));
-                    if record {
-                        record_state(&sol, &status, count, mode, &mut rows, &mut states);
-                    }
-                    break;
-                }
-            }
-        }
-        sol = solve(&status)?;
-        if record {
-            record_state(&sol, &status, count, mode, &mut rows, &mut states);
-        }
-    }
-    if !converged && count >= max_iterations {
-        notes.push(format!(
-            "the contact iteration did not converge in {max_iterations} iterations \
-             (solve.max_iterations)"
-        ));
-    }
-    let residual = complementarity(model, &sol, &status, &cohesion);
-    Ok(ContactResult {
-        status,
-        solution: sol,
-        iterations: count,
-        converged,
-        solver: mode.name(),
-        residual,
-        cohesion,
-        rows,
-        states,
-        notes,
-    })
-}
-
-/// The cohesion of every pair at the start (zero on open and bonded interfaces).
-pub fn initial_cohesion(model: &Model) -> Vec<Vec<f64>> {
-    model
-        .interfaces
-        .iter()
-        .map(|it| it.pairs.iter().map(|p| p.cohesion).collect())
-        .collect()
-}
-
-impl ContactResult {
-    /// The failure of a solve that did not converge, as a numerical error naming what failed.
-    pub fn failure(&self) -> Option<Error> {
-        (!self.converged).then(|| {
-            Error::numerical(format!(
-                "the contact solver did not converge after {} iterations (largest violation \
-                 {:.1e} of its scale): {}",
-                self.iterations,
-                self.residual,
-                self.notes.join("; ")
-            ))
+                .zip(&y.pairs)
+                .filter(|(p, q)| p.status != q.status)
+                .count()
         })
-    }
+        .sum()
 }

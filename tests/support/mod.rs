@@ -8,9 +8,12 @@ use std::process::Command;
 
 /// A fresh temporary folder for one test.
 pub fn tmpdir(name: &str) -> PathBuf {
+    // Unique per call: tests of one binary run in parallel and may share a name.
+    static COUNT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
+    let k = COUNT.fetch_add(1, std::sync::atomic::Ordering::Relaxed);
     let d = std::env::temp_dir()
         .join("sgbem-tests")
-        .join(format!("{name}-{}", std::process::id()));
+        .join(format!("{name}-{}-{k}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).expect("create temp dir");
     d

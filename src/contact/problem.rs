@@ -1,0 +1,903 @@
+//! The one discrete contact problem that every solver solves (formulation §6.2 (ii)).
+//!
+//! Place in the flow: `bem` (per-body condensed operators D00, Z̄0) → **`problem`** → the
+//! solvers (`evolutive`, `active_set`, `lemke`, `qp`) → results.
+//!
+//! # The discrete problem
+//!
+//! **Per body: the symmetric Steklov–Poincaré stiffness.** Each body's condensed system
+//! `Z0 = D00 X0 + Z̄0` over its interface unknowns `X0 = [F; −U]` (traction hats and nodal
+//! displacements in the pair frames) is reduced by imposing the body's own weak
+//! compatibility `W = 0`:
+//!
+//! ```text
+//!   F = G_U U − G_z,        G_U = D_WF⁻¹ D_WU,  G_z = D_WF⁻¹ Z̄_W
+//!   P = S U + p̂,           S = −D_PU + D_WUᵀ G_U (symmetric PSD),  p̂ = Z̄_P − D_WUᵀ G_z
+//! ```
+//!
+//! `P` is the Galerkin-weighted traction `∫ψ_j t` of the body at its interface nodes: the
+//! **nodal force** that the neighbour exerts on it. Each body's energy is
+//! `E_b(U) = ½ UᵀS U + p̂ᵀU`; S is singular only for a body held by interfaces alone.
+//!
+//! **Pairing.** Every interface pair component with a displacement unknown on both sides is a
+//! row r with the relative displacement `[u]_r = U^B_r − U^A_r` (pair frame of A: tangential
+//! s, normal n). Unilateral normal rows pair the **nodal gap** `g_r = h_r + [u]_n ≥ 0` with
+//! the **nodal contact force** `λ_r = P^B_n + c_r w_r ≥ 0` (compression positive; `w_r` is
+//! the tributary length ∫ψ_j ds of the pair, so a closed pair holds a tension up to the
+//! cohesion c_r times its tributary length):
+//!
+//! ```text
+//!   g_r ≥ 0,   λ_r ≥ 0,   g_r λ_r = 0       (one complementarity per unilateral pair)
+//! ```
+//!
+//! Bonded rows and the tangential rows of tangentially tied pairs are equalities `[u] = 0`
+//! (`stick`: tied while the pair is closed; `slide`: never tied). With every row closed the
+//! bodies are glued into one assembled stiffness K_g over shared nodal displacements (sparse:
+//! bodies couple only through their shared nodes), factorised once by sparse Cholesky.
+//! Opening a set O of rows adds the openings s_O as unknowns; eliminating the glued
+//! displacements gives
+//!
+//! ```text
+//!   λ = λ⁰ + A s,    A = ∂λ/∂s  (the opening stiffness, symmetric PSD; PD unless a body
+//!                                 can move freely once the rows of O are open)
+//! ```
+//!
+//! so the frictionless problem is the LCP `λ = λ⁰ + A s, s ≥ 0, λ ≥ 0, sᵀλ = 0` over the
+//! unilateral rows: unique when A is positive definite (a P-matrix; Cottle–Pang–Stone), and
+//! equivalently the convex QP `min ½sᵀA s + λ⁰ᵀs, s ≥ 0`. A status (open set O) is solved by
+//! `A_OO s_O = −λ⁰_O` with the columns of A computed on demand (one sparse solve each) and a
+//! Cholesky factor of A_OO that is updated, not refactorised, when one row switches
+//! ([`Opening`]): O(|O|²) per switch. No dense matrix over all interfaces is formed, except
+//! by Lemke's method and the QP, which need A over every unilateral row.
+//!
+//! Why this pairing: the paper's mixed status system shares the traction F of a closed pair
+//! and checks nodal gaps of open ones, so its statuses are not the principal pivots of one
+//! LCP (its open state balances nodal forces P = 0, its closed state weak compatibility), and
+//! the force QP (32b) checks Galerkin-weighted gaps instead: the solvers solved different
+//! problems. Here every body satisfies W = 0 in every status, the only status-dependent
+//! conditions are the rows above, and the status systems are exactly the principal pivots of
+//! one symmetric LCP. The mixed system remains available for the archive (`interface`).
+
+// Index loops mirror the block formulas.
+#![allow(clippy::needless_range_loop)]
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat;
+
+use crate::bem::assembly::{BodySystem, Unknown};
+use crate::contact::solve::{body_field, Prepared};
+use crate::error::{Error, Result};
+use crate::input::model::Model;
+use crate::input::scene::{InterfaceModel, Tangential};
+use crate::solution::{BodyField, InterfaceResult, PairResult, PairStatus};
+
+/// `m x` by faer's product (vectorised, parallel on large blocks).
+pub fn matvec(m: &Mat<f64>, x: &[f64]) -> Vec<f64> {
+    if m.nrows() == 0 {
+        return Vec::new();
+    }
+    let y = m * faer::ColRef::from_slice(x);
+    y.iter().copied().collect()
+}
+
+/// One body's Steklov–Poincaré operator.
+pub struct BodyOp {
+    /// X0 indices of the displacement unknowns (the body's dofs) and of the tractions.
+    pub u_idx: Vec<usize>,
+    pub f_idx: Vec<usize>,
+    /// S (n_u × n_u) and p̂ for the unit load.
+    pub s: Mat<f64>,
+    pub p: Vec<f64>,
+    /// Traction recovery F = G_U U − factor·G_z.
+    pub gu: Mat<f64>,
+    pub gz: Vec<f64>,
+}
+
+/// What a row ties.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RowKind {
+    /// Bonded interface: always closed.
+    Bonded,
+    /// Normal component of a unilateral pair: the complementarity row.
+    Normal,
+    /// Tangential component of a `stick` pair: tied while the pair is closed.
+    Stick,
+}
+
+/// A relative-displacement row `[u]_r = U^B − U^A` of one pair component.
+#[derive(Debug, Clone, Copy)]
+pub struct Row {
+    pub iface: usize,
+    pub pair: usize,
+    /// 0 tangential, 1 normal.
+    pub comp: usize,
+    pub kind: RowKind,
+    /// Global dof indices of A's and B's displacement component.
+    pub dof_a: usize,
+    pub dof_b: usize,
+    /// Initial gap (normal rows).
+    pub gap: f64,
+    /// Tributary length ∫ψ_j ds of the pair on A's side.
+    pub weight: f64,
+}
+
+/// The contact problem of a model: per-body operators, rows, and the glued base factor.
+pub struct Problem {
+    pub ops: Vec<BodyOp>,
+    /// First global dof of each body (dofs are the bodies' U unknowns in order).
+    pub dof_start: Vec<usize>,
+    pub n_dofs: usize,
+    /// Rows that can open (normal and stick rows), then bonded rows.
+    pub rows: Vec<Row>,
+    /// Number of rows that can open (a prefix of `rows`).
+    pub n_open_rows: usize,
+    /// `row_of[k][j][c]`: the row of a pair component, if any.
+    pub row_of: Vec<Vec<[Option<usize>; 2]>>,
+    /// Glued index of each global dof (shared by the two sides of a base-closed row).
+    glued: Vec<usize>,
+    n_glued: usize,
+    factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
+}
+
+/// The all-closed state for one load factor and cohesion: glued displacements v⁰ and row
+/// forces λ⁰ (over the rows that can open).
+pub struct Base {
+    pub factor: f64,
+    pub v0: Vec<f64>,
+    pub lambda0: Vec<f64>,
+    /// Offsets (initial gaps closed) and cohesion terms per row.
+    pub cohesion: Vec<f64>,
+}
+
+fn x0_maps(sys: &BodySystem) -> (Vec<usize>, Vec<usize>, Vec<(usize, usize, usize)>) {
+    let (mut u_idx, mut f_idx, mut on) = (Vec::new(), Vec::new(), Vec::new());
+    for (i, u) in sys.unknowns[sys.n_x..].iter().enumerate() {
+        match *u {
+            Unknown::Displacement { on: Some(o), .. } => {
+                u_idx.push(i);
+                on.push(o);
+            }
+            Unknown::Traction0 { .. } => f_idx.push(i),
+            _ => {}
+        }
+    }
+    (u_idx, f_idx, on)
+}
+
+/// The Steklov–Poincaré operator of one body from its condensed operator.
+fn body_op(sys: &BodySystem, d00: &Mat<f64>, z0: &[f64], name: &str) -> Result<BodyOp> {
+    let (u_idx, f_idx, _) = x0_maps(sys);
+    let (nu, nf) = (u_idx.len(), f_idx.len());
+    let sub =
+        |r: &[usize], c: &[usize]| Mat::<f64>::from_fn(r.len(), c.len(), |i, j| d00[(r[i], c[j])]);
+    let dwf = sub(&f_idx, &f_idx);
+    let dwu = sub(&f_idx, &u_idx);
+    let dpu = sub(&u_idx, &u_idx);
+    let (gu, gz) = if nf > 0 {
+        let llt = dwf.llt(faer::Side::Lower).map_err(|_| {
+            Error::numerical(format!(
+                "body \"{name}\": the single-layer block of its interface tractions is not \
+                 positive definite (degenerate scale or a badly graded interface mesh)"
+            ))
+        })?;
+        let zw = Mat::<f64>::from_fn(nf, 1, |i, _| z0[f_idx[i]]);
+        let gz = llt.solve(&zw);
+        (
+            llt.solve(&dwu),
+            (0..nf).map(|i| gz[(i, 0)]).collect::<Vec<_>>(),
+        )
+    } else {
+        (Mat::zeros(0, nu), Vec::new())
+    };
+    let prod = dwu.transpose() * &gu;
+    let mut s = Mat::<f64>::from_fn(nu, nu, |i, j| -dpu[(i, j)] + prod[(i, j)]);
+    for i in 0..nu {
+        for j in 0..i {
+            let m = 0.5 * (s[(i, j)] + s[(j, i)]);
+            s[(i, j)] = m;
+            s[(j, i)] = m;
+        }
+    }
+    let p = (0..nu)
+        .map(|i| z0[u_idx[i]] - (0..nf).map(|k| dwu[(k, i)] * gz[k]).sum::<f64>())
+        .collect();
+    Ok(BodyOp {
+        u_idx,
+        f_idx,
+        s,
+        p,
+        gu,
+        gz,
+    })
+}
+
+/// Tributary length of each pair of an interface (half of each adjacent element).
+fn weights(model: &Model, k: usize) -> Vec<f64> {
+    let it = &model.interfaces[k];
+    let mut w = vec![0.0; it.pairs.len()];
+    for e in &it.elements {
+        let (a, b) = (it.pairs[e.pairs[0]].x, it.pairs[e.pairs[1]].x);
+        let l = (b[0] - a[0]).hypot(b[1] - a[1]);
+        w[e.pairs[0]] += 0.5 * l;
+        w[e.pairs[1]] += 0.5 * l;
+    }
+    w
+}
+
+impl Problem {
+    /// Builds the problem from the prepared bodies and factorises the glued base.
+    pub fn new(model: &Model, prepared: &Prepared) -> Result<Problem> {
+        let mut ops = Vec::with_capacity(model.bodies.len());
+        let mut dof_start = Vec::with_capacity(model.bodies.len());
+        let mut n_dofs = 0;
+        // (k, j, c) → global dof, per body.
+        let mut dof_at: Vec<std::collections::HashMap<(usize, usize, usize), usize>> = Vec::new();
+        for (b, sys) in prepared.systems.iter().enumerate() {
+            let c = &prepared.condensed[b];
+            let op = body_op(sys, &c.d00, &c.z0, &model.bodies[b].name)?;
+            let (_, _, on) = x0_maps(sys);
+            dof_start.push(n_dofs);
+            dof_at.push(
+                on.iter()
+                    .enumerate()
+                    .map(|(l, &o)| (o, n_dofs + l))
+                    .collect(),
+            );
+            n_dofs += op.u_idx.len();
+            ops.push(op);
+        }
+        let mut open_rows = Vec::new();
+        let mut bonded_rows = Vec::new();
+        for (k, it) in model.interfaces.iter().enumerate() {
+            let w = weights(model, k);
+            for j in 0..it.pairs.len() {
+                for c in 0..2 {
+                    let da = dof_at[it.body_a].get(&(k, j, c)).copied();
+                    let db = dof_at[it.body_b].get(&(k, j, c)).copied();
+                    let (dof_a, dof_b) = match (da, db) {
+                        (Some(a), Some(b)) => (a, b),
+                        (None, None) => continue,
+                        _ => {
+                            return Err(Error::input(
+                                &model.mesh_path,
+                                format!(
+                                    "interface \"{}\" at {:?}: a displacement component is \
+                                     prescribed on one side only; prescribe it on both bodies \
+                                     or on neither",
+                                    it.spec.name, it.pairs[j].x
+                                ),
+                            ))
+                        }
+                    };
+                    let kind = match (it.spec.model, c, it.spec.tangential) {
+                        (InterfaceModel::Bonded, _, _) => RowKind::Bonded,
+                        (InterfaceModel::Unilateral, 1, _) => RowKind::Normal,
+                        (InterfaceModel::Unilateral, _, Tangential::Slide) => continue,
+                        (InterfaceModel::Unilateral, _, _) => RowKind::Stick,
+                    };
+                    let row = Row {
+                        iface: k,
+                        pair: j,
+                        comp: c,
+                        kind,
+                        dof_a,
+                        dof_b,
+                        gap: if c == 1 { it.pairs[j].gap } else { 0.0 },
+                        weight: w[j],
+                    };
+                    if kind == RowKind::Bonded {
+                        bonded_rows.push(row);
+                    } else {
+                        open_rows.push(row);
+                    }
+                }
+            }
+        }
+        let n_open_rows = open_rows.len();
+        let rows: Vec<Row> = open_rows.into_iter().chain(bonded_rows).collect();
+        let mut row_of: Vec<Vec<[Option<usize>; 2]>> = model
+            .interfaces
+            .iter()
+            .map(|it| vec![[None; 2]; it.pairs.len()])
+            .collect();
+        for (r, row) in rows.iter().enumerate() {
+            row_of[row.iface][row.pair][row.comp] = Some(r);
+        }
+        // Glue B's dof onto A's for every row (all closed).
+        let mut glued: Vec<usize> = (0..n_dofs).collect();
+        for row in &rows {
+            glued[row.dof_b] = glued[row.dof_a];
+        }
+        let mut renumber = vec![usize::MAX; n_dofs];
+        let mut n_glued = 0;
+        for d in 0..n_dofs {
+            let g = glued[d];
+            if renumber[g] == usize::MAX {
+                renumber[g] = n_glued;
+                n_glued += 1;
+            }
+            glued[d] = renumber[g];
+        }
+        let mut trip = Vec::new();
+        for (b, op) in ops.iter().enumerate() {
+            let n = op.u_idx.len();
+            for i in 0..n {
+                let gi = glued[dof_start[b] + i];
+                for j in 0..n {
+                    let gj = glued[dof_start[b] + j];
+                    if gj >= gi {
+                        trip.push(Triplet::new(gj, gi, op.s[(i, j)]));
+                    }
+                }
+            }
+        }
+        let kg = SparseColMat::<usize, f64>::try_new_from_triplets(n_glued, n_glued, &trip)
+            .map_err(|e| Error::numerical(format!("assembling the interface system: {e:?}")))?;
+        let factor = kg.sp_cholesky(faer::Side::Lower).map_err(|_| {
+            Error::numerical(format!(
+                "the interface system with every pair closed is singular: {}",
+                mechanism_hint(model, &ops, &rows, &dof_start)
+            ))
+        })?;
+        let problem = Problem {
+            ops,
+            dof_start,
+            n_dofs,
+            rows,
+            n_open_rows,
+            row_of,
+            glued,
+            n_glued,
+            factor,
+        };
+        problem.check_base(&kg, model)?;
+        Ok(problem)
+    }
+
+    /// A Cholesky factor can succeed on a matrix that is singular up to roundoff: the
+    /// residual of one solve with a rough right-hand side tells.
+    fn check_base(&self, kg: &SparseColMat<usize, f64>, model: &Model) -> Result<()> {
+        let n = self.n_glued;
+        if n == 0 {
+            return Ok(());
+        }
+        let b = Mat::<f64>::from_fn(n, 1, |i, _| 1.0 + (i % 7) as f64);
+        let x = self.factor.solve(&b);
+        // K x with the full symmetric matrix from its lower triangle.
+        let mut kx = vec![0.0; n];
+        let sym = kg.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let vals = kg.val();
+        for c in 0..n {
+            for p in cp[c]..cp[c + 1] {
+                let r = ri[p];
+                kx[r] += vals[p] * x[(c, 0)];
+                if r != c {
+                    kx[c] += vals[p] * x[(r, 0)];
+                }
+            }
+        }
+        let res = (0..n)
+            .map(|i| (kx[i] - b[(i, 0)]).abs())
+            .fold(0.0, f64::max)
+            / 7.0;
+        if !(res < 1e-6) {
+            return Err(Error::numerical(format!(
+                "the interface system with every pair closed is singular (relative residual \
+                 {res:.1e}): {}",
+                mechanism_hint(model, &self.ops, &self.rows, &self.dof_start)
+            )));
+        }
+        Ok(())
+    }
+
+    /// Number of glued unknowns (the size of the sparse base system).
+    pub fn base_size(&self) -> usize {
+        self.n_glued
+    }
+
+    fn body_of(&self, dof: usize) -> (usize, usize) {
+        let b = self.dof_start.partition_point(|&s| s <= dof) - 1;
+        (b, dof - self.dof_start[b])
+    }
+
+    /// Body displacements for glued displacements `v`, openings `s` (over rows that can
+    /// open, zero where closed) and the closed initial gaps.
+    fn displacements(&self, v: &[f64], s: &[f64]) -> Vec<Vec<f64>> {
+        let mut u: Vec<Vec<f64>> = self
+            .ops
+            .iter()
+            .enumerate()
+            .map(|(b, op)| {
+                (0..op.u_idx.len())
+                    .map(|l| v[self.glued[self.dof_start[b] + l]])
+                    .collect()
+            })
+            .collect();
+        for (r, row) in self.rows.iter().enumerate() {
+            // U^B = U^A − h + s: the gap closed when s = 0.
+            let (b, l) = self.body_of(row.dof_b);
+            u[b][l] += -row.gap + if r < self.n_open_rows { s[r] } else { 0.0 };
+        }
+        u
+    }
+
+    /// Right-hand side of the glued system: Σ Pᵀ(S U_fixed + factor p̂), where U_fixed holds
+    /// the parts of U that are not glued unknowns (gap offsets, openings).
+    fn glued_load(&self, factor: f64, s: &[f64]) -> Vec<f64> {
+        let zero = vec![0.0; self.n_glued];
+        let u = self.displacements(&zero, s);
+        let mut f = vec![0.0; self.n_glued];
+        for (b, op) in self.ops.iter().enumerate() {
+            let su = matvec(&op.s, &u[b]);
+            for (i, v) in su.iter().enumerate() {
+                f[self.glued[self.dof_start[b] + i]] += factor * op.p[i] + v;
+            }
+        }
+        f
+    }
+
+    fn solve_glued(&self, rhs: &[f64]) -> Vec<f64> {
+        let n = self.n_glued;
+        let b = Mat::<f64>::from_fn(n, 1, |i, _| -rhs[i]);
+        let x = self.factor.solve(&b);
+        (0..n).map(|i| x[(i, 0)]).collect()
+    }
+
+    /// Nodal forces P = S U + factor·p̂ of each body.
+    fn forces(&self, u: &[Vec<f64>], factor: f64) -> Vec<Vec<f64>> {
+        self.ops
+            .iter()
+            .zip(u)
+            .map(|(op, ub)| {
+                matvec(&op.s, ub)
+                    .iter()
+                    .zip(&op.p)
+                    .map(|(v, p)| v + factor * p)
+                    .collect()
+            })
+            .collect()
+    }
+
+    /// The all-closed state for a load factor and the cohesion left at each pair.
+    pub fn base(&self, factor: f64, cohesion: &[Vec<f64>]) -> Base {
+        let s = vec![0.0; self.n_open_rows];
+        let v0 = self.solve_glued(&self.glued_load(factor, &s));
+        let u = self.displacements(&v0, &s);
+        let p = self.forces(&u, factor);
+        let coh: Vec<f64> = self.rows[..self.n_open_rows]
+            .iter()
+            .map(|r| match r.kind {
+                RowKind::Normal => cohesion[r.iface][r.pair] * r.weight,
+                _ => 0.0,
+            })
+            .collect();
+        let lambda0 = (0..self.n_open_rows)
+            .map(|r| {
+                let (b, l) = self.body_of(self.rows[r].dof_b);
+                p[b][l] + coh[r]
+            })
+            .collect();
+        Base {
+            factor,
+            v0,
+            lambda0,
+            cohesion: coh,
+        }
+    }
+
+    /// Column j of the opening stiffness A over the rows that can open: the change of
+    /// every row force per unit opening of row j (one sparse solve and a product with the
+    /// operator of each body that is the second side of a row).
+    pub fn column(&self, j: usize) -> Vec<f64> {
+        let (bj, lj) = self.body_of(self.rows[j].dof_b);
+        // B_j = Pᵀ S e: the glued load of a unit opening.
+        let mut rhs = vec![0.0; self.n_glued];
+        let op = &self.ops[bj];
+        for i in 0..op.u_idx.len() {
+            rhs[self.glued[self.dof_start[bj] + i]] += op.s[(i, lj)];
+        }
+        let y = self.solve_glued(&rhs); // = ∂v/∂s_j
+        let mut need = vec![false; self.ops.len()];
+        for r in &self.rows[..self.n_open_rows] {
+            need[self.body_of(r.dof_b).0] = true;
+        }
+        let t: Vec<Vec<f64>> = self
+            .ops
+            .iter()
+            .enumerate()
+            .map(|(b, op)| {
+                if !need[b] {
+                    return Vec::new();
+                }
+                let n = op.u_idx.len();
+                let mut du: Vec<f64> = (0..n)
+                    .map(|l| y[self.glued[self.dof_start[b] + l]])
+                    .collect();
+                if b == bj {
+                    du[lj] += 1.0;
+                }
+                matvec(&op.s, &du)
+            })
+            .collect();
+        (0..self.n_open_rows)
+            .map(|r| {
+                let (b, l) = self.body_of(self.rows[r].dof_b);
+                t[b][l]
+            })
+            .collect()
+    }
+
+    /// The boundary solution of every body and the interface results for openings `s`
+    /// (over the rows that can open; zero on closed rows) and the row statuses `open`.
+    pub fn state(
+        &self,
+        model: &Model,
+        prepared: &Prepared,
+        factor: f64,
+        s: &[f64],
+        open: &[bool],
+    ) -> (Vec<BodyField>, Vec<InterfaceResult>, Vec<Vec<f64>>) {
+        let v = self.solve_glued(&self.glued_load(factor, s));
+        let u = self.displacements(&v, s);
+        let mut fields = Vec::with_capacity(self.ops.len());
+        let mut tractions = Vec::with_capacity(self.ops.len());
+        for (b, op) in self.ops.iter().enumerate() {
+            let sys = &prepared.systems[b];
+            let mut x0 = vec![0.0; sys.n_x0()];
+            for (l, &i) in op.u_idx.iter().enumerate() {
+                x0[i] = -u[b][l];
+            }
+            let gu = matvec(&op.gu, &u[b]);
+            for (m, &i) in op.f_idx.iter().enumerate() {
+                x0[i] = -factor * op.gz[m] + gu[m];
+            }
+            let x = prepared.condensed[b].recover_x_scaled(&x0, factor);
+            fields.push(body_field(model, b, sys, &x, &x0, factor));
+            tractions.push(x0);
+        }
+        let p = self.forces(&u, factor);
+        let mut nodal = Vec::with_capacity(model.interfaces.len());
+        let interfaces = model
+            .interfaces
+            .iter()
+            .enumerate()
+            .map(|(k, it)| {
+                let mut nk = Vec::with_capacity(it.pairs.len());
+                let pairs = it
+                    .pairs
+                    .iter()
+                    .enumerate()
+                    .map(|(j, pr)| {
+                        // The traction on A of the discrete problem: the nodal force of the
+                        // row over the pair's tributary length (∫ψ_j t = t w_j for a uniform
+                        // traction; zero exactly where a row is open or frictionless); the
+                        // body's own traction hat where no row exists (prescribed both sides).
+                        let mut traction = [0.0; 2];
+                        for (c, t) in traction.iter_mut().enumerate() {
+                            match self.row_of[k][j][c] {
+                                Some(r) => {
+                                    let row = &self.rows[r];
+                                    let (b, l) = self.body_of(row.dof_b);
+                                    *t = -p[b][l] / row.weight;
+                                }
+                                None => {
+                                    // Frictionless tangential component: no row, no force.
+                                    let slide = c == 0
+                                        && it.spec.model == InterfaceModel::Unilateral
+                                        && it.spec.tangential == Tangential::Slide;
+                                    if !slide {
+                                        if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true)
+                                        {
+                                            *t = tractions[it.body_a][i];
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        let (ua, ub) = (
+                            fields[it.body_a].u[pr.node_a],
+                            fields[it.body_b].u[pr.node_b],
+                        );
+                        let d = [ub[0] - ua[0], ub[1] - ua[1]];
+                        let jump = [
+                            d[0] * pr.tangent[0] + d[1] * pr.tangent[1],
+                            d[0] * pr.normal[0] + d[1] * pr.normal[1],
+                        ];
+                        let closed = match self.row_of[k][j][1] {
+                            Some(r) if r < self.n_open_rows => !open[r],
+                            _ => true,
+                        };
+                        // Nodal normal force on B (compression positive).
+                        nk.push(match self.row_of[k][j][1] {
+                            Some(r) => {
+                                let (b, l) = self.body_of(self.rows[r].dof_b);
+                                p[b][l]
+                            }
+                            None => 0.0,
+                        });
+                        PairResult {
+                            status: if closed {
+                                PairStatus::Closed
+                            } else {
+                                PairStatus::Open
+                            },
+                            traction,
+                            jump,
+                        }
+                    })
+                    .collect();
+                nodal.push(nk);
+                InterfaceResult { pairs }
+            })
+            .collect();
+        (fields, interfaces, nodal)
+    }
+}
+
+/// Names the bodies that nothing but interfaces holds and the rigid motion that the closed
+/// rows leave free (translation along a direction, or rotation).
+pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[usize]) -> String {
+    let mut out = Vec::new();
+    for (b, body) in model.bodies.iter().enumerate() {
+        // Gram matrix of the rigid modes (x, y translation, rotation about the centroid)
+        // seen by the rows touching body b.
+        let n = ops[b].u_idx.len();
+        let (lo, hi) = (dof_start[b], dof_start[b] + n);
+        let nodes = &body.nodes;
+        let c = {
+            let m = nodes.len().max(1) as f64;
+            let (sx, sy) = nodes
+                .iter()
+                .fold((0.0, 0.0), |a, p| (a.0 + p[0], a.1 + p[1]));
+            [sx / m, sy / m]
+        };
+        let scale = model.scale.max(f64::MIN_POSITIVE);
+        let mut g = [[0.0f64; 3]; 3];
+        let mut touched = false;
+        for r in rows {
+            let dof = if (lo..hi).contains(&r.dof_a) {
+                r.dof_a
+            } else if (lo..hi).contains(&r.dof_b) {
+                r.dof_b
+            } else {
+                continue;
+            };
+            let _ = dof;
+            touched = true;
+            let it = &model.interfaces[r.iface];
+            let pr = &it.pairs[r.pair];
+            let dir = if r.comp == 1 { pr.normal } else { pr.tangent };
+            let m = [
+                dir[0],
+                dir[1],
+                (-(pr.x[1] - c[1]) * dir[0] + (pr.x[0] - c[0]) * dir[1]) / scale,
+            ];
+            for i in 0..3 {
+                for j in 0..3 {
+                    g[i][j] += m[i] * m[j];
+                }
+            }
+        }
+        let held_elsewhere = body_has_support(model, b);
+        if held_elsewhere || !touched && !held_elsewhere && n == 0 {
+            continue;
+        }
+        // Smallest eigenvector of the 3×3 Gram matrix by a few inverse-free sweeps (Jacobi).
+        let (val, vec) = smallest_eigen(g);
+        let tr = g[0][0] + g[1][1] + g[2][2];
+        if val <= 1e-10 * tr.max(f64::MIN_POSITIVE) || !touched {
+            let motion = if vec[2].abs() > 0.9 {
+                "a rotation".to_string()
+            } else {
+                let l = vec[0].hypot(vec[1]).max(f64::MIN_POSITIVE);
+                format!("a translation along ({:.3}, {:.3})", vec[0] / l, vec[1] / l)
+            };
+            out.push(format!("body \"{}\" is free to move ({motion})", body.name));
+        }
+    }
+    if out.is_empty() {
+        "a body or group of bodies is held by interfaces alone and can move freely: hold it \
+         with a displacement condition, or use tangential = \"stick\" where it can slide"
+            .into()
+    } else {
+        format!(
+            "{}: with every pair closed the interfaces do not hold it (frictionless pairs on a \
+             straight interface leave sliding free); hold it with a displacement condition \
+             (e.g. a symmetry plane or ux = 0 on a point-like boundary), or use tangential = \
+             \"stick\"",
+            out.join("; ")
+        )
+    }
+}
+
+fn body_has_support(model: &Model, b: usize) -> bool {
+    model.bodies[b].dof_counts()[0] > 0
+}
+
+fn smallest_eigen(mut a: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
+    let mut v = [[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]];
+    for _ in 0..50 {
+        let mut off = 0.0;
+        for p in 0..3 {
+            for q in (p + 1)..3 {
+                off += a[p][q].abs();
+                if a[p][q].abs() < 1e-300 {
+                    continue;
+                }
+                let theta = 0.5 * (a[q][q] - a[p][p]) / a[p][q];
+                let t = theta.signum() / (theta.abs() + (theta * theta + 1.0).sqrt());
+                let t = if theta == 0.0 { 1.0 } else { t };
+                let cs = 1.0 / (t * t + 1.0).sqrt();
+                let sn = t * cs;
+                for k in 0..3 {
+                    let (akp, akq) = (a[k][p], a[k][q]);
+                    a[k][p] = cs * akp - sn * akq;
+                    a[k][q] = sn * akp + cs * akq;
+                }
+                for k in 0..3 {
+                    let (apk, aqk) = (a[p][k], a[q][k]);
+                    a[p][k] = cs * apk - sn * aqk;
+                    a[q][k] = sn * apk + cs * aqk;
+                }
+                for k in 0..3 {
+                    let (vkp, vkq) = (v[k][p], v[k][q]);
+                    v[k][p] = cs * vkp - sn * vkq;
+                    v[k][q] = sn * vkp + cs * vkq;
+                }
+            }
+        }
+        if off < 1e-14 {
+            break;
+        }
+    }
+    let i = (0..3)
+        .min_by(|&x, &y| a[x][x].total_cmp(&a[y][y]))
+        .unwrap_or(0);
+    (a[i][i], [v[0][i], v[1][i], v[2][i]])
+}
+
+/// The Cholesky factor of A_OO for an open set O, updated one row at a time.
+///
+/// Rows are kept in insertion order; `append` adds a row and column (O(m²)), `remove`
+/// deletes one with a rank-one update of the trailing factor (O(m²)). A pivot below
+/// `1e-12` of the column's diagonal means A_OO is singular: opening that row would leave a
+/// body free (a mechanism), and the row is refused.
+#[derive(Debug, Clone, Default)]
+pub struct Opening {
+    /// Row indices of O in factor order.
+    pub rows: Vec<usize>,
+    /// Lower-triangular factor, row-major rows of growing length.
+    l: Vec<Vec<f64>>,
+}
+
+impl Opening {
+    pub fn len(&self) -> usize {
+        self.rows.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.rows.is_empty()
+    }
+
+    /// Appends row `r` whose column of A is `col` (over all rows that can open). Returns
+    /// false (and changes nothing) if A_OO would become singular.
+    pub fn append(&mut self, r: usize, col: &[f64]) -> bool {
+        let m = self.rows.len();
+        let a: Vec<f64> = self.rows.iter().map(|&q| col[q]).collect();
+        // Solve L x = a.
+        let mut x = vec![0.0; m];
+        for i in 0..m {
+            let mut acc = a[i];
+            for k in 0..i {
+                acc -= self.l[i][k] * x[k];
+            }
+            x[i] = acc / self.l[i][i];
+        }
+        let d2 = col[r] - x.iter().map(|v| v * v).sum::<f64>();
+        if !(d2 > 1e-12 * col[r].abs()) {
+            return false;
+        }
+        x.push(d2.sqrt());
+        self.l.push(x);
+        self.rows.push(r);
+        true
+    }
+
+    /// Removes row `r` from O.
+    pub fn remove(&mut self, r: usize) {
+        let Some(k) = self.rows.iter().position(|&q| q == r) else {
+            return;
+        };
+        // The column below the removed diagonal updates the trailing factor:
+        // L33' L33'ᵀ = L33 L33ᵀ + l32 l32ᵀ.
+        let mut w: Vec<f64> = (k + 1..self.rows.len()).map(|i| self.l[i][k]).collect();
+        self.rows.remove(k);
+        self.l.remove(k);
+        for row in self.l.iter_mut().skip(k) {
+            row.remove(k);
+        }
+        let m = self.rows.len();
+        for (t, i) in (k..m).enumerate() {
+            let lii = self.l[i][i];
+            let wi = w[t];
+            let rr = lii.hypot(wi);
+            let (c, s) = (rr / lii, wi / lii);
+            self.l[i][i] = rr;
+            for (t2, j) in (i + 1..m).enumerate() {
+                let idx = t + 1 + t2;
+                self.l[j][i] = (self.l[j][i] + s * w[idx]) / c;
+                w[idx] = c * w[idx] - s * self.l[j][i];
+            }
+        }
+    }
+
+    /// Solves A_OO s = rhs (rhs in factor order).
+    pub fn solve(&self, rhs: &[f64]) -> Vec<f64> {
+        let m = self.rows.len();
+        let mut y = vec![0.0; m];
+        for i in 0..m {
+            let mut acc = rhs[i];
+            for k in 0..i {
+                acc -= self.l[i][k] * y[k];
+            }
+            y[i] = acc / self.l[i][i];
+        }
+        for i in (0..m).rev() {
+            let mut acc = y[i];
+            for k in (i + 1)..m {
+                acc -= self.l[k][i] * y[k];
+            }
+            y[i] = acc / self.l[i][i];
+        }
+        y
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn opening_factor_follows_appends_and_removals() {
+        // A = B Bᵀ + I over 6 rows; compare with a fresh factor after each change.
+        let n = 6;
+        let b: Vec<f64> = (0..n * n)
+            .map(|i| ((i * 37 % 11) as f64) / 7.0 - 0.6)
+            .collect();
+        let a = |i: usize, j: usize| -> f64 {
+            (0..n).map(|k| b[i * n + k] * b[j * n + k]).sum::<f64>()
+                + if i == j { 1.0 } else { 0.0 }
+        };
+        let col = |j: usize| (0..n).map(|i| a(i, j)).collect::<Vec<_>>();
+        let mut o = Opening::default();
+        for r in [3, 0, 5, 1, 4] {
+            assert!(o.append(r, &col(r)));
+        }
+        o.remove(0);
+        o.remove(4);
+        assert!(o.append(2, &col(2)));
+        // Check A_OO s = rhs.
+        let rhs: Vec<f64> = (0..o.len()).map(|i| i as f64 - 1.5).collect();
+        let s = o.solve(&rhs);
+        for (i, &ri) in o.rows.iter().enumerate() {
+            let lhs: f64 = o.rows.iter().zip(&s).map(|(&rj, sj)| a(ri, rj) * sj).sum();
+            assert!(
+                (lhs - rhs[i]).abs() < 1e-12,
+                "row {ri}: {lhs} vs {}",
+                rhs[i]
+            );
+        }
+    }
+
+    #[test]
+    fn singular_opening_is_refused() {
+        // A = v vᵀ (rank one): the second row cannot be appended.
+        let v = [1.0, 2.0];
+        let col = |j: usize| vec![v[0] * v[j], v[1] * v[j]];
+        let mut o = Opening::default();
+        assert!(o.append(0, &col(0)));
+        assert!(!o.append(1, &col(1)));
+        assert_eq!(o.rows, vec![0]);
+    }
+}
