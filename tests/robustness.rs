@@ -746,3 +746,27 @@ fn the_estimate_counts_the_unknowns_the_assembly_numbers() {
         assert!(est.peak_bytes > dense, "the peak holds every G");
     }
 }
+
+/// An archive the `archive` fuzz target found to crash libhdf5 (SEGV in H5HG_read, a
+/// variable-length string through the global heap): `inspect` and `export` end in exit 1
+/// and a message.
+#[test]
+fn an_archive_that_crashes_libhdf5_ends_in_a_message() {
+    let dir = tmpdir("rb-segv");
+    let file = root().join("tests/fixtures/fuzz_archive_hdf5_segv.h5");
+    for args in [
+        vec!["inspect", s(&file)],
+        vec!["export", s(&file), "--vtk", s(&dir.join("vtk"))],
+    ] {
+        let r = output(bin().args(&args).env("SGBEM_ARCHIVE_TIMEOUT", "10"));
+        expect(
+            &r,
+            1,
+            &[
+                "fuzz_archive_hdf5_segv.h5",
+                "the archive is damaged",
+                "again",
+            ],
+        );
+    }
+}
