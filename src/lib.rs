@@ -11,12 +11,14 @@
 //! * `contact` — the interface problem and its solvers;
 //! * `post` — boundary stresses, interior fields, sections;
 //! * `output` — summary, archive, VTK, CSV (they read result records; nothing imports them);
+//! * `estimate` (memory and time of a run, before assembling it);
 //! * `plan` (the effects a scene calls for), `report` (what `sgbem check` prints) and
 //!   `pipeline` (the only module that knows the stage order).
 
 pub mod bem;
 pub mod contact;
 pub mod error;
+pub mod estimate;
 pub mod input;
 pub mod output;
 pub mod pipeline;

@@ -1,10 +1,12 @@
 //! The `sgbem` command line: a thin front over the pipeline.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand, ValueEnum};
 
+use sgbem::error::Error;
 use sgbem::input::scene::Method;
 use sgbem::{pipeline, report};
 
@@ -98,8 +100,99 @@ enum Command {
     },
 }
 
+/// Environment variable that marks the child process reading an archive.
+const ARCHIVE_WORKER: &str = "SGBEM_ARCHIVE_WORKER";
+
+/// Writes to stdout. A closed pipe (`| head -1`) ends the output quietly; any other failure
+/// (a full device) is an I/O error.
+fn out(text: &str) -> Result<(), Error> {
+    let mut o = std::io::stdout().lock();
+    match o.write_all(text.as_bytes()).and_then(|()| o.flush()) {
+        Ok(()) => Ok(()),
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => Ok(()),
+        Err(e) => Err(Error::io("standard output", format!("cannot write: {e}"))),
+    }
+}
+
+/// Writes a line to stderr; a stderr that cannot be written is ignored (nothing else can
+/// be told).
+fn err_line(text: &str) {
+    let _ = writeln!(std::io::stderr().lock(), "{text}");
+}
+
+/// Runs `inspect` or `export` in a child process bounded in time, so that a damaged archive
+/// that crashes or hangs the HDF5 library ends in a message, not a crash.
+fn archive_in_child(archive: &std::path::Path) -> Result<u8, Error> {
+    let exe = std::env::current_exe().map_err(|e| Error::io("sgbem", e))?;
+    let limit = std::env::var("SGBEM_ARCHIVE_TIMEOUT")
+        .ok()
+        .and_then(|v| v.trim().parse::<f64>().ok())
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .unwrap_or(300.0);
+    let mut child = std::process::Command::new(exe)
+        .args(std::env::args_os().skip(1))
+        .env(ARCHIVE_WORKER, "1")
+        .spawn()
+        .map_err(|e| Error::io(archive, format!("cannot start the reader: {e}")))?;
+    let start = std::time::Instant::now();
+    let damaged = |why: &str| {
+        Error::io(
+            archive,
+            format!(
+                "the archive is damaged ({why}): it is not a whole archive written by \
+                 `sgbem run`; run the scene again to write it anew"
+            ),
+        )
+    };
+    loop {
+        match child.try_wait() {
+            Ok(Some(status)) => {
+                return match status.code() {
+                    Some(c) => Ok(u8::try_from(c).unwrap_or(1)),
+                    None => Err(damaged("reading it crashed the HDF5 library")),
+                };
+            }
+            Ok(None) => {}
+            Err(e) => {
+                return Err(Error::io(
+                    archive,
+                    format!("cannot wait for the reader: {e}"),
+                ))
+            }
+        }
+        if start.elapsed().as_secs_f64() > limit {
+            let _ = child.kill();
+            let _ = child.wait();
+            return Err(damaged(&format!("reading it did not end within {limit} s")));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) => {
+            // Help and version go to stdout; a closed or full stream must not panic.
+            let code = if e.use_stderr() { 2 } else { 0 };
+            let text = e.render().to_string();
+            if e.use_stderr() {
+                err_line(text.trim_end());
+            } else if let Err(e) = out(&text) {
+                err_line(&format!("sgbem: {e}"));
+                return ExitCode::from(1);
+            }
+            return ExitCode::from(code);
+        }
+    };
+    if std::env::var_os(ARCHIVE_WORKER).is_none() {
+        if let Command::Inspect { archive } | Command::Export { archive, .. } = &cli.command {
+            return match archive_in_child(archive) {
+                Ok(code) => ExitCode::from(code),
+                Err(e) => fail(&e),
+            };
+        }
+    }
     let result = match cli.command {
         Command::Check { scene, mesh, set } => {
             // A .geo mesh is meshed into a temporary folder, removed afterwards.
@@ -113,24 +206,26 @@ fn main() -> ExitCode {
                 },
             );
             let _ = std::fs::remove_dir_all(&tmp);
-            loaded.map(|l| {
-                print!(
-                    "{}",
-                    report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
-                );
+            loaded.and_then(|l| {
+                out(&report::check_report(
+                    &l.scene,
+                    &l.model,
+                    &l.plan,
+                    l.mesh.binary,
+                ))
             })
         }
         Command::Run {
             scene,
             mesh,
-            out,
+            out: out_dir,
             method,
             quiet,
             set,
         } => {
             let opts = pipeline::RunOptions {
                 mesh,
-                out,
+                out: out_dir,
                 method: method.map(|m| match m {
                     MethodArg::Lcp => Method::Lcp,
                     MethodArg::Qp => Method::Qp,
@@ -139,12 +234,14 @@ fn main() -> ExitCode {
                 quiet,
                 sets: set,
             };
-            pipeline::run(&scene, &opts).map(|r| {
+            pipeline::run(&scene, &opts).and_then(|r| {
                 for n in &r.notes {
-                    eprintln!("sgbem: note: {n}");
+                    err_line(&format!("sgbem: note: {n}"));
                 }
-                if !quiet {
-                    println!("results in {}", r.out_dir.display());
+                if quiet {
+                    Ok(())
+                } else {
+                    out(&format!("results in {}\n", r.out_dir.display()))
                 }
             })
         }
@@ -166,19 +263,26 @@ fn main() -> ExitCode {
             }
         }),
         Command::Inspect { archive } => {
-            sgbem::output::archive::inspect(&archive).map(|text| print!("{text}"))
+            sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
         }
         Command::Export { archive, vtk } => {
-            sgbem::output::vtk::export(&archive, &vtk).map(|files| {
-                println!("{} VTK files written to {}", files.len(), vtk.display());
+            sgbem::output::vtk::export(&archive, &vtk).and_then(|files| {
+                out(&format!(
+                    "{} VTK files written to {}\n",
+                    files.len(),
+                    vtk.display()
+                ))
             })
         }
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        Err(e) => {
-            eprintln!("sgbem: {e}");
-            ExitCode::from(e.exit_code() as u8)
-        }
+        Err(e) => fail(&e),
     }
+}
+
+/// Reports an error on stderr; its kind decides the exit status.
+fn fail(e: &Error) -> ExitCode {
+    err_line(&format!("sgbem: {e}"));
+    ExitCode::from(e.exit_code() as u8)
 }

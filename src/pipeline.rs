@@ -435,14 +435,37 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         loaded.scene.output.directory = o.clone();
     }
     timings.add("read", t0.elapsed().as_secs_f64());
+    // Refuse what cannot fit before allocating any of it.
+    crate::estimate::estimate(&loaded.model, &loaded.scene)
+        .check_fits(&loaded.model, scene_path)?;
+    // The run writes into a staging folder, swapped in when complete (output/folder.rs).
+    let folder = crate::output::folder::RunFolder::acquire(&loaded.scene.output.directory)?;
+    // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
+    let meshed = loaded.scene.output.directory.join("mesh");
+    if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
+        && meshed.is_dir()
+    {
+        let dest = folder.staging().join("mesh");
+        std::fs::create_dir_all(&dest)
+            .map_err(|e| Error::io(&dest, format!("cannot create the mesh folder: {e}")))?;
+        for entry in std::fs::read_dir(&meshed).into_iter().flatten().flatten() {
+            let _ = std::fs::copy(entry.path(), dest.join(entry.file_name()));
+        }
+    }
     let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
         .unwrap_or_else(QuadratureSettings::standard);
     let progress = crate::output::progress::Progress::new(opts.quiet);
-    let (prepared, result) = solve_loaded_with(&loaded, &settings, &mut timings, &progress)?;
+    let (prepared, mut result) = solve_loaded_with(&loaded, &settings, &mut timings, &progress)?;
     let Loaded {
         scene, model, plan, ..
     } = &loaded;
-    let out_dir = scene.output.directory.clone();
+    if let Some(where_) = non_finite(model, &result) {
+        result.status = "failed: non-finite results".into();
+        if result.failure.is_none() {
+            result.failure = Some(non_finite_error(&where_, scene));
+        }
+    }
+    let out_dir = folder.staging().to_path_buf();
     let factor = result.load_factor;
     let mut notes = plan.advice.clone();
     notes.extend(result.notes.iter().cloned());
@@ -464,6 +487,18 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                 )
             })
             .collect();
+        if result.failure.is_none() {
+            if let Some(x) = rows.iter().find_map(|(x, v)| {
+                v.filter(|(u, sg)| !u.iter().chain(sg.iter()).all(|c| c.is_finite()))
+                    .map(|_| *x)
+            }) {
+                result.status = "failed: non-finite results".into();
+                result.failure = Some(non_finite_error(
+                    &format!("section {} at ({:e}, {:e})", s.name, x[0], x[1]),
+                    scene,
+                ));
+            }
+        }
         if rows.iter().any(|r| r.1.is_none()) {
             notes.push(format!(
                 "section {}: some points lie outside every body (written as nan)",
@@ -512,6 +547,20 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                     stage.inc(n)
                 });
             field_nodes += values.len();
+            let bad = values.iter().find(|v| {
+                !(v.u.iter().all(|c| c.is_finite())
+                    && v.sigma.iter().flatten().all(|c| c.is_finite()))
+            });
+            if let (Some(v), None) = (bad, &result.failure) {
+                result.status = "failed: non-finite results".into();
+                result.failure = Some(non_finite_error(
+                    &format!(
+                        "body \"{}\": interior field at mesh node {}",
+                        input.body.name, v.mesh_node
+                    ),
+                    scene,
+                ));
+            }
             interior.push(crate::output::record::InteriorRecord::from_values(&values));
         }
         stage.finish();
@@ -582,9 +631,24 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
     }
+    // Figures that overflow (serialised as null): a resultant of finite tractions can.
+    if result.failure.is_none() {
+        let overflow = summary["interfaces"].as_object().and_then(|m| {
+            m.iter().find_map(|(name, fig)| {
+                fig.as_object()?
+                    .iter()
+                    .find(|(_, v)| v.is_null())
+                    .map(|(k, _)| format!("interface \"{name}\": {k}"))
+            })
+        });
+        if let Some(where_) = overflow {
+            result.status = "failed: non-finite results".into();
+            summary["status"] = serde_json::json!(result.status);
+            result.failure = Some(non_finite_error(&where_, scene));
+        }
+    }
     let text = serde_json::to_string_pretty(&summary)
         .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
-    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
 
     // Archive and VTK files.
     let t4 = Instant::now();
@@ -650,6 +714,10 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     }))
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
     write_atomic(&out_dir.join("timings.json"), timing_text.as_bytes())?;
+    // The summary last, then the whole folder swapped in.
+    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    let out_dir = folder.target().to_path_buf();
+    folder.commit()?;
     if let Some(f) = result.failure {
         return Err(f);
     }
@@ -658,4 +726,50 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         summary,
         notes,
     })
+}
+
+/// Where a result holds a number that is not finite ("body \"A\" displacement", ...).
+fn non_finite(model: &Model, result: &RunResult) -> Option<String> {
+    let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+    for (b, f) in model.bodies.iter().zip(&result.fields) {
+        if let Some(n) = f.u.iter().position(|u| !finite(u)) {
+            return Some(format!(
+                "body \"{}\": displacement at node ({:e}, {:e})",
+                b.name, b.nodes[n][0], b.nodes[n][1]
+            ));
+        }
+        if let Some(e) = f.t.iter().position(|t| !t.iter().all(|x| finite(x))) {
+            let p = b.nodes[b.elements[e].nodes[0]];
+            return Some(format!(
+                "body \"{}\": traction on the element at ({:e}, {:e})",
+                b.name, p[0], p[1]
+            ));
+        }
+    }
+    for (it, r) in model.interfaces.iter().zip(&result.interfaces) {
+        if r.pairs
+            .iter()
+            .any(|p| !finite(&p.traction) || !finite(&p.jump))
+        {
+            return Some(format!(
+                "interface \"{}\": traction or opening",
+                it.spec.name
+            ));
+        }
+    }
+    None
+}
+
+/// The numerical failure for a non-finite result at `where_`.
+fn non_finite_error(where_: &str, scene: &Scene) -> Error {
+    let largest = scene
+        .solve
+        .load_factors
+        .iter()
+        .fold(0.0f64, |m, f| m.max(f.abs()));
+    Error::numerical(format!(
+        "the results hold numbers that are not finite ({where_}): the load factors (largest \
+         {largest:e}), prescribed values or material constants overflow double precision; \
+         scale the scene's units so that values stay well within 1e-100..1e100"
+    ))
 }

@@ -221,6 +221,19 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     for (name, what) in &plan.stages {
         let _ = writeln!(o, "    {name:<12} {what}");
     }
+    let cost = crate::estimate::estimate(model, scene);
+    let unknowns: usize = cost.bodies.iter().map(|b| b.n_x + b.n_x0).sum();
+    let _ = writeln!(o, "  cost:    {} ({unknowns} unknowns)", cost.line());
+    if let Some((avail, source)) = crate::estimate::available_memory() {
+        if cost.peak_bytes > avail {
+            let _ = writeln!(
+                o,
+                "  cost:    more than the {} available ({source}): `sgbem run` will refuse; \
+                 coarsen the mesh",
+                crate::estimate::fmt_bytes(avail)
+            );
+        }
+    }
     for a in &plan.advice {
         let _ = writeln!(o, "  advice: {a}");
     }

@@ -92,8 +92,16 @@ impl Expr {
                 function_list()
             ));
         }
+        check_size(text)?;
         let tree = build_operator_tree::<DefaultNumericTypes>(&floats_for_integers(text))
             .map_err(|e| format!("it does not parse ({e})"))?;
+        let depth = tree_depth(&tree);
+        if depth > MAX_TREE_DEPTH {
+            return Err(format!(
+                "it nests {depth} operations deep, more than {MAX_TREE_DEPTH}: simplify it \
+                 (e.g. a long sum as a product, a polynomial in Horner form)"
+            ));
+        }
         for name in tree.iter_read_variable_identifiers() {
             if !VARIABLES.contains(&name) {
                 return Err(format!(
@@ -138,6 +146,68 @@ impl Expr {
             Err(e) => Err(format!("it cannot be evaluated ({e})")),
         }
     }
+}
+
+/// Longest expression accepted, in characters.
+pub const MAX_LEN: usize = 10_000;
+/// Deepest nesting of parentheses, and longest run of signs.
+pub const MAX_DEPTH: usize = 200;
+/// Deepest parsed tree (a sum of n terms is n deep; each parenthesis or call adds 1 or 2).
+pub const MAX_TREE_DEPTH: usize = 1000;
+
+/// Refuses, before the parser sees it, a text too long, nested too deep in parentheses, or
+/// with a run of signs (`- - - x`) longer than [`MAX_DEPTH`]: the parser's and the
+/// evaluator's recursion and time grow with them.
+fn check_size(text: &str) -> Result<(), String> {
+    let len = text.chars().count();
+    if len > MAX_LEN {
+        return Err(format!(
+            "it is {len} characters long, more than {MAX_LEN}: write a shorter expression"
+        ));
+    }
+    let (mut depth, mut deepest, mut signs, mut most_signs) = (0usize, 0usize, 0usize, 0usize);
+    for c in text.chars() {
+        match c {
+            '(' => {
+                depth += 1;
+                deepest = deepest.max(depth);
+            }
+            ')' => depth = depth.saturating_sub(1),
+            _ => {}
+        }
+        match c {
+            '+' | '-' => {
+                signs += 1;
+                most_signs = most_signs.max(signs);
+            }
+            c if c.is_whitespace() || c == '(' => {}
+            _ => signs = 0,
+        }
+    }
+    if deepest > MAX_DEPTH {
+        return Err(format!(
+            "it nests parentheses {deepest} deep, more than {MAX_DEPTH}: simplify it"
+        ));
+    }
+    if most_signs > MAX_DEPTH {
+        return Err(format!(
+            "it has a run of {most_signs} signs (+ -), more than {MAX_DEPTH}: simplify it"
+        ));
+    }
+    Ok(())
+}
+
+/// Depth of a parsed tree, without recursion.
+fn tree_depth(tree: &Node<DefaultNumericTypes>) -> usize {
+    let mut deepest = 0;
+    let mut stack = vec![(tree, 1usize)];
+    while let Some((node, d)) = stack.pop() {
+        deepest = deepest.max(d);
+        for c in node.children() {
+            stack.push((c, d + 1));
+        }
+    }
+    deepest
 }
 
 fn function_list() -> String {
@@ -255,6 +325,76 @@ mod tests {
 
     fn ev(text: &str, p: [f64; 2]) -> f64 {
         Expr::parse(text).expect("parses").eval(p)
+    }
+
+    /// The worst texts within the limits parse (or are refused) quickly and without
+    /// exhausting a 1 MB stack (threads get 2 MB); beyond the limits they are refused before
+    /// parsing.
+    #[test]
+    fn size_and_depth_are_bounded() {
+        let run = || {
+            let n = MAX_LEN / 2 - 1;
+            let m = MAX_TREE_DEPTH - 2;
+            let cases: Vec<String> = vec![
+                vec!["x"; n].join("+"),
+                vec!["x"; n].join("^"),
+                vec!["x"; n].join("*-"),
+                vec!["x"; m].join("+"),
+                vec!["x"; m].join("^"),
+                vec!["x"; m / 2].join("*-"),
+                format!("{}x{}", "sin(".repeat(m / 8), ")".repeat(m / 8)),
+                format!("{}x{}", "(".repeat(MAX_DEPTH), ")".repeat(MAX_DEPTH)),
+                format!("{}x{}", "sin(".repeat(MAX_DEPTH), ")".repeat(MAX_DEPTH)),
+                format!("{}x", "-".repeat(MAX_DEPTH)),
+                format!("{}x", "- ".repeat(MAX_DEPTH)),
+                format!("{}x", "-(".repeat(MAX_DEPTH / 2)) + &")".repeat(MAX_DEPTH / 2),
+            ];
+            let mut out = Vec::new();
+            for c in &cases {
+                let t = std::time::Instant::now();
+                let r = Expr::parse(c).map(|e| e.eval([0.5, 0.5]));
+                out.push((c.len(), r, t.elapsed().as_secs_f64()));
+            }
+            out
+        };
+        let results = std::thread::Builder::new()
+            .stack_size(1 << 20)
+            .spawn(run)
+            .expect("thread")
+            .join()
+            .expect("no stack overflow");
+        for (len, r, secs) in &results {
+            eprintln!("{len} chars: {r:?} in {secs:.4} s");
+            assert!(*secs < 0.5, "{len} chars took {secs} s");
+        }
+        // Within the limits: evaluated (x = 0.5).
+        assert_eq!(results[3].1, Ok(0.5 * (MAX_TREE_DEPTH - 2) as f64));
+        assert!(results[6].1.as_ref().is_ok_and(|v| v.is_finite()));
+        assert!(results[0]
+            .1
+            .as_ref()
+            .unwrap_err()
+            .contains("5000 operations deep"));
+        assert!(results[1]
+            .1
+            .as_ref()
+            .unwrap_err()
+            .contains("5000 operations deep"));
+        assert!(results[2]
+            .1
+            .as_ref()
+            .unwrap_err()
+            .contains("characters long"));
+        let long = format!("{}+x", "1".repeat(MAX_LEN));
+        assert!(Expr::parse(&long).unwrap_err().contains("characters long"));
+        let deep = format!(
+            "{}x{}",
+            "(".repeat(MAX_DEPTH + 1),
+            ")".repeat(MAX_DEPTH + 1)
+        );
+        assert!(Expr::parse(&deep).unwrap_err().contains("parentheses"));
+        let signs = format!("{}x", "-".repeat(MAX_DEPTH + 1));
+        assert!(Expr::parse(&signs).unwrap_err().contains("signs"));
     }
 
     #[test]

@@ -267,9 +267,25 @@ pub fn read_scene(path: &Path) -> Result<Scene> {
 /// Reads a scene file, applies the `--set KEY=VALUE` overrides to its TOML document and
 /// validates the result exactly like a file.
 pub fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
-    let text = std::fs::read_to_string(path)
+    let bytes = std::fs::read(path)
         .map_err(|e| Error::io(path, format!("cannot read the scene file: {e}")))?;
-    parse_scene_with(&text, path, sets)
+    if let Some(hint) = not_a_scene(path, &bytes) {
+        return Err(Error::input(path, hint));
+    }
+    let text = match std::str::from_utf8(&bytes) {
+        Ok(t) => t,
+        Err(e) => {
+            return Err(Error::input(
+                path,
+                format!(
+                    "the scene is not UTF-8 text (invalid byte at offset {}): a scene is a TOML \
+                     text file; save it as UTF-8",
+                    e.valid_up_to()
+                ),
+            ))
+        }
+    };
+    parse_scene_with(text, path, sets)
 }
 
 /// One `--set KEY=VALUE`: the dotted key path and the value. The value is read as a TOML
@@ -403,6 +419,70 @@ pub fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scen
         }
     }
 }
+
+/// A hint when the file given as the scene is another kind of file sgbem knows.
+fn not_a_scene(path: &Path, bytes: &[u8]) -> Option<String> {
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    let head = String::from_utf8_lossy(&bytes[..bytes.len().min(4096)]).into_owned();
+    if bytes.starts_with(b"\x89HDF") || ext == "h5" {
+        return Some(
+            "this is an HDF5 archive, not a scene: give the .toml scene it came from, or read \
+             it with `sgbem inspect FILE.h5`"
+                .into(),
+        );
+    }
+    if head.trim_start().starts_with("$MeshFormat") || ext == "msh" {
+        return Some(
+            "this is a gmsh mesh, not a scene: pass it with --mesh FILE.msh (or mesh = \
+             \"FILE.msh\" in the scene) and give the .toml scene as the first argument"
+                .into(),
+        );
+    }
+    let geo_words = [
+        "SetFactory",
+        "Point(",
+        "Line(",
+        "Curve Loop(",
+        "Plane Surface(",
+    ];
+    if ext == "geo" || geo_words.iter().any(|w| head.contains(w)) {
+        return Some(
+            "this is a gmsh geometry, not a scene: mesh it with gmsh -2 -format msh41 FILE.geo \
+             -o FILE.msh, then pass a .toml scene that names the mesh"
+                .into(),
+        );
+    }
+    None
+}
+
+/// Err message when `name` cannot be used as a file or group name: it must be made of ASCII
+/// letters, digits, `.`, `_` and `-`, not be empty and not start with `.`.
+pub fn file_name_problem(name: &str) -> Option<String> {
+    if name.is_empty() {
+        return Some("the name is empty".into());
+    }
+    if name.starts_with('.') {
+        return Some(format!(
+            "the name \"{name}\" starts with `.` (a hidden file)"
+        ));
+    }
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-')))
+    {
+        return Some(format!("the name \"{name}\" holds `{c}`"));
+    }
+    if name.len() > 100 {
+        return Some(format!("the name \"{name}\" is longer than 100 characters"));
+    }
+    None
+}
+
+/// Young's moduli outside this range are refused as extreme values.
+pub const YOUNG_RANGE: (f64, f64) = (1e-100, 1e100);
 
 // ---------------------------------------------------------------------------------------
 // Raw TOML shapes (serde). Unknown keys are caught first by `check_keys` for a friendly
@@ -586,6 +666,12 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     let mut bodies = Vec::new();
     for (name, v) in sub_tables(&doc, "body", path)? {
         let key = format!("body.{name}");
+        if let Some(problem) = file_name_problem(name) {
+            return Err(err(format!(
+                "[{key}]: {problem}; a body's name becomes a group name in the archive: \
+                 name the Physical Surface (and this table) with letters, digits, . _ - only"
+            )));
+        }
         let raw: RawBody = typed(v, &key, path)?;
         if !(raw.young.is_finite() && raw.young > 0.0) {
             return Err(err(format!(
@@ -593,16 +679,25 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
                 raw.young
             )));
         }
-        let upper_ok = match plane {
-            Plane::Strain => raw.poisson < 0.5,
-            Plane::Stress => raw.poisson <= 0.5,
-        };
-        if !(raw.poisson.is_finite() && raw.poisson > -1.0 && upper_ok) {
+        if !(YOUNG_RANGE.0..=YOUNG_RANGE.1).contains(&raw.young) {
+            return Err(err(format!(
+                "`{key}.young` = {:e} is an extreme value (outside {:e}..{:e}): products of it \
+                 overflow or underflow double precision; choose units that keep the moduli \
+                 moderate (e.g. MPa and mm, or GPa)",
+                raw.young, YOUNG_RANGE.0, YOUNG_RANGE.1
+            )));
+        }
+        if !(raw.poisson.is_finite() && raw.poisson > -1.0 && raw.poisson < 0.5) {
             let range = match plane {
                 Plane::Strain => {
                     "-1 < poisson < 0.5 (0.5, incompressible, is invalid in plane strain)"
                 }
-                Plane::Stress => "-1 < poisson <= 0.5",
+                // ν = 0.5 is physical in plane stress (ν̄ = ν/(1+ν) = 1/3), but the kernels
+                // take the material's ν in (-1, 0.5).
+                Plane::Stress => {
+                    "-1 < poisson < 0.5 (0.5 is not supported in plane stress either: use \
+                     0.499 for a nearly incompressible sheet)"
+                }
             };
             return Err(err(format!(
                 "`{key}.poisson` = {} is outside {range}",
@@ -639,6 +734,13 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     let mut interfaces = Vec::new();
     for (name, v) in sub_tables(&doc, "interface", path)? {
         let key = format!("interface.{name}");
+        if let Some(problem) = file_name_problem(name) {
+            return Err(err(format!(
+                "[{key}]: {problem}; an interface's name becomes a file name \
+                 (interfaces/NAME.csv): name the Physical Curve (and this table) with letters, \
+                 digits, . _ - only"
+            )));
+        }
         let raw: RawInterface = typed(v, &key, path)?;
         interfaces.push(interface_spec(name, raw, &key, path)?);
     }
@@ -1082,18 +1184,25 @@ fn output_spec(raw: RawOutput, dir: &Path, stem: &str, path: &Path) -> Result<Ou
     let mut sections: Vec<SectionSpec> = Vec::new();
     for (i, s) in raw.section.into_iter().enumerate() {
         let key = format!("output.section[{}] (\"{}\")", i + 1, s.name);
-        let safe = !s.name.is_empty()
-            && s.name
-                .chars()
-                .all(|c| c.is_alphanumeric() || matches!(c, '-' | '_' | '.'))
-            && !s.name.starts_with('.');
-        if !safe {
+        if let Some(problem) = file_name_problem(&s.name) {
             return Err(err(format!(
-                "{key}: the name becomes a file name; use letters, digits, - _ and . only"
+                "{key}: {problem}; the name becomes a file name; use letters, digits, - _ and . \
+                 only"
             )));
         }
         if sections.iter().any(|o| o.name == s.name) {
             return Err(err(format!("{key}: two sections have this name")));
+        }
+        // sections/NAME.csv and sections/NAME_path.csv must not meet.
+        if let Some(o) = sections
+            .iter()
+            .find(|o| o.name == format!("{}_path", s.name) || s.name == format!("{}_path", o.name))
+        {
+            return Err(err(format!(
+                "{key}: the sections \"{}\" and \"{}\" would write the same file \
+                 (sections/NAME_path.csv holds a section's contact path): rename one",
+                o.name, s.name
+            )));
         }
         if !s.from.iter().chain(s.to.iter()).all(|c| c.is_finite()) {
             return Err(err(format!("{key}: `from` and `to` must be finite points")));

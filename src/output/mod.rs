@@ -4,6 +4,7 @@
 
 pub mod archive;
 pub mod csv;
+pub mod folder;
 pub mod progress;
 pub mod record;
 pub mod summary;

@@ -1,0 +1,270 @@
+//! The cost of a run, estimated from the model before anything is assembled.
+//!
+//! Place in the flow: after `model`; printed by `sgbem check`, and `sgbem run` refuses a
+//! scene whose estimate exceeds the memory available (so a mesh far too fine is refused in
+//! milliseconds instead of allocating until the machine gives out).
+//!
+//! Each body assembles one dense system `G = [[A, A0], [A0ᵀ, A00]]` over its boundary
+//! unknowns: `n = n_x + n_x0`, with
+//!
+//! * `n_x` = 2 traction unknowns per element end and prescribed-displacement component,
+//!   plus 1 per free displacement component of a node, plus at most 3 rigid-mode unknowns
+//!   per boundary loop;
+//! * `n_x0` = 2 interface traction unknowns per interface pair node of the body, plus 1 per
+//!   interface displacement component of a node.
+//!
+//! The bodies are assembled and condensed one after the other; a run keeps every body's
+//! `G` (n²), its recovery matrix (n_x·n_x0) and its condensed `D00` (n_x0²), and condensing
+//! one body needs, besides, the scaled copy of `A` and its LU factors (2·n_x²), four
+//! `n_x × (n_x0+1)` work matrices and two `n_x0²` ones. In f64 (8 bytes):
+//!
+//! ```text
+//! kept(b)  = 8 (n² + n_x n_x0 + n_x0²)
+//! work(b)  = 8 (2 n_x² + 4 n_x (n_x0 + 1) + 2 n_x0²)
+//! peak     = Σ_b kept(b) + max_b work(b) + 8 (2 n_i)² + 64 MB
+//! ```
+//!
+//! where `n_i` = 4 × (interface pairs) is the size of the interface system and 64 MB is the
+//! program itself with its mesh. Time: the Galerkin pair loop costs about
+//! `c_q` per element pair (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
+//! one core of a 2020s machine), and the LU condensation `(2/3) n_x³ + 2 n_x² n_x0` flops at
+//! about 1 Gflop/s; post-processing about 8 µs per (interior-field node or section point,
+//! boundary element). All are rough: they are there to tell minutes from days.
+
+use crate::error::{Error, Result};
+use crate::input::model::{DofClass, Model, Role};
+use crate::input::scene::{Condition, Quadrature, Scene};
+
+/// Unknown counts of one body.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct BodySize {
+    pub n_x: usize,
+    pub n_x0: usize,
+    pub elements: usize,
+}
+
+/// The estimated cost of a run.
+#[derive(Debug, Clone)]
+pub struct Estimate {
+    pub bodies: Vec<BodySize>,
+    /// Peak memory in bytes.
+    pub peak_bytes: f64,
+    /// Assembly and condensation time in seconds.
+    pub seconds: f64,
+    /// Interior field and sections, in seconds.
+    pub post_seconds: f64,
+}
+
+/// Bytes the program needs besides the dense operators.
+const BASE_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
+
+/// Unknown counts of every body of a model (no allocation beyond a counter per body).
+pub fn body_sizes(model: &Model) -> Vec<BodySize> {
+    let mut pair_nodes = vec![0usize; model.bodies.len()];
+    for it in &model.interfaces {
+        pair_nodes[it.body_a] += it.pairs.len();
+        pair_nodes[it.body_b] += it.pairs.len();
+    }
+    model
+        .bodies
+        .iter()
+        .enumerate()
+        .map(|(bi, b)| {
+            let mut n_x = 3 * b.loops.len();
+            let mut n_x0 = 2 * pair_nodes[bi];
+            for e in &b.elements {
+                if let Role::Boundary(pi) = e.role {
+                    let prescribed = model.parts[pi]
+                        .spec
+                        .components
+                        .iter()
+                        .filter(|c| matches!(c, Condition::Displacement(_)))
+                        .count();
+                    n_x += 2 * prescribed;
+                }
+            }
+            for d in &b.dofs {
+                for k in d.class {
+                    match k {
+                        DofClass::Known => {}
+                        DofClass::Free => n_x += 1,
+                        DofClass::Interface => n_x0 += 1,
+                    }
+                }
+            }
+            BodySize {
+                n_x,
+                n_x0,
+                elements: b.elements.len(),
+            }
+        })
+        .collect()
+}
+
+/// Estimates peak memory and time of a run of `scene` on `model` (formula above).
+pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
+    let quadrature = scene.solve.quadrature;
+    let bodies = body_sizes(model);
+    let mut kept = 0.0;
+    let mut work = 0.0f64;
+    let mut flops = 0.0;
+    let mut pairs = 0.0;
+    for s in &bodies {
+        let (nx, nx0) = (s.n_x as f64, s.n_x0 as f64);
+        let n = nx + nx0;
+        kept += 8.0 * (n * n + nx * nx0 + nx0 * nx0);
+        work = work.max(8.0 * (2.0 * nx * nx + 4.0 * nx * (nx0 + 1.0) + 2.0 * nx0 * nx0));
+        flops += 2.0 / 3.0 * nx * nx * nx + 2.0 * nx * nx * nx0;
+        pairs += (s.elements as f64) * (s.elements as f64);
+    }
+    let ni = 8.0 * model.pair_count() as f64;
+    let per_pair = match quadrature {
+        Quadrature::Fast => 4e-6,
+        Quadrature::Standard => 10e-6,
+        Quadrature::Accurate => 30e-6,
+    };
+    // Post-processing: every interior-field node and section point meets every boundary
+    // element of its body (about 8 µs each; all elements, for a section).
+    let total_elements: f64 = bodies.iter().map(|b| b.elements as f64).sum();
+    let mut evaluations: f64 = scene
+        .output
+        .sections
+        .iter()
+        .map(|s| s.points as f64 * total_elements)
+        .sum();
+    if scene.output.field {
+        for (b, size) in model.bodies.iter().zip(&bodies) {
+            let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
+            v.sort_unstable();
+            v.dedup();
+            evaluations += v.len() as f64 * size.elements as f64;
+        }
+    }
+    Estimate {
+        bodies,
+        peak_bytes: kept + work + 8.0 * ni * ni + BASE_BYTES,
+        seconds: pairs * per_pair + flops / 1e9,
+        post_seconds: evaluations * 8e-6,
+    }
+}
+
+/// The memory a run may use: `SGBEM_MEMORY_LIMIT` (bytes) if set, else `MemAvailable` of
+/// /proc/meminfo; None when neither can be read.
+pub fn available_memory() -> Option<(f64, &'static str)> {
+    if let Ok(v) = std::env::var("SGBEM_MEMORY_LIMIT") {
+        if let Ok(b) = v.trim().parse::<f64>() {
+            if b.is_finite() && b > 0.0 {
+                return Some((b, "SGBEM_MEMORY_LIMIT"));
+            }
+        }
+    }
+    let text = std::fs::read_to_string("/proc/meminfo").ok()?;
+    text.lines()
+        .find_map(|l| l.strip_prefix("MemAvailable:"))
+        .and_then(|rest| {
+            rest.trim()
+                .trim_end_matches("kB")
+                .trim()
+                .parse::<f64>()
+                .ok()
+        })
+        .map(|kb| (kb * 1024.0, "MemAvailable in /proc/meminfo"))
+}
+
+/// "1.2 GB", "340 MB", "5.0 PB".
+pub fn fmt_bytes(b: f64) -> String {
+    let units = ["B", "kB", "MB", "GB", "TB", "PB", "EB"];
+    let mut v = b;
+    let mut i = 0;
+    while v >= 1000.0 && i + 1 < units.len() {
+        v /= 1000.0;
+        i += 1;
+    }
+    if i == 0 {
+        format!("{v:.0} {}", units[i])
+    } else {
+        format!("{v:.1} {}", units[i])
+    }
+}
+
+/// "0.3 s", "4 min", "2.5 h", "12 days".
+pub fn fmt_seconds(s: f64) -> String {
+    if s < 60.0 {
+        format!("{s:.1} s")
+    } else if s < 3600.0 {
+        format!("{:.0} min", s / 60.0)
+    } else if s < 86400.0 {
+        format!("{:.1} h", s / 3600.0)
+    } else {
+        format!("{:.0} days", s / 86400.0)
+    }
+}
+
+impl Estimate {
+    /// Err (input error, exit 2) when the estimate exceeds the memory available: the
+    /// message names the estimate, the memory available and the fix.
+    pub fn check_fits(&self, model: &Model, scene_file: &std::path::Path) -> Result<()> {
+        let Some((avail, source)) = available_memory() else {
+            return Ok(());
+        };
+        if self.peak_bytes <= avail {
+            return Ok(());
+        }
+        let body = self
+            .largest()
+            .map(|(i, n)| {
+                format!(
+                    "; the largest system is body \"{}\" with {} boundary elements and {n} \
+                     unknowns (a dense {n} × {n} matrix)",
+                    model.bodies[i].name, self.bodies[i].elements
+                )
+            })
+            .unwrap_or_default();
+        Err(Error::input(
+            scene_file,
+            format!(
+                "this run needs about {} of memory but {} are available ({source}){body}: \
+                 memory grows with the square of the boundary elements per body, so coarsen \
+                 the mesh (e.g. gmsh -setnumber h with a larger size, or -clscale 2 to halve \
+                 the elements per edge) or split the body; `sgbem check` prints the estimate \
+                 (about {} of assembly and condensation)",
+                fmt_bytes(self.peak_bytes),
+                fmt_bytes(avail),
+                fmt_seconds(self.seconds)
+            ),
+        ))
+    }
+
+    /// The largest body: (index, unknowns).
+    pub fn largest(&self) -> Option<(usize, usize)> {
+        self.bodies
+            .iter()
+            .enumerate()
+            .map(|(i, s)| (i, s.n_x + s.n_x0))
+            .max_by_key(|(_, n)| *n)
+    }
+
+    /// One line for `sgbem check`.
+    pub fn line(&self) -> String {
+        format!(
+            "about {} peak memory, about {} to assemble and condense, {} to post-process",
+            fmt_bytes(self.peak_bytes),
+            fmt_seconds(self.seconds),
+            fmt_seconds(self.post_seconds)
+        )
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn units() {
+        assert_eq!(fmt_bytes(512.0), "512 B");
+        assert_eq!(fmt_bytes(1.5e9), "1.5 GB");
+        assert_eq!(fmt_bytes(1.55e14), "155.0 TB");
+        assert_eq!(fmt_seconds(30.0), "30.0 s");
+        assert_eq!(fmt_seconds(7200.0), "2.0 h");
+    }
+}
