@@ -180,11 +180,29 @@ pub fn solve_loaded_with(
     // Two steps per body (assembly, condensation); each message starts the next.
     let stage = progress.bar("assemble", 2 * model.bodies.len() as u64);
     let started = std::cell::Cell::new(0u64);
+    // A numerical failure of the operators names the stiffness contrast when it is the
+    // likely cause.
+    let cause = |e: Error| -> Error {
+        let (c, iface) = &plan.contrast;
+        if e.exit_code() == 3 && *c >= 1e6 {
+            Error::numerical(format!(
+                "{}; likely cause: the stiffness contrast across interface \"{iface}\" is \
+                 {c:.1e}, which costs about {:.0} of the 16 digits of the boundary systems: \
+                 model the much stiffer body as a rigid support (displacement conditions) or \
+                 keep the contrast below about 1e6",
+                e.message(),
+                c.log10()
+            ))
+        } else {
+            e
+        }
+    };
     let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
         stage.set_position(started.get());
         started.set(started.get() + 1);
         stage.set_message(m.to_string())
-    })?;
+    })
+    .map_err(cause)?;
     stage.finish();
     timings.add("assemble", prepared.assemble_seconds);
     timings.add("condense", prepared.condense_seconds);
@@ -198,7 +216,7 @@ pub fn solve_loaded_with(
     let maxit = scene.solve.max_iterations;
 
     let t = Instant::now();
-    let mut session = Session::new(model, &prepared)?;
+    let mut session = Session::new(model, &prepared).map_err(cause)?;
     timings.add("interface_system", t.elapsed().as_secs_f64());
     if plan.problem == ContactProblem::None {
         let t = Instant::now();

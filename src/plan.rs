@@ -55,6 +55,8 @@ pub struct Plan {
     pub stages: Vec<(&'static str, String)>,
     /// Advice on the settings (printed by `check`, kept in the summary by `run`).
     pub advice: Vec<String>,
+    /// The largest Young's modulus ratio across an interface, and that interface.
+    pub contrast: (f64, String),
 }
 
 impl Plan {
@@ -255,14 +257,15 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     // Stiffness contrast across interfaces amplifies the quadrature floor (about 1e-12 of
     // the operators with "standard") in the stiff body's tractions.
     let mut advice = Vec::new();
-    let contrast = model
+    let worst = model
         .interfaces
         .iter()
         .map(|i| {
             let (a, b) = (model.bodies[i.body_a].young, model.bodies[i.body_b].young);
-            a.max(b) / a.min(b)
+            (a.max(b) / a.min(b), i.spec.name.clone())
         })
-        .fold(1.0, f64::max);
+        .fold((1.0, String::new()), |m, c| if c.0 > m.0 { c } else { m });
+    let contrast = worst.0;
     if contrast > 1e3 && scene.solve.quadrature != crate::input::scene::Quadrature::Accurate {
         advice.push(format!(
             "the stiffness contrast across an interface is {contrast:.1e}: the quadrature floor \
@@ -276,5 +279,6 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
         omitted,
         stages,
         advice,
+        contrast: worst,
     })
 }

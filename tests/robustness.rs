@@ -770,3 +770,32 @@ fn an_archive_that_crashes_libhdf5_ends_in_a_message() {
         );
     }
 }
+
+/// A stiffness contrast that the boundary systems cannot carry is named as the likely cause.
+#[test]
+fn an_extreme_stiffness_contrast_is_named() {
+    let dir = tmpdir("contrast");
+    let msh = gmsh(
+        &root().join("geo/two_blocks.geo"),
+        &dir,
+        "m.msh",
+        false,
+        &[],
+    );
+    let (code, _, err) = sgbem(&[
+        "run",
+        root().join("pipelines/two_blocks.toml").to_str().unwrap(),
+        "--mesh",
+        msh.to_str().unwrap(),
+        "--out",
+        dir.join("out").to_str().unwrap(),
+        "--set",
+        "body.upper.young=1e12",
+        "--quiet",
+    ]);
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("stiffness contrast across interface \"joint\" is 1.0e9"),
+        "{err}"
+    );
+}

@@ -386,6 +386,12 @@ impl Problem {
             .map(|i| (kx[i] - b[(i, 0)]).abs())
             .fold(0.0, f64::max)
             / 7.0;
+        if res.is_finite() && (1e-6..1e-2).contains(&res) {
+            return Err(Error::numerical(format!(
+                "the interface system with every pair closed is ill-conditioned (relative \
+                 residual {res:.1e} after solving)"
+            )));
+        }
         if res.is_nan() || res >= 1e-6 {
             return Err(Error::numerical(format!(
                 "the interface system with every pair closed is singular (relative residual \
