@@ -8,7 +8,7 @@ mod support;
 use std::time::Instant;
 
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::contact::solve::{all_closed, prepare, solve_status};
+use sgbem::contact::solve::{prepare, solve_all_closed};
 use sgbem::pipeline::load;
 use support::*;
 
@@ -49,7 +49,7 @@ fn main() {
         let t0 = Instant::now();
         let prep = prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {}).expect("prepare");
         let t1 = Instant::now();
-        let sol = solve_status(&l.model, &prep, &all_closed(&l.model)).expect("solve");
+        let sol = solve_all_closed(&l.model, &prep).expect("solve");
         let ts = t1.elapsed().as_secs_f64();
         let _ = t0;
         let dofs: usize = prep.systems.iter().map(|s| s.n()).sum();

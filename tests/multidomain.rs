@@ -6,7 +6,7 @@ mod support;
 
 use sgbem::bem::kernels::Material;
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::contact::solve::{all_closed, prepare, solve_status};
+use sgbem::contact::solve::{prepare, solve_all_closed};
 use sgbem::pipeline::load;
 use support::*;
 
@@ -146,8 +146,7 @@ fn bonded_patch(ratio: f64, n: usize, quadrature: &str) -> (f64, f64, f64) {
     let q = QuadratureSettings::from_name(quadrature).unwrap();
     let prep =
         prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {}).unwrap_or_else(|e| panic!("{e}"));
-    let sol =
-        solve_status(&l.model, &prep, &all_closed(&l.model)).unwrap_or_else(|e| panic!("{e}"));
+    let sol = solve_all_closed(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
     let mut err_u = 0.0f64;
     let mut err_t = 0.0f64;
     for (b, body) in l.model.bodies.iter().enumerate() {
@@ -214,8 +213,7 @@ fn solve_scene(
     let q = QuadratureSettings::from_name(quadrature).unwrap();
     let prep =
         prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {}).unwrap_or_else(|e| panic!("{e}"));
-    let sol =
-        solve_status(&l.model, &prep, &all_closed(&l.model)).unwrap_or_else(|e| panic!("{e}"));
+    let sol = solve_all_closed(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
     (l, prep, sol)
 }
 

@@ -2,20 +2,19 @@
 //! of every body, the interface system, and recovery of every body's boundary solution.
 //!
 //! Place in the flow: `assembly`, `condensation`, `interface` → **`solve`** → post-processing.
-//! The per-body work (the expensive part) is done once by [`prepare`]; [`solve_status`] can
-//! then be called for any number of interface statuses (the contact iterations) at the cost
-//! of the interface system only.
+//! The per-body work (the expensive part) is done once by [`prepare`]; the contact problem
+//! (`problem`) is built on it, and [`solve_all_closed`] solves it with every pair closed.
 
 use std::time::Instant;
 
 use crate::bem::assembly::{assemble_body, check_single_layer, BodySystem, Unknown};
 use crate::bem::condensation::{condense, Condensed};
 use crate::bem::quadrature::QuadratureSettings;
-use crate::contact::interface::{self, Layout, X0Map};
+use crate::contact::interface::X0Map;
 use crate::error::Result;
 use crate::input::model::Model;
 use crate::input::scene::Plane;
-use crate::solution::{BodyField, InterfaceResult, PairResult, PairStatus};
+use crate::solution::{BodyField, InterfaceResult};
 
 /// Every body assembled and condensed.
 pub struct Prepared {
@@ -61,99 +60,20 @@ pub fn prepare(
     })
 }
 
-/// The solution for one status of the interfaces.
+/// The solution with every interface pair closed.
 pub struct StatusSolution {
-    pub layout: Layout,
-    pub y: Vec<f64>,
-    pub residual: f64,
     pub fields: Vec<BodyField>,
     pub interfaces: Vec<InterfaceResult>,
 }
 
-/// Statuses with every pair component closed.
-pub fn all_closed(model: &Model) -> Vec<Vec<[PairStatus; 2]>> {
-    model
-        .interfaces
-        .iter()
-        .map(|i| vec![[PairStatus::Closed; 2]; i.pairs.len()])
-        .collect()
-}
-
-/// Solves the interface system for `status` and recovers every body, for the loads of
-/// [`prepare`] (one load case).
-pub fn solve_status(
-    model: &Model,
-    prepared: &Prepared,
-    status: &[Vec<[PairStatus; 2]>],
-) -> Result<StatusSolution> {
-    solve_status_scaled(model, prepared, status, 1.0)
-}
-
-/// [`solve_status`] with every load of [`prepare`] multiplied by `factor` (the problem is
-/// linear in the loads for a fixed status; gaps are not loads and stay as they are).
-pub fn solve_status_scaled(
-    model: &Model,
-    prepared: &Prepared,
-    status: &[Vec<[PairStatus; 2]>],
-    factor: f64,
-) -> Result<StatusSolution> {
-    let layout = interface::layout(model, &prepared.maps, status)?;
-    let (k, l) = interface::assemble_scaled(&layout, &prepared.condensed, factor);
-    let (y, residual) = interface::solve(&k, &l, "interface")?;
-    let mut fields = Vec::with_capacity(model.bodies.len());
-    let mut x0s = Vec::with_capacity(model.bodies.len());
-    for (b, sys) in prepared.systems.iter().enumerate() {
-        let x0 = interface::body_x0(&layout, b, sys.n_x0(), &y);
-        let x = prepared.condensed[b].recover_x_scaled(&x0, factor);
-        fields.push(body_field(model, b, sys, &x, &x0, factor));
-        x0s.push(x0);
-    }
-    let interfaces = model
-        .interfaces
-        .iter()
-        .enumerate()
-        .map(|(k, it)| {
-            let (a, b) = (it.body_a, it.body_b);
-            InterfaceResult {
-                pairs: it
-                    .pairs
-                    .iter()
-                    .enumerate()
-                    .map(|(j, p)| {
-                        let mut traction = [0.0; 2];
-                        for (c, t) in traction.iter_mut().enumerate() {
-                            if let Some(i) = prepared.maps[a].get(k, j, c, true) {
-                                *t = x0s[a][i];
-                            }
-                        }
-                        let (ua, ub) = (fields[a].u[p.node_a], fields[b].u[p.node_b]);
-                        let d = [ub[0] - ua[0], ub[1] - ua[1]];
-                        let jump = [
-                            d[0] * p.tangent[0] + d[1] * p.tangent[1],
-                            d[0] * p.normal[0] + d[1] * p.normal[1],
-                        ];
-                        let closed = status[k][j].contains(&PairStatus::Closed);
-                        PairResult {
-                            status: if closed {
-                                PairStatus::Closed
-                            } else {
-                                PairStatus::Open
-                            },
-                            traction,
-                            jump,
-                        }
-                    })
-                    .collect(),
-            }
-        })
-        .collect();
-    Ok(StatusSolution {
-        layout,
-        y,
-        residual,
-        fields,
-        interfaces,
-    })
+/// Solves the model with every interface pair closed (bonded interfaces, and unilateral ones
+/// held closed) through the contact problem's glued system, for the loads of [`prepare`].
+pub fn solve_all_closed(model: &Model, prepared: &Prepared) -> Result<StatusSolution> {
+    let problem = crate::contact::problem::Problem::new(model, prepared)?;
+    let n = problem.n_open_rows;
+    let (fields, interfaces, _) =
+        problem.state(model, prepared, 1.0, &vec![0.0; n], &vec![false; n]);
+    Ok(StatusSolution { fields, interfaces })
 }
 
 /// Nodal displacements and element-end tractions of a body from its unknowns.
