@@ -49,7 +49,11 @@ fn main() {
             vec![],
         ),
     ];
-    for n in [104, 208, 416, 832] {
+    let sizes: Vec<usize> = std::env::var("SGBEM_BENCH_JOINTS")
+        .ok()
+        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
+        .unwrap_or_else(|| vec![104, 208, 416, 832]);
+    for n in sizes {
         cases.push((
             format!("example 2, {n} joint el."),
             "geo/clamped_beam_joint.geo",

@@ -856,12 +856,14 @@ impl Opening {
             }
             y[i] = acc / self.l[i][i];
         }
-        for i in (0..m).rev() {
-            let mut acc = y[i];
-            for k in (i + 1)..m {
-                acc -= self.l[k][i] * y[k];
+        // Lᵀ x = y by columns of Lᵀ, i.e. the stored rows of L (contiguous).
+        for k in (0..m).rev() {
+            y[k] /= self.l[k][k];
+            let yk = y[k];
+            let row = &self.l[k];
+            for i in 0..k {
+                y[i] -= row[i] * yk;
             }
-            y[i] = acc / self.l[i][i];
         }
         y
     }
