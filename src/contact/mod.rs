@@ -184,8 +184,8 @@ impl<'a> Session<'a> {
         let mut failure = None;
         let mut info = serde_json::json!({});
         let mut last: Option<(InnerState, f64)> = None;
-        // Outer iterates (state, inner state, stick inconsistency) for a stick edge cycle.
-        let mut iterates: Vec<(StepState, InnerState, f64)> = Vec::new();
+        // The outer iterates' open rows, to find the rows of a stick edge cycle.
+        let mut iterates: Vec<Vec<bool>> = Vec::new();
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion);
@@ -210,7 +210,8 @@ impl<'a> Session<'a> {
                         &start_open,
                         max_iterations.saturating_sub(it0),
                         &mut |s: &InnerState| {
-                            if record && (first || k > it0 || compact.is_empty()) {
+                            // Later outer iterations start where the last one ended.
+                            if record && (first || k > it0) {
                                 compact.push((k, s.open.clone(), s.s.clone()));
                             }
                             k += 1;
@@ -270,8 +271,6 @@ impl<'a> Session<'a> {
             let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {
-                let closed: Vec<bool> = state.open.iter().map(|o| !o).collect();
-                let _ = closed;
                 let hint = if outcome_blocked.is_empty() {
                     String::new()
                 } else {
@@ -301,7 +300,7 @@ impl<'a> Session<'a> {
                     next.cohesion[row.iface][row.pair] = 0.0;
                 }
             }
-            iterates.push((st.clone(), state.clone(), 0.0));
+            iterates.push(st.open.clone());
             last = Some((state, residual));
             if next == st {
                 converged = true;
@@ -311,16 +310,13 @@ impl<'a> Session<'a> {
                 // A stick edge cycle: a pair at the contact edge opens once tied and closes
                 // once untied. Such a pair is closed and slipping (the μ → ∞ limit of Coulomb
                 // friction where the normal force vanishes): keep it untied from now on.
-                let k0 = iterates
-                    .iter()
-                    .position(|(s0, _, _)| s0.open == next.open)
-                    .unwrap_or(0);
+                let k0 = iterates.iter().position(|o| *o == next.open).unwrap_or(0);
                 let cycle = &iterates[k0..];
                 let flipping: Vec<usize> = (0..n)
                     .filter(|&r| {
                         self.problem.rows[r].kind == RowKind::Stick
                             && !edge_slip[r]
-                            && cycle.iter().any(|(s0, _, _)| s0.open[r] != next.open[r])
+                            && cycle.iter().any(|o| o[r] != next.open[r])
                     })
                     .collect();
                 if flipping.is_empty() || outer > 200 {
@@ -342,7 +338,7 @@ impl<'a> Session<'a> {
             }
             st = next;
         }
-        let (final_state, residual) = last.unwrap_or_else(|| (unreachable_state(n), f64::INFINITY));
+        let (final_state, residual) = last.unwrap_or_else(|| (all_closed_state(n), f64::INFINITY));
         if slipping > 0 {
             notes.push(format!(
                 "{slipping} stick pair(s) at the contact edge neither stay tied (they open) nor \
@@ -457,10 +453,8 @@ impl<'a> Session<'a> {
     }
 }
 
-/// Largest stick mismatch accepted when the outer loop cycles at the contact edge.
-pub const CYCLE_ACCEPT: f64 = 1e-3;
-
-fn unreachable_state(n: usize) -> InnerState {
+/// Every row closed, nothing open: the state reported when no inner solve finished.
+fn all_closed_state(n: usize) -> InnerState {
     InnerState {
         open: vec![false; n],
         s: vec![0.0; n],

@@ -670,14 +670,9 @@ pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[
         let mut g = [[0.0f64; 3]; 3];
         let mut touched = false;
         for r in rows {
-            let dof = if (lo..hi).contains(&r.dof_a) {
-                r.dof_a
-            } else if (lo..hi).contains(&r.dof_b) {
-                r.dof_b
-            } else {
+            if !(lo..hi).contains(&r.dof_a) && !(lo..hi).contains(&r.dof_b) {
                 continue;
-            };
-            let _ = dof;
+            }
             touched = true;
             let it = &model.interfaces[r.iface];
             let pr = &it.pairs[r.pair];
