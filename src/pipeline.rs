@@ -133,6 +133,10 @@ impl Timings {
 pub struct RunResult {
     pub status: String,
     pub load_factor: f64,
+    /// Pseudo-time of the final state (1 without `[solve] time`).
+    pub time: f64,
+    /// Body force of each body at the final state (before the load factor).
+    pub body_force: Vec<Option<[f64; 2]>>,
     pub fields: Vec<crate::solution::BodyField>,
     pub interfaces: Vec<crate::solution::InterfaceResult>,
     /// Nodal normal contact force of each interface pair (on the second body, compression
@@ -169,7 +173,7 @@ pub fn solve_loaded_with(
     progress: &crate::output::progress::Progress,
 ) -> Result<(crate::contact::solve::Prepared, RunResult)> {
     use crate::contact::solve::prepare;
-    use crate::contact::{differing_pairs, Method as Solver, Session};
+    use crate::contact::{Method as Solver, Session};
     use crate::input::scene::Method;
     use crate::plan::ContactProblem;
     use std::time::Instant;
@@ -206,11 +210,12 @@ pub fn solve_loaded_with(
     stage.finish();
     timings.add("assemble", prepared.assemble_seconds);
     timings.add("condense", prepared.condense_seconds);
-    let factors = &scene.solve.load_factors;
-    let last = factors.len() - 1;
-    let mut notes = Vec::new();
-    let mut history = crate::solution::History::default();
-    let mut states = Vec::new();
+    let steps = scene.solve.steps();
+    let last = steps.len() - 1;
+    // With `[solve] time` and values that depend on t, every step has its own loads: the
+    // model is evaluated and the bodies assembled again at the step's pseudo-time (the
+    // operators are the same; the columns of the opening stiffness are kept).
+    let timed = scene.solve.time.is_some() && crate::plan::uses_time(scene);
     let method = scene.solve.method;
     let tol = scene.solve.tolerance;
     let maxit = scene.solve.max_iterations;
@@ -220,28 +225,41 @@ pub fn solve_loaded_with(
     timings.add("interface_system", t.elapsed().as_secs_f64());
     if plan.problem == ContactProblem::None {
         let t = Instant::now();
+        let (f, time) = steps[last];
+        let at = if timed && time != model.time {
+            let m = model.at_time(scene, time)?;
+            let p = prepare(&m, scene.plane, settings, 1.0, &scene.path, &|_| {}).map_err(cause)?;
+            Some((m, p))
+        } else {
+            None
+        };
+        let (m, p) = match &at {
+            Some((m, p)) => (m, p),
+            None => (model, &prepared),
+        };
+        let problem = crate::contact::problem::Problem::new(m, p).map_err(cause)?;
+        let n = problem.n_open_rows;
         let start = session.initial();
-        let f = factors[last];
-        let n = session.problem.n_open_rows;
-        let (fields, interfaces, nodal_force) =
-            session
-                .problem
-                .state(model, &prepared, f, &vec![0.0; n], &start.open);
+        let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
         timings.add("solve", t.elapsed().as_secs_f64());
         let result = RunResult {
             status: "solved".into(),
             load_factor: f,
+            time,
+            body_force: m.bodies.iter().map(|b| b.body_force).collect(),
             fields,
             interfaces,
             nodal_force,
-            history,
-            states,
+            history: crate::solution::History::default(),
+            states: Vec::new(),
             contact: serde_json::json!({"solver": "linear (no unilateral interface)"}),
             qp: None,
-            notes,
+            notes: Vec::new(),
             failure: None,
         };
-        return Ok((prepared, result));
+        drop(problem);
+        drop(session);
+        return Ok((at.map_or(prepared, |(_, p)| p), result));
     }
 
     // The main solver gives the answer and the history; the others cross-check it on the
@@ -257,111 +275,80 @@ pub fn solve_loaded_with(
             checks.push(Solver::Lemke);
         }
     }
-    let stage = progress.contact(factors.len());
+    let stage = progress.contact(steps.len());
     let mut state = session.initial();
-    let mut iterations = 0;
-    let mut converged = true;
-    let mut failure = None;
-    let mut residual = 0.0f64;
-    let mut final_sol = None;
-    let mut cross = Vec::new();
-    let mut qp_block = None;
-    for (step, &f) in factors.iter().enumerate() {
-        let t = Instant::now();
-        let full = scene.output.history == crate::input::scene::History::Full;
-        let mut r = session.solve_step(&state, main, tol, maxit, step, f, full);
-        timings.add(
-            if main == Solver::Qp {
-                "contact_qp"
-            } else {
-                "contact_lcp"
-            },
-            t.elapsed().as_secs_f64(),
-        );
-        let t = Instant::now();
-        session.expand(&mut r);
-        timings.add("contact_record", t.elapsed().as_secs_f64());
-        for &c in &checks {
+    let mut acc = StepAcc::default();
+    let ctx = StepContext {
+        scene,
+        model,
+        main,
+        checks: &checks,
+        last,
+        steps: steps.len(),
+        tol,
+        maxit,
+        stage: &stage,
+    };
+    let mut last_prepared = None;
+    for (step, &(f, time)) in steps.iter().enumerate() {
+        if step == 0 || !timed {
+            contact_step(&mut session, &ctx, step, f, &mut state, &mut acc, timings);
+        } else {
             let t = Instant::now();
-            let x = session.solve_step(&state, c, tol, maxit, step, f, false);
-            timings.add(
-                match c {
-                    Solver::ActiveSet => "contact_active_set",
-                    Solver::Qp => "contact_qp",
-                    Solver::Lemke => "contact_lemke",
-                    Solver::Evolutive => "contact_lcp",
-                },
-                t.elapsed().as_secs_f64(),
-            );
-            let differing = differing_pairs(&x.interfaces, &r.interfaces);
-            cross.push(serde_json::json!({
-                "solver": c.name(), "load_step": step, "iterations": x.iterations,
-                "outer_iterations": x.outer_iterations, "converged": x.converged,
-                "differing_pairs": differing, "info": x.info,
-                "failure": x.failure.as_ref().map(|e| e.message()),
-            }));
-            if c == Solver::Qp && step == last {
-                qp_block = Some(serde_json::json!({
-                    "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
-                    "interfaces": crate::output::summary::interfaces(&model.interfaces, &x.interfaces, scene.thickness),
-                    "converged": x.converged,
-                    "differing_pairs_from_lcp": differing,
-                    "info": x.info,
-                }));
+            let model_t = model.at_time(scene, time)?;
+            let prepared_t = prepare(&model_t, scene.plane, settings, 1.0, &scene.path, &|_| {})
+                .map_err(cause)?;
+            timings.add("assemble", prepared_t.assemble_seconds);
+            timings.add("condense", prepared_t.condense_seconds);
+            let t1 = Instant::now();
+            {
+                let mut s = Session::new(&model_t, &prepared_t).map_err(cause)?;
+                s.cols = std::mem::take(&mut session.cols);
+                timings.add("interface_system", t1.elapsed().as_secs_f64());
+                // Cohesion follows its expression where the pair has never opened.
+                for (k, it) in model_t.interfaces.iter().enumerate() {
+                    for (j, p) in it.pairs.iter().enumerate() {
+                        if !state.broken[k][j] {
+                            state.cohesion[k][j] = p.cohesion;
+                        }
+                    }
+                }
+                contact_step(&mut s, &ctx, step, f, &mut state, &mut acc, timings);
+                session.cols = std::mem::take(&mut s.cols);
             }
+            let _ = t;
+            last_prepared = Some(prepared_t);
         }
-        iterations += r.iterations;
-        residual = residual.max(r.residual);
-        notes.extend(r.notes.iter().cloned());
-        history.rows.extend(r.rows);
-        if let Some(row) = history.rows.last() {
-            let status = row.status.iter().flatten();
-            stage.contact_tick(&crate::output::progress::ContactTick {
-                load_step: step,
-                load_steps: factors.len(),
-                iteration: row.iteration,
-                max_iterations: maxit,
-                open_pairs: status
-                    .clone()
-                    .filter(|s| **s == crate::solution::PairStatus::Open)
-                    .count(),
-                pairs: status.count(),
-                detached_length: row.detached_length.iter().sum(),
-                step_done: true,
-            });
-        }
-        states.extend(r.states);
-        if main == Solver::Qp && step == last {
-            qp_block = Some(serde_json::json!({
-                "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
-                "interfaces": crate::output::summary::interfaces(&model.interfaces, &r.interfaces, scene.thickness),
-                "converged": r.converged,
-                "info": r.info,
-            }));
-        }
-        state = r.state;
-        final_sol = Some((f, r.fields, r.interfaces, r.nodal_force));
-        if let Some(e) = r.failure {
-            converged = false;
-            failure = Some(e);
+        if acc.failure.is_some() {
             break;
         }
     }
     stage.finish();
+    let StepAcc {
+        iterations,
+        residual,
+        final_sol,
+        cross,
+        qp_block,
+        notes,
+        history,
+        states,
+        failure,
+    } = acc;
+    let converged = failure.is_none();
     let contact = serde_json::json!({
         "solver": main.name(),
-        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP)",
+        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP; Tresca fixed point for friction)",
         "iterations": iterations,
         "converged": converged,
         "complementarity_residual": residual,
-        "load_steps": factors.len(),
+        "load_steps": steps.len(),
         "opening_stiffness_columns": session.cols.computed(),
         "interface_system_size": session.problem.base_size(),
         "cross_checks": cross,
     });
-    let (load_factor, fields, interfaces, nodal_force) = match final_sol {
-        Some(x) => x,
-        None => return Err(Error::numerical("the contact stage produced no state")),
+    let Some((load_factor, time, body_force, fields, interfaces, nodal_force)) = final_sol else {
+        return Err(Error::numerical("the contact stage produced no state"));
     };
     let result = RunResult {
         status: if converged {
@@ -370,6 +357,8 @@ pub fn solve_loaded_with(
             "not converged".into()
         },
         load_factor,
+        time,
+        body_force,
         fields,
         interfaces,
         nodal_force,
@@ -380,7 +369,147 @@ pub fn solve_loaded_with(
         notes,
         failure,
     };
-    Ok((prepared, result))
+    drop(session);
+    Ok((last_prepared.unwrap_or(prepared), result))
+}
+
+/// What every load step of a contact run shares.
+struct StepContext<'a> {
+    scene: &'a crate::input::scene::Scene,
+    model: &'a Model,
+    main: crate::contact::Method,
+    checks: &'a [crate::contact::Method],
+    last: usize,
+    steps: usize,
+    tol: f64,
+    maxit: usize,
+    stage: &'a crate::output::progress::Stage,
+}
+
+/// The final boundary solution of a step: load factor, time, body forces, fields,
+/// interfaces and nodal forces.
+type FinalSolution = (
+    f64,
+    f64,
+    Vec<Option<[f64; 2]>>,
+    Vec<crate::solution::BodyField>,
+    Vec<crate::solution::InterfaceResult>,
+    Vec<Vec<f64>>,
+);
+
+/// What the load steps of a contact run accumulate.
+#[derive(Default)]
+struct StepAcc {
+    iterations: usize,
+    residual: f64,
+    final_sol: Option<FinalSolution>,
+    cross: Vec<serde_json::Value>,
+    qp_block: Option<serde_json::Value>,
+    notes: Vec<String>,
+    history: crate::solution::History,
+    states: Vec<crate::contact::RecordedState>,
+    failure: Option<Error>,
+}
+
+/// One load step of a contact run: the main solver, the cross-checks, the history.
+fn contact_step(
+    session: &mut crate::contact::Session,
+    ctx: &StepContext,
+    step: usize,
+    f: f64,
+    state: &mut crate::contact::StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+) {
+    use crate::contact::{differing_pairs, Method as Solver};
+    use std::time::Instant;
+    let (scene, model, main) = (ctx.scene, ctx.model, ctx.main);
+    let (tol, maxit) = (ctx.tol, ctx.maxit);
+    let t = Instant::now();
+    let full = scene.output.history == crate::input::scene::History::Full;
+    let mut r = session.solve_step(state, main, tol, maxit, step, f, full);
+    timings.add(
+        if main == Solver::Qp {
+            "contact_qp"
+        } else {
+            "contact_lcp"
+        },
+        t.elapsed().as_secs_f64(),
+    );
+    let t = Instant::now();
+    session.expand(&mut r);
+    timings.add("contact_record", t.elapsed().as_secs_f64());
+    for &c in ctx.checks {
+        let t = Instant::now();
+        let x = session.solve_step(state, c, tol, maxit, step, f, false);
+        timings.add(
+            match c {
+                Solver::ActiveSet => "contact_active_set",
+                Solver::Qp => "contact_qp",
+                Solver::Lemke => "contact_lemke",
+                Solver::Evolutive => "contact_lcp",
+            },
+            t.elapsed().as_secs_f64(),
+        );
+        let differing = differing_pairs(&x.interfaces, &r.interfaces);
+        acc.cross.push(serde_json::json!({
+            "solver": c.name(), "load_step": step, "iterations": x.iterations,
+            "outer_iterations": x.outer_iterations, "converged": x.converged,
+            "differing_pairs": differing, "info": x.info,
+            "failure": x.failure.as_ref().map(|e| e.message()),
+        }));
+        if c == Solver::Qp && step == ctx.last {
+            acc.qp_block = Some(serde_json::json!({
+                "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
+                "interfaces": crate::output::summary::interfaces(&model.interfaces, &x.interfaces, scene.thickness),
+                "converged": x.converged,
+                "differing_pairs_from_lcp": differing,
+                "info": x.info,
+            }));
+        }
+    }
+    acc.iterations += r.iterations;
+    acc.residual = acc.residual.max(r.residual);
+    acc.notes.extend(r.notes.iter().cloned());
+    acc.history.rows.extend(r.rows);
+    if let Some(row) = acc.history.rows.last() {
+        let status = row.status.iter().flatten();
+        ctx.stage
+            .contact_tick(&crate::output::progress::ContactTick {
+                load_step: step,
+                load_steps: ctx.steps,
+                iteration: row.iteration,
+                max_iterations: maxit,
+                open_pairs: status
+                    .clone()
+                    .filter(|s| **s == crate::solution::PairStatus::Open)
+                    .count(),
+                pairs: status.count(),
+                detached_length: row.detached_length.iter().sum(),
+                step_done: true,
+            });
+    }
+    acc.states.extend(r.states);
+    if main == Solver::Qp && step == ctx.last {
+        acc.qp_block = Some(serde_json::json!({
+            "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
+            "interfaces": crate::output::summary::interfaces(&model.interfaces, &r.interfaces, scene.thickness),
+            "converged": r.converged,
+            "info": r.info,
+        }));
+    }
+    *state = r.state;
+    acc.final_sol = Some((
+        f,
+        session.model.time,
+        session.body_forces(),
+        r.fields,
+        r.interfaces,
+        r.nodal_force,
+    ));
+    if let Some(e) = r.failure {
+        acc.failure = Some(e);
+    }
 }
 
 /// The status of the final state (closed where the interface result says so).
@@ -406,23 +535,25 @@ fn final_status(model: &Model, result: &RunResult) -> Vec<Vec<[crate::solution::
         .collect()
 }
 
-/// The post-processing input of every body for a boundary solution at a load factor.
+/// The post-processing input of every body for a boundary solution with the body forces
+/// `body_force` (of its step) at a load factor.
 fn body_inputs<'a>(
     model: &'a Model,
     plane: crate::input::scene::Plane,
     fields: &'a [crate::solution::BodyField],
+    body_force: &[Option<[f64; 2]>],
     factor: f64,
 ) -> Vec<crate::post::BodyInput<'a>> {
     model
         .bodies
         .iter()
         .zip(fields)
-        .map(|(b, field)| crate::post::BodyInput {
+        .zip(body_force)
+        .map(|((b, field), bf)| crate::post::BodyInput {
             body: b,
             material: crate::bem::assembly::material(b, plane),
             field,
-            body_force: b
-                .body_force
+            body_force: bf
                 .filter(|v| *v != [0.0, 0.0])
                 .map(|v| [factor * v[0], factor * v[1]]),
         })
@@ -490,7 +621,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 
     // Post-processing.
     let t2 = Instant::now();
-    let inputs = body_inputs(model, scene.plane, &result.fields, factor);
+    let inputs = body_inputs(
+        model,
+        scene.plane,
+        &result.fields,
+        &result.body_force,
+        factor,
+    );
     let mut sections = Vec::new();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
@@ -535,7 +672,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                 "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
             );
             for (st, row) in result.states.iter().zip(&result.history.rows) {
-                let inputs = body_inputs(model, scene.plane, &st.fields, st.load_factor);
+                let inputs = body_inputs(
+                    model,
+                    scene.plane,
+                    &st.fields,
+                    &st.body_force,
+                    st.load_factor,
+                );
                 let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
                 for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
                     let vals = match v {

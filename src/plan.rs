@@ -70,6 +70,55 @@ impl Plan {
     }
 }
 
+/// The prescribed values that depend on the pseudo-time `t`, as key paths.
+pub fn time_dependent(scene: &Scene) -> Vec<String> {
+    let mut out = Vec::new();
+    for b in &scene.bodies {
+        if let Some(f) = &b.body_force {
+            for (c, v) in f.iter().enumerate() {
+                if v.uses_time() {
+                    out.push(format!("body.{}.body_force[{c}]", b.name));
+                }
+            }
+        }
+    }
+    for b in &scene.boundaries {
+        let names = match b.frame {
+            crate::input::scene::Frame::Global => [("ux", "tx"), ("uy", "ty")],
+            crate::input::scene::Frame::Local => [("ut", "tt"), ("un", "tn")],
+        };
+        for (c, cond) in b.components.iter().enumerate() {
+            let (crate::input::scene::Condition::Displacement(v)
+            | crate::input::scene::Condition::Traction(v)) = cond;
+            if v.uses_time() {
+                let key = if cond.is_displacement() {
+                    names[c].0
+                } else {
+                    names[c].1
+                };
+                out.push(format!("boundary.{}.{key}", b.name));
+            }
+        }
+    }
+    for i in &scene.interfaces {
+        for (what, v) in [
+            ("gap", &i.gap),
+            ("cohesion", &i.cohesion),
+            ("friction", &i.friction),
+        ] {
+            if v.uses_time() {
+                out.push(format!("interface.{}.{what}", i.name));
+            }
+        }
+    }
+    out
+}
+
+/// Whether any prescribed value depends on the pseudo-time `t`.
+pub fn uses_time(scene: &Scene) -> bool {
+    !time_dependent(scene).is_empty()
+}
+
 /// Decides the plan of a scene on its model.
 pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     let mut effects = vec!["elastic"];
@@ -130,7 +179,13 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     } else if closed {
         omitted.push("cohesion loop: cohesion = 0 on every closed zone".to_string());
     }
-    let steps = scene.solve.load_factors.len();
+    let steps = scene.solve.steps().len();
+    let frictional = unilateral
+        .iter()
+        .any(|i| i.spec.tangential == crate::input::scene::Tangential::Friction);
+    if frictional {
+        effects.push("friction");
+    }
     if scene.output.field {
         if let Some(b) = model.bodies.iter().find(|b| b.triangles.is_empty()) {
             return Err(Error::input(
@@ -179,17 +234,48 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     } else {
         String::new()
     };
+    if let Some(ts) = &scene.solve.time {
+        let dep = time_dependent(scene);
+        let list: Vec<String> = ts
+            .iter()
+            .map(|t| crate::input::model::fmt_num(*t))
+            .collect();
+        stages.push((
+            "load_path",
+            if dep.is_empty() {
+                format!(
+                    "pseudo-time t = {}: no prescribed value depends on t (the same loads at \
+                     every step)",
+                    list.join(", ")
+                )
+            } else {
+                format!(
+                    "pseudo-time t = {}, each step from the previous state; depending on t: {} \
+                     (evaluated and assembled again at each step)",
+                    list.join(", "),
+                    dep.join(", ")
+                )
+            },
+        ));
+    }
     if problem == ContactProblem::None {
         stages.push((
             "solve",
             format!("bonded interface system, linear (no contact solver){steps_note}"),
         ));
     } else {
-        let cohesion_note = if cohesive {
+        let mut cohesion_note = if cohesive {
             "; brittle-cohesion outer loop (a node that detaches loses c)"
         } else {
             ""
-        };
+        }
+        .to_string();
+        if frictional {
+            cohesion_note.push_str(
+                "; Coulomb friction by a Tresca fixed point (slip bound mu*normal force from \
+                 the last outer iterate), stick/slip statuses per pair",
+            );
+        }
         let what = match problem {
             ContactProblem::Detachment => "detachment",
             ContactProblem::Contact => "contact",
@@ -205,11 +291,7 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
             ));
         }
         if matches!(scene.solve.method, Method::Qp | Method::Both) {
-            let form = match problem {
-                ContactProblem::Detachment => "QP (32b) on interface forces",
-                ContactProblem::Contact => "QP (32a) on interface displacements",
-                _ => "min-max QP (30) as a convex QP",
-            };
+            let form = "convex QP on the openings (the same discrete problem as the LCP)";
             stages.push((
                 "contact_qp",
                 format!("{form} with Clarabel{cohesion_note}{steps_note}"),

@@ -182,8 +182,8 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
                     InitialState::Open => "starts open",
                 };
                 let tang = match sp.tangential {
-                    Tangential::Stick => "stick",
-                    Tangential::Slide => "slide",
+                    Tangential::Friction => format!("friction {}", sp.friction),
+                    other => other.name().to_string(),
                 };
                 let extra = match sp.initial {
                     InitialState::Closed => format!("cohesion {}", sp.cohesion),

@@ -27,6 +27,23 @@ pub struct PairResult {
     pub traction: [f64; 2],
     /// Relative displacement `u_B − u_A`: tangential (slip), normal (opening).
     pub jump: [f64; 2],
+    /// Friction pairs: whether the closed pair slips (`Some(true)`) or sticks; `None` for
+    /// other pairs.
+    pub slipping: Option<bool>,
+    /// Friction pairs: the accumulated slip path Σ|Δs| over the load steps while closed.
+    pub slip: f64,
+}
+
+impl PairResult {
+    /// `stick`, `slip` or `open` for friction pairs; `None` for other pairs.
+    pub fn tangential_status(&self) -> Option<&'static str> {
+        match (self.status, self.slipping) {
+            (_, None) => None,
+            (PairStatus::Open, _) => Some("open"),
+            (PairStatus::Closed, Some(true)) => Some("slip"),
+            (PairStatus::Closed, Some(false)) => Some("stick"),
+        }
+    }
 }
 
 /// Results of one interface.

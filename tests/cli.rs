@@ -92,7 +92,7 @@ fn scene_errors() {
         (
             STACKED_SCENE.replace(
                 "model = \"unilateral\"",
-                "model = \"unilateral\"\ninitial = \"open\"\ngap = -1",
+                "model = \"unilateral\"\ninitial = \"open\"\ngap = \"ln(0)\"",
             ),
             vec!["interface.joint.gap"],
         ),
@@ -111,13 +111,63 @@ fn scene_errors() {
         (
             STACKED_SCENE.replace(
                 "model = \"unilateral\"",
-                "model = \"unilateral\"\ninitial = \"open\"\ngap = \"0.1 - x\"",
+                "model = \"unilateral\"\ninitial = \"open\"\ngap = \"sqrt(0.1 - x)\"",
             ),
             vec!["interface.joint.gap", "node"],
         ),
         (
             STACKED_SCENE.replace("plane = \"strain\"", "plane = \"strian\""),
             vec!["plane", "did you mean `strain`"],
+        ),
+        // friction and load paths
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ntangential = \"friction\"",
+            ),
+            vec!["interface.joint", "no `friction`", "friction = 0.6"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ntangential = \"slide\"\nfriction = 0.5",
+            ),
+            vec!["interface.joint.friction", "tangential = \"slide\""],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ntangential = \"friction\"\nfriction = \"0.5 - x\"",
+            ),
+            vec!["interface.joint.friction", ">= 0"],
+        ),
+        (
+            STACKED_SCENE.replace(
+                "model = \"unilateral\"",
+                "model = \"unilateral\"\ntangential = \"frictoin\"",
+            ),
+            vec!["interface.joint.tangential", "did you mean `friction`"],
+        ),
+        (
+            format!("{STACKED_SCENE}\n[solve]\ntime = [1.0, 2.0]\nload_factors = [1.0]\n"),
+            vec!["solve.time", "solve.load_factors", "not both"],
+        ),
+        (
+            format!("{STACKED_SCENE}\n[solve]\ntime = [1.0, 0.5]\n"),
+            vec!["solve.time", "must increase"],
+        ),
+        (
+            format!("{STACKED_SCENE}\n[solve]\ntime = [1.0, 2.0]\n")
+                .replace("ty = -1.0", "ty = \"sqrt(1.5 - t)\""),
+            vec!["boundary.top.ty", "t = 2"],
+        ),
+        (
+            STACKED_SCENE.replacen(
+                "poisson = 0.3",
+                "poisson = 0.3\nbody_force = [0.0, \"-y\"]",
+                1,
+            ),
+            vec!["body_force[1]", "uniform"],
         ),
         (
             "plane = \"strain\"\n[body.lower\n".to_string(),

@@ -295,7 +295,7 @@ fn final_state_does_not_depend_on_the_initial_status_or_the_solver() {
         ] {
             let start = sgbem::contact::StepState {
                 open: open.clone(),
-                cohesion: init.cohesion.clone(),
+                ..init.clone()
             };
             let r = session.solve_step(&start, m, 1e-10, 1000, 0, 1.0, false);
             assert!(r.converged, "start {i} {m:?}: {:?}", r.notes);

@@ -634,7 +634,7 @@ fn check_scene(ex: &dyn Exact, path: &Path) {
                 b.name
             );
             assert_eq!(
-                b.body_force.unwrap_or([0.0; 2]),
+                b.body_force_at(1.0).unwrap_or([0.0; 2]),
                 ex.body_force(p),
                 "{name}: body force of {}",
                 b.name
@@ -705,11 +705,14 @@ fn check_scene(ex: &dyn Exact, path: &Path) {
                     };
                     for (cond, e) in spec.components.iter().zip(dirs) {
                         let (given, want, scale, what) = match cond {
-                            Condition::Displacement(v) => {
-                                (v.eval(p), u[0] * e[0] + u[1] * e[1], u_ref, "displacement")
-                            }
+                            Condition::Displacement(v) => (
+                                v.eval(p, 1.0),
+                                u[0] * e[0] + u[1] * e[1],
+                                u_ref,
+                                "displacement",
+                            ),
                             Condition::Traction(v) => {
-                                (v.eval(p), t[0] * e[0] + t[1] * e[1], s_ref, "traction")
+                                (v.eval(p, 1.0), t[0] * e[0] + t[1] * e[1], s_ref, "traction")
                             }
                         };
                         assert!(

@@ -171,6 +171,8 @@ fn fabricated(big_operator: usize) -> RunRecord {
                 status: st[j],
                 traction: [val(seed + 500 + j), val(seed + 510 + j)],
                 jump: [val(seed + 520 + j), val(seed + 530 + j)],
+                slipping: None,
+                slip: 0.0,
             })
             .collect();
         let mut state = StateRecord::new(k, 0, 1.0, fields, vec![InterfaceResult { pairs }]);
@@ -849,6 +851,8 @@ fn record_from_a_model() {
             status: PairStatus::Closed,
             traction: [0.0; 2],
             jump: [0.0; 2],
+            slipping: None,
+            slip: 0.0,
         };
         4
     ];
@@ -934,6 +938,8 @@ fn fabricated_run(dir: &Path) -> PathBuf {
                 status: st[j],
                 traction: [val(seed + 3000 + j), val(seed + 3100 + j)],
                 jump: [val(seed + 3200 + j), val(seed + 3300 + j).abs()],
+                slipping: None,
+                slip: 0.0,
             })
             .collect();
         let result = InterfaceResult { pairs };

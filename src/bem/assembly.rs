@@ -297,7 +297,7 @@ pub fn assemble_body_scaled(
             match cond {
                 Condition::Traction(v) => {
                     for a in 0..2 {
-                        let val = load_factor * v.eval(body.nodes[e.nodes[a]]);
+                        let val = load_factor * v.eval(body.nodes[e.nodes[a]], model.time);
                         known_t[ei][a][0] += val * dir[0];
                         known_t[ei][a][1] += val * dir[1];
                     }
@@ -310,7 +310,7 @@ pub fn assemble_body_scaled(
                             dir,
                         });
                         let n = e.nodes[a];
-                        constraints[n].push((dir, load_factor * v.eval(body.nodes[n])));
+                        constraints[n].push((dir, load_factor * v.eval(body.nodes[n], model.time)));
                     }
                 }
             }

@@ -8,17 +8,24 @@
 use std::collections::HashSet;
 
 use crate::contact::evolutive::{self, Outcome};
-use crate::contact::lcp::{Columns, Inner};
+use crate::contact::lcp::{status_key, Columns, Inner};
 
-/// Solves the inner problem from the normal statuses `open`.
-pub fn solve(inner: &Inner, cols: &mut Columns, open: &[bool], max_iterations: usize) -> Outcome {
-    let mut open = open.to_vec();
-    let mut seen: HashSet<Vec<bool>> = HashSet::new();
+/// Solves the inner problem from the statuses `open` and slip directions `sign`.
+pub fn solve(
+    inner: &Inner,
+    cols: &mut Columns,
+    open: &[bool],
+    sign: &[f64],
+    max_iterations: usize,
+) -> Outcome {
+    let mut sign = sign.to_vec();
+    let mut open = inner.start_open(open, &sign);
+    let mut seen: HashSet<Vec<i8>> = HashSet::new();
     let mut iterations = 0;
     let mut notes = Vec::new();
     loop {
         let (o, refused) = inner.factor(cols, &open);
-        let st = inner.state(cols, &o);
+        let st = inner.state(cols, &o, &sign);
         let v = inner.violations(&st);
         if v.is_empty() && refused.is_empty() {
             return Outcome {
@@ -29,7 +36,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns, open: &[bool], max_iterations: u
                 blocked: Vec::new(),
             };
         }
-        if !seen.insert(st.open.clone()) || iterations >= max_iterations || v.is_empty() {
+        if !seen.insert(status_key(&st)) || iterations >= max_iterations || v.is_empty() {
             notes.push(format!(
                 "the active-set iteration cycled after {iterations} iterations; continued \
                  with the evolutive iteration"
@@ -38,6 +45,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns, open: &[bool], max_iterations: u
                 inner,
                 cols,
                 &st.open,
+                &st.sign,
                 max_iterations.saturating_sub(iterations),
                 &mut |_| {},
             );
@@ -47,8 +55,10 @@ pub fn solve(inner: &Inner, cols: &mut Columns, open: &[bool], max_iterations: u
             return out;
         }
         open = st.open.clone();
+        sign = st.sign.clone();
         for x in &v {
             open[x.row] = !open[x.row];
+            sign[x.row] = if open[x.row] { x.sign } else { 0.0 };
         }
         iterations += 1;
     }

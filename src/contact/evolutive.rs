@@ -12,7 +12,7 @@
 
 use std::collections::HashSet;
 
-use crate::contact::lcp::{Columns, Inner, InnerState};
+use crate::contact::lcp::{status_key, Columns, Inner, InnerState};
 
 /// Outcome of an inner solve.
 pub struct Outcome {
@@ -24,17 +24,36 @@ pub struct Outcome {
     pub blocked: Vec<usize>,
 }
 
-/// Solves the inner problem from the normal statuses `open`; `record` is called with every
-/// state (the start included).
+/// Solves the inner problem from the statuses `open` (with the slip directions `sign` of
+/// slipping friction rows); `record` is called with every state (the start included).
 pub fn solve(
     inner: &Inner,
     cols: &mut Columns,
     open: &[bool],
+    sign: &[f64],
     max_iterations: usize,
     record: &mut dyn FnMut(&InnerState),
 ) -> Outcome {
     let mut notes = Vec::new();
-    let (mut o, refused) = inner.factor(cols, open);
+    let open = inner.start_open(open, sign);
+    let mut sign = sign.to_vec();
+    let (mut o, refused) = inner.factor(cols, &open);
+    // A free row (an untied stick row, a friction row without a slip bound) that cannot
+    // open leaves a body free: no equilibrium (the body tips over or comes loose).
+    let loose: Vec<usize> = refused.iter().copied().filter(|&r| inner.free[r]).collect();
+    if !loose.is_empty() {
+        let st = inner.state(cols, &o, &sign);
+        return Outcome {
+            state: st,
+            iterations: 0,
+            converged: false,
+            notes: vec![format!(
+                "{} free tangential row(s) cannot be free without leaving a body free",
+                loose.len()
+            )],
+            blocked: loose,
+        };
+    }
     if !refused.is_empty() {
         notes.push(format!(
             "{} pair(s) of the start status could not be open without leaving a body free; \
@@ -42,10 +61,10 @@ pub fn solve(
             refused.len()
         ));
     }
-    let mut st = inner.state(cols, &o);
+    let mut st = inner.state(cols, &o, &sign);
     record(&st);
-    let mut seen: HashSet<Vec<bool>> = HashSet::new();
-    seen.insert(st.open.clone());
+    let mut seen: HashSet<Vec<i8>> = HashSet::new();
+    seen.insert(status_key(&st));
     let mut least_index = false;
     let mut iterations = 0;
     let mut blocked: HashSet<usize> = HashSet::new();
@@ -60,14 +79,16 @@ pub fn solve(
                 blocked: Vec::new(),
             };
         }
-        let mut candidates: Vec<usize> = v.iter().map(|x| x.row).collect();
+        let mut candidates = v.clone();
         if least_index {
-            candidates.sort_unstable();
+            candidates.sort_unstable_by_key(|x| x.row);
         }
         let mut switched = false;
-        for r in candidates {
+        for x in candidates {
+            let r = x.row;
             if st.open[r] {
                 o.remove(r);
+                sign[r] = 0.0;
                 switched = true;
                 break;
             }
@@ -76,6 +97,7 @@ pub fn solve(
             }
             let col = cols.get(inner.problem, r);
             if o.append(r, col) {
+                sign[r] = x.sign;
                 switched = true;
                 break;
             }
@@ -93,10 +115,10 @@ pub fn solve(
             };
         }
         iterations += 1;
-        st = inner.state(cols, &o);
+        st = inner.state(cols, &o, &sign);
         blocked.clear();
         record(&st);
-        if !seen.insert(st.open.clone()) {
+        if !seen.insert(status_key(&st)) {
             if least_index {
                 notes.push(format!(
                     "the least-index rule returned to an earlier status after {iterations} \
@@ -116,7 +138,7 @@ pub fn solve(
             ));
             least_index = true;
             seen.clear();
-            seen.insert(st.open.clone());
+            seen.insert(status_key(&st));
         }
     }
     notes.push(format!(

@@ -7,8 +7,21 @@
 //! tied: opening unconstrained, force zero):
 //!
 //! ```text
-//!   λ = λ⁰ + A s;   normal rows: s ≥ 0, λ ≥ 0, sλ = 0;   free rows: λ = 0
+//!   λ = λ⁰ + A (s − s̄);   normal rows: s ≥ 0, λ ≥ 0, sλ = 0;   free rows: λ = 0
 //! ```
+//!
+//! **Friction rows** (the tangential rows of `tangential = "friction"` pairs) carry a Tresca
+//! problem with the slip bound g_r = μ_r λ_n fixed by the outer loop (from the normal force of
+//! the last outer iterate), so the inner problem keeps the symmetric A: with the slip
+//! increment Δs_r = s_r − s̄_r from the accumulated slip s̄_r of the previous load step,
+//!
+//! ```text
+//!   stick: Δs_r = 0, |λ_r| ≤ g_r;   slip+: Δs_r ≥ 0, λ_r = −g_r;   slip−: Δs_r ≤ 0, λ_r = g_r
+//! ```
+//!
+//! i.e. the optimality system of `min ½ΔsᵀAΔs + λ⁰ᵀΔs + Σ g_r |Δs_r|` (s ≥ 0 on normal rows):
+//! unique for positive definite A. A friction row whose bound is zero (its pair open or
+//! without compression) is free. Slipping rows are "open" rows with a target force −σ g_r.
 
 use std::collections::HashMap;
 
@@ -33,8 +46,11 @@ impl Columns {
 pub struct Inner<'a> {
     pub problem: &'a Problem,
     pub base: &'a Base,
-    /// Rows that are open whatever happens (untied stick rows).
+    /// Rows that are open whatever happens (untied stick rows, friction rows without a
+    /// slip bound).
     pub free: Vec<bool>,
+    /// Slip bound g_r = μ_r λ_n of each friction row (0 on other rows).
+    pub bound: Vec<f64>,
     /// Relative tolerance of the violation checks.
     pub tol: f64,
 }
@@ -42,20 +58,39 @@ pub struct Inner<'a> {
 /// A solution of the inner problem for one open set.
 #[derive(Debug, Clone)]
 pub struct InnerState {
-    /// Open rows (normal rows that are open, and the free rows).
+    /// Open rows (normal rows that are open, slipping friction rows, and the free rows).
     pub open: Vec<bool>,
-    /// Opening of every row (zero where closed).
+    /// Slip direction σ = ±1 of each slipping friction row (0 elsewhere).
+    pub sign: Vec<f64>,
+    /// Opening of every row (zero on closed normal rows; the accumulated slip s̄ on sticking
+    /// friction rows).
     pub s: Vec<f64>,
     /// Force of every row (λ; zero on open rows up to roundoff).
     pub lambda: Vec<f64>,
 }
 
-/// A switch of one normal row.
+/// A switch of one row.
 #[derive(Debug, Clone, Copy)]
 pub struct Violation {
     pub row: usize,
     /// Relative size.
     pub size: f64,
+    /// The slip direction a sticking friction row takes (0 for other switches).
+    pub sign: f64,
+}
+
+/// The status of every row in one comparable key: 0 closed/stick, 1 open, ±2 slipping.
+pub fn status_key(st: &InnerState) -> Vec<i8> {
+    st.open
+        .iter()
+        .zip(&st.sign)
+        .map(|(&o, &g)| match (o, g) {
+            (false, _) => 0,
+            (true, g) if g > 0.0 => 2,
+            (true, g) if g < 0.0 => -2,
+            _ => 1,
+        })
+        .collect()
 }
 
 impl<'a> Inner<'a> {
@@ -65,6 +100,28 @@ impl<'a> Inner<'a> {
 
     pub fn is_normal(&self, r: usize) -> bool {
         self.problem.rows[r].kind == RowKind::Normal
+    }
+
+    /// The open rows of a start status: a friction row that slips without a direction (a
+    /// row that was free) starts sticking.
+    pub fn start_open(&self, open: &[bool], sign: &[f64]) -> Vec<bool> {
+        (0..self.n())
+            .map(|r| open[r] && !(self.is_friction(r) && sign[r] == 0.0))
+            .collect()
+    }
+
+    /// A friction row with a positive slip bound (not free).
+    pub fn is_friction(&self, r: usize) -> bool {
+        self.problem.rows[r].kind == RowKind::Friction && !self.free[r]
+    }
+
+    /// The force a row holds while open: −σ g on slipping friction rows, 0 elsewhere.
+    fn target(&self, r: usize, sign: &[f64]) -> f64 {
+        if self.is_friction(r) {
+            -sign[r] * self.bound[r]
+        } else {
+            0.0
+        }
     }
 
     /// Builds the factor of A_OO for the free rows and the normal rows `open` (in order of
@@ -93,26 +150,40 @@ impl<'a> Inner<'a> {
         (o, refused)
     }
 
-    /// Openings and forces of the status whose factor is `o`.
-    pub fn state(&self, cols: &mut Columns, o: &Opening) -> InnerState {
+    /// Openings and forces of the status whose factor is `o`, with the slip directions
+    /// `sign` of its friction rows.
+    pub fn state(&self, cols: &mut Columns, o: &Opening, sign: &[f64]) -> InnerState {
         let n = self.n();
-        let rhs: Vec<f64> = o.rows.iter().map(|&r| -self.base.lambda0[r]).collect();
+        let rhs: Vec<f64> = o
+            .rows
+            .iter()
+            .map(|&r| self.target(r, sign) - self.base.lambda0[r])
+            .collect();
         let so = o.solve(&rhs);
-        let mut s = vec![0.0; n];
+        let mut s = self.base.offset.clone();
         let mut open = vec![false; n];
+        let mut sg = vec![0.0; n];
         let mut lambda = self.base.lambda0.clone();
         for (&r, &sr) in o.rows.iter().zip(&so) {
-            s[r] = sr;
+            s[r] += sr;
             open[r] = true;
+            if self.is_friction(r) {
+                sg[r] = if sign[r] < 0.0 { -1.0 } else { 1.0 };
+            }
             let col = cols.get(self.problem, r);
             for (l, c) in lambda.iter_mut().zip(col) {
                 *l += c * sr;
             }
         }
         for &r in &o.rows {
-            lambda[r] = 0.0;
+            lambda[r] = self.target(r, &sg);
         }
-        InnerState { open, s, lambda }
+        InnerState {
+            open,
+            sign: sg,
+            s,
+            lambda,
+        }
     }
 
     /// Scales of forces and openings for relative checks.
@@ -128,33 +199,57 @@ impl<'a> Inner<'a> {
         (f.max(f64::MIN_POSITIVE), s.max(v).max(f64::MIN_POSITIVE))
     }
 
-    /// Violated normal rows, largest first: tension beyond the cohesion on a closed row,
-    /// interpenetration on an open one.
+    /// Violated rows, largest first: tension beyond the cohesion on a closed normal row,
+    /// interpenetration on an open one; a sticking friction row whose force exceeds its
+    /// bound, a slipping one whose slip increment runs against its direction.
     pub fn violations(&self, st: &InnerState) -> Vec<Violation> {
         let (fs, ss) = self.scales(st);
         let mut v = Vec::new();
         for r in 0..self.n() {
-            if !self.is_normal(r) || self.free[r] {
-                continue;
-            }
-            let size = if st.open[r] {
-                -st.s[r] / ss
+            let (size, sign) = if self.is_friction(r) {
+                let ds = st.s[r] - self.base.offset[r];
+                if st.open[r] {
+                    (-st.sign[r] * ds / ss, 0.0)
+                } else {
+                    let l = st.lambda[r];
+                    // λ > g: the row slips backwards (σ = −1, λ = g), and vice versa.
+                    ((l.abs() - self.bound[r]) / fs, -l.signum())
+                }
+            } else if self.is_normal(r) && !self.free[r] {
+                let size = if st.open[r] {
+                    -st.s[r] / ss
+                } else {
+                    -st.lambda[r] / fs
+                };
+                (size, 0.0)
             } else {
-                -st.lambda[r] / fs
+                continue;
             };
             if size > self.tol {
-                v.push(Violation { row: r, size });
+                v.push(Violation { row: r, size, sign });
             }
         }
         v.sort_by(|a, b| b.size.total_cmp(&a.size).then(a.row.cmp(&b.row)));
         v
     }
 
-    /// Complementarity residual `max(−λ, −s, λ·s)` over the normal rows, relative.
+    /// Complementarity residual `max(−λ, −s, λ·s)` over the normal rows, and over the
+    /// friction rows the excess of |λ| over its bound and the slip against its force,
+    /// relative.
     pub fn residual(&self, st: &InnerState) -> f64 {
         let (fs, ss) = self.scales(st);
         let mut r = 0.0f64;
         for j in 0..self.n() {
+            if self.is_friction(j) {
+                let (l, ds) = (st.lambda[j] / fs, (st.s[j] - self.base.offset[j]) / ss);
+                let g = self.bound[j] / fs;
+                // Dissipation is λ·Δs = −g|Δs| exactly when the row slips against its force.
+                r = r.max(l.abs() - g);
+                if g.is_finite() {
+                    r = r.max((l * ds + g * ds.abs()).abs());
+                }
+                continue;
+            }
             if !self.is_normal(j) || self.free[j] {
                 continue;
             }
@@ -164,15 +259,31 @@ impl<'a> Inner<'a> {
         r
     }
 
-    /// The dense LCP over the normal rows with the free rows eliminated:
-    /// `M = A_NN − A_NF A_FF⁻¹ A_FN`, `q = λ⁰_N − A_NF A_FF⁻¹ λ⁰_F` (for Lemke and the QP,
-    /// which need every column). Returns the normal rows, M (row-major) and q, or None when
-    /// A_FF is singular.
-    pub fn dense(&self, cols: &mut Columns) -> Option<(Vec<usize>, Vec<f64>, Vec<f64>)> {
+    /// The dense LCP `w = M z + q, z ≥ 0, w ≥ 0, zᵀw = 0` of the inner problem with the free
+    /// rows eliminated (for Lemke and the QP, which need every column). Its variables are
+    /// the openings of the normal rows and, per friction row, the slip increments
+    /// `p, m ≥ 0` forwards and backwards (`Δs = p − m`, `w = ±λ + g`):
+    /// `M = σσᵀ ∘ (A_NN − A_NF A_FF⁻¹ A_FN)` over the variables' rows with signs σ = ±1, and
+    /// `q = σ (λ⁰ − A_NF A_FF⁻¹ λ⁰_F) + g`. M is symmetric positive semidefinite, so the LCP
+    /// is the QP `min ½zᵀMz + qᵀz, z ≥ 0`.
+    pub fn dense(&self, cols: &mut Columns) -> Option<Dense> {
+        // Friction rows tied without a bound (the first outer iteration) are no variables.
         let normal: Vec<usize> = (0..self.n())
-            .filter(|&r| self.is_normal(r) && !self.free[r])
+            .filter(|&r| {
+                (self.is_normal(r) && !self.free[r])
+                    || (self.is_friction(r) && self.bound[r].is_finite())
+            })
             .collect();
-        let free: Vec<usize> = (0..self.n()).filter(|&r| self.free[r]).collect();
+        // Free rows whose opening would leave a body free stay tied, as in `factor` (the
+        // first contact of a body held by friction alone).
+        let mut o = Opening::default();
+        let mut free = Vec::new();
+        for r in (0..self.n()).filter(|&r| self.free[r]) {
+            let col = cols.get(self.problem, r);
+            if o.append(r, col) {
+                free.push(r);
+            }
+        }
         let nn = normal.len();
         let mut m = vec![0.0; nn * nn];
         let mut q: Vec<f64> = normal.iter().map(|&r| self.base.lambda0[r]).collect();
@@ -183,13 +294,6 @@ impl<'a> Inner<'a> {
             }
         }
         if !free.is_empty() {
-            let mut o = Opening::default();
-            for &r in &free {
-                let col = cols.get(self.problem, r);
-                if !o.append(r, col) {
-                    return None;
-                }
-            }
             // X = A_FF⁻¹ A_FN column by column, then M −= A_NF X.
             let anf: Vec<Vec<f64>> = free
                 .iter()
@@ -215,6 +319,64 @@ impl<'a> Inner<'a> {
                 q[a] -= (0..free.len()).map(|f| anf[f][a] * xq[f]).sum::<f64>();
             }
         }
-        Some((normal, m, q))
+        // Expand the friction rows into their two slip variables.
+        let mut vars: Vec<(usize, usize, f64)> = Vec::with_capacity(nn);
+        for (a, &r) in normal.iter().enumerate() {
+            vars.push((a, r, 1.0));
+            if self.is_friction(r) {
+                vars.push((a, r, -1.0));
+            }
+        }
+        let nv = vars.len();
+        let mut mv = vec![0.0; nv * nv];
+        let mut qv = vec![0.0; nv];
+        for (i, &(a, r, sa)) in vars.iter().enumerate() {
+            qv[i] = sa * q[a]
+                + if self.is_friction(r) {
+                    self.bound[r]
+                } else {
+                    0.0
+                };
+            for (j, &(b, _, sb)) in vars.iter().enumerate() {
+                mv[i * nv + j] = sa * sb * m[a * nn + b];
+            }
+        }
+        Some(Dense {
+            vars: vars.iter().map(|&(_, r, s)| (r, s)).collect(),
+            m: mv,
+            q: qv,
+        })
     }
+
+    /// The statuses of a solution of the dense LCP: `active[i]` says that variable i is the
+    /// positive one of its complementary pair. Returns the open rows and slip directions.
+    pub fn statuses(&self, dense: &Dense, active: &[bool]) -> (Vec<bool>, Vec<f64>) {
+        let mut open = self.free.clone();
+        let mut sign = vec![0.0; self.n()];
+        for (&(r, s), &on) in dense.vars.iter().zip(active) {
+            if !on {
+                continue;
+            }
+            if self.is_friction(r) {
+                // Both directions active only without a bound: then the row is free anyway.
+                if open[r] {
+                    open[r] = false;
+                    sign[r] = 0.0;
+                } else {
+                    open[r] = true;
+                    sign[r] = s;
+                }
+            } else {
+                open[r] = true;
+            }
+        }
+        (open, sign)
+    }
+}
+
+/// The dense LCP of an inner problem: variables (row, sign) and M (row-major), q.
+pub struct Dense {
+    pub vars: Vec<(usize, f64)>,
+    pub m: Vec<f64>,
+    pub q: Vec<f64>,
 }

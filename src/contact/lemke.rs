@@ -149,16 +149,18 @@ pub fn lemke(m: &[f64], q: &[f64], max_pivots: usize) -> Result<LemkeSolution, L
 }
 
 /// Solves the inner contact LCP (`lcp`) by Lemke's method on its dense form (every column of
-/// the opening stiffness, free rows eliminated). Returns the open statuses of the rows and the
-/// number of pivots; a secondary ray means no equilibrium exists (a mechanism).
+/// the opening stiffness, free rows eliminated, friction rows split into their two slip
+/// directions). Returns the open statuses of the rows, the slip directions and the number
+/// of pivots; a secondary ray means no equilibrium exists (a mechanism).
 pub fn solve_inner(
     inner: &crate::contact::lcp::Inner,
     cols: &mut crate::contact::lcp::Columns,
-) -> Result<(Vec<bool>, usize), String> {
-    let (normal, mut m, mut q) = inner
+) -> Result<(Vec<bool>, Vec<f64>, usize), String> {
+    let dense = inner
         .dense(cols)
         .ok_or_else(|| "the free tangential openings leave a body free".to_string())?;
-    let n = normal.len();
+    let n = dense.q.len();
+    let (mut m, mut q) = (dense.m.clone(), dense.q.clone());
     // Jacobi scaling keeps the pivots O(1).
     let d: Vec<f64> = (0..n)
         .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
@@ -178,12 +180,10 @@ pub fn solve_inner(
             format!("Lemke's method reached its pivot limit ({pivots} pivots)")
         }
     })?;
-    let mut open = inner.free.clone();
-    for (i, &r) in normal.iter().enumerate() {
-        // z is the (scaled) opening, w the force: open where the opening is the positive one.
-        open[r] = sol.z[i] > sol.w[i];
-    }
-    Ok((open, sol.pivots))
+    // z is the (scaled) opening or slip, w its force: active where z is the positive one.
+    let active: Vec<bool> = (0..n).map(|i| sol.z[i] > sol.w[i]).collect();
+    let (open, sign) = inner.statuses(&dense, &active);
+    Ok((open, sign, sol.pivots))
 }
 
 #[cfg(test)]

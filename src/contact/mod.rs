@@ -68,12 +68,24 @@ impl Method {
 }
 
 /// The state carried from one load step (and outer iteration) to the next: open rows,
-/// tangential ties of stick rows, and the cohesion left at each pair.
+/// tangential ties of stick rows, slip statuses and accumulated slips of friction rows,
+/// and the cohesion left at each pair.
 #[derive(Debug, Clone, PartialEq)]
 pub struct StepState {
-    /// Per row that can open: open (normal rows) or untied (stick rows).
+    /// Per row that can open: open (normal rows), untied (stick rows) or slipping (friction
+    /// rows).
     pub open: Vec<bool>,
+    /// Slip direction ±1 of slipping friction rows (0 elsewhere).
+    pub sign: Vec<f64>,
+    /// Accumulated slip s̄ of friction rows (their opening while they stick).
+    pub offset: Vec<f64>,
+    /// Accumulated slip path Σ|Δs| of friction rows while closed.
+    pub path: Vec<f64>,
+    /// Slip bounds μλ_n of friction rows at the end of the last step (empty at the start).
+    pub bound: Vec<f64>,
     pub cohesion: Vec<Vec<f64>>,
+    /// Pairs that have opened (their cohesion is lost for good).
+    pub broken: Vec<Vec<bool>>,
 }
 
 /// The solution after one iteration, kept for output.
@@ -81,6 +93,10 @@ pub struct StepState {
 pub struct RecordedState {
     pub load_step: usize,
     pub load_factor: f64,
+    /// Pseudo-time of the step (1 without `[solve] time`).
+    pub time: f64,
+    /// Body force of each body at this step (before the load factor).
+    pub body_force: Vec<Option<[f64; 2]>>,
     pub iteration: usize,
     pub fields: Vec<BodyField>,
     pub interfaces: Vec<InterfaceResult>,
@@ -109,6 +125,8 @@ pub struct ContactResult {
     /// The states of the evolutive path in compact form (iteration, open rows, openings),
     /// expanded into `rows` and `states` by [`Session::expand`].
     pub recorded: Vec<(usize, Vec<bool>, Vec<f64>)>,
+    /// The state the step started from (for the slip paths of recorded states).
+    pub start: StepState,
     pub load_step: usize,
     pub load_factor: f64,
 }
@@ -148,7 +166,72 @@ impl<'a> Session<'a> {
             .iter()
             .map(|it| it.pairs.iter().map(|p| p.cohesion).collect())
             .collect();
-        StepState { open, cohesion }
+        let broken = self
+            .model
+            .interfaces
+            .iter()
+            .map(|it| vec![false; it.pairs.len()])
+            .collect();
+        let n = self.problem.n_open_rows;
+        StepState {
+            open,
+            sign: vec![0.0; n],
+            offset: vec![0.0; n],
+            path: vec![0.0; n],
+            bound: Vec::new(),
+            cohesion,
+            broken,
+        }
+    }
+
+    /// The slip bound μ·max(P_n, 0) of each friction row from the row forces `lambda`
+    /// (cohesion terms `coh` removed) and the open rows; zero on other rows and where the
+    /// pair is open.
+    fn bounds(&self, lambda: &[f64], coh: &[f64], open: &[bool]) -> Vec<f64> {
+        let n = self.problem.n_open_rows;
+        (0..n)
+            .map(|r| {
+                let row = self.problem.rows[r];
+                if row.kind != RowKind::Friction {
+                    return 0.0;
+                }
+                let mu = self.model.interfaces[row.iface].pairs[row.pair].friction;
+                match self.problem.row_of[row.iface][row.pair][1] {
+                    Some(rn) if rn < n && !open[rn] => mu * (lambda[rn] - coh[rn]).max(0.0),
+                    _ => 0.0,
+                }
+            })
+            .collect()
+    }
+
+    /// Sets the slip statuses and accumulated slip paths of friction pairs in `interfaces`
+    /// for openings `s` from the step's start `offset` and `path`.
+    fn mark_slip(
+        &self,
+        interfaces: &mut [InterfaceResult],
+        s: &[f64],
+        open: &[bool],
+        start: &StepState,
+    ) -> Vec<f64> {
+        let mut path = start.path.clone();
+        for (r, row) in self.problem.rows[..self.problem.n_open_rows]
+            .iter()
+            .enumerate()
+        {
+            if row.kind != RowKind::Friction {
+                continue;
+            }
+            if !self.pair_open(open, row.iface, row.pair) {
+                path[r] += (s[r] - start.offset[r]).abs();
+            }
+            interfaces[row.iface].pairs[row.pair].slip = path[r];
+        }
+        path
+    }
+
+    /// The body force of each body at the model's pseudo-time.
+    pub fn body_forces(&self) -> Vec<Option<[f64; 2]>> {
+        self.model.bodies.iter().map(|b| b.body_force).collect()
     }
 
     /// Whether pair (k, j)'s normal row is open in `open`.
@@ -186,19 +269,46 @@ impl<'a> Session<'a> {
         let mut last: Option<(InnerState, f64)> = None;
         // The outer iterates' open rows, to find the rows of a stick edge cycle.
         let mut iterates: Vec<Vec<bool>> = Vec::new();
+        let friction = self.problem.rows[..n]
+            .iter()
+            .any(|r| r.kind == RowKind::Friction);
+        // Slip bounds of the Tresca fixed point: from the last step's normal forces, or
+        // (first step) from those with every pair closed.
+        let mut bound = start.bound.clone();
+        let mut bound_changes: Vec<f64> = Vec::new();
         loop {
             outer += 1;
-            let base = self.problem.base(factor, &st.cohesion);
+            let base = self.problem.base(factor, &st.cohesion, &st.offset);
+            if bound.len() != n {
+                // No normal force is known yet: the first outer iteration ties every
+                // friction row (stick), which gives the normal forces of the bounds.
+                bound = self.problem.rows[..n]
+                    .iter()
+                    .map(|r| {
+                        if r.kind == RowKind::Friction {
+                            f64::INFINITY
+                        } else {
+                            0.0
+                        }
+                    })
+                    .collect();
+            }
             let free: Vec<bool> = (0..n)
-                .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r])
+                .map(|r| match self.problem.rows[r].kind {
+                    RowKind::Stick => st.open[r],
+                    RowKind::Friction => bound[r] <= 0.0,
+                    _ => false,
+                })
                 .collect();
             let inner = Inner {
                 problem: &self.problem,
                 base: &base,
                 free,
+                bound: bound.clone(),
                 tol,
             };
             let start_open = st.open.clone();
+            let start_sign = st.sign.clone();
             let it0 = iterations;
             let outcome: Result<evolutive::Outcome, String> = match method {
                 Method::Evolutive => {
@@ -208,6 +318,7 @@ impl<'a> Session<'a> {
                         &inner,
                         &mut self.cols,
                         &start_open,
+                        &start_sign,
                         max_iterations.saturating_sub(it0),
                         &mut |s: &InnerState| {
                             // Later outer iterations start where the last one ended.
@@ -223,12 +334,13 @@ impl<'a> Session<'a> {
                     &inner,
                     &mut self.cols,
                     &start_open,
+                    &start_sign,
                     max_iterations.saturating_sub(it0),
                 )),
                 Method::Lemke => {
-                    lemke::solve_inner(&inner, &mut self.cols).and_then(|(open, pivots)| {
+                    lemke::solve_inner(&inner, &mut self.cols).and_then(|(open, sign, pivots)| {
                         info = serde_json::json!({ "pivots": pivots });
-                        exact_state(&inner, &mut self.cols, &open)
+                        exact_state(&inner, &mut self.cols, &open, &sign)
                     })
                 }
                 Method::Qp => qp::solve(&inner, &mut self.cols, tol).and_then(|q| {
@@ -237,7 +349,7 @@ impl<'a> Session<'a> {
                         "objective": q.objective, "variables": q.variables,
                         "constraints": q.constraints,
                     });
-                    exact_state(&inner, &mut self.cols, &q.open)
+                    exact_state(&inner, &mut self.cols, &q.open, &q.sign)
                 }),
             };
             let outcome = match outcome {
@@ -248,13 +360,14 @@ impl<'a> Session<'a> {
                         &inner,
                         &mut self.cols,
                         &start_open,
+                        &start_sign,
                         max_iterations,
                         &mut |_| {},
                     );
                     let hint = if probe.blocked.is_empty() {
                         String::new()
                     } else {
-                        format!("; {}", self.mechanism(&probe.blocked))
+                        format!("; {}", self.mechanism(&probe.blocked, &probe.state, &inner))
                     };
                     failure = Some(Error::numerical(format!(
                         "the contact solver ({}) failed at load step {}: {e}{hint}",
@@ -274,37 +387,84 @@ impl<'a> Session<'a> {
                 let hint = if outcome_blocked.is_empty() {
                     String::new()
                 } else {
-                    format!("; {}", self.mechanism(&outcome_blocked))
+                    format!("; {}", self.mechanism(&outcome_blocked, &state, &inner))
                 };
                 failure = Some(Error::numerical(format!(
                     "the contact solver ({}) did not converge at load step {} (largest \
-                     violation {residual:.1e} of its scale): {}{}",
+                     violation {residual:.1e} of its scale){}{}",
                     method.name(),
                     load_step + 1,
-                    notes.join("; "),
+                    if notes.is_empty() {
+                        String::new()
+                    } else {
+                        format!(": {}", notes.join("; "))
+                    },
                     hint
                 )));
                 last = Some((state, residual));
                 break;
             }
-            // Outer update: brittle cohesion and stick ties.
+            // Outer update: brittle cohesion, stick ties, slip bounds.
             let mut next = st.clone();
             for r in 0..n {
                 let row = self.problem.rows[r];
                 let pair_open = self.pair_open(&state.open, row.iface, row.pair);
                 next.open[r] = match row.kind {
-                    RowKind::Normal => state.open[r],
+                    RowKind::Normal | RowKind::Friction => state.open[r],
                     _ => pair_open || edge_slip[r],
                 };
+                next.sign[r] = state.sign[r];
                 if row.kind == RowKind::Normal && pair_open {
                     next.cohesion[row.iface][row.pair] = 0.0;
+                    next.broken[row.iface][row.pair] = true;
                 }
             }
+            // The Tresca fixed point: the bounds from the new normal forces.
+            let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
+            let scale = bound
+                .iter()
+                .chain(&new_bound)
+                .filter(|v| v.is_finite())
+                .fold(0.0f64, |a, v| a.max(v.abs()))
+                .max(f64::MIN_POSITIVE);
+            // Relative change of the bounds (1 from the tied first iteration).
+            let change = bound.iter().zip(&new_bound).fold(0.0f64, |a, (x, y)| {
+                a.max(if x.is_finite() {
+                    (x - y).abs() / scale
+                } else {
+                    1.0
+                })
+            });
+            let settled = !friction || change <= 1e-10;
+            if friction {
+                bound_changes.push(change);
+            }
+            bound = new_bound;
             iterates.push(st.open.clone());
             last = Some((state, residual));
-            if next == st {
+            let same = (0..n).all(|r| {
+                self.problem.rows[r].kind == RowKind::Friction || next.open[r] == st.open[r]
+            }) && next.cohesion == st.cohesion;
+            if same && settled {
                 converged = true;
+                st = next;
                 break;
+            }
+            if friction && outer >= FRICTION_OUTER_LIMIT {
+                failure = Some(Error::numerical(format!(
+                    "the friction fixed point (slip bounds μλ_n from the normal forces) did not \
+                     settle in {outer} outer iterations at load step {}: the last relative \
+                     change of the bounds was {:.1e}; use smaller load steps (more values in \
+                     solve.time or load_factors)",
+                    load_step + 1,
+                    change
+                )));
+                st = next;
+                break;
+            }
+            if !settled {
+                st = next;
+                continue;
             }
             if !seen.insert(next.open.clone()) {
                 // A stick edge cycle: a pair at the contact edge opens once tied and closes
@@ -346,13 +506,17 @@ impl<'a> Session<'a> {
                  free), the μ → ∞ limit of Coulomb friction where the normal force vanishes"
             ));
         }
-        let (fields, interfaces, nodal_force) = self.problem.state(
+        let (fields, mut interfaces, nodal_force) = self.problem.state(
             self.model,
             self.prepared,
             factor,
             &final_state.s,
             &final_state.open,
         );
+        let path = self.mark_slip(&mut interfaces, &final_state.s, &final_state.open, start);
+        if friction {
+            info["friction_outer_changes"] = serde_json::json!(bound_changes);
+        }
         let mut rows = Vec::new();
         let mut states = Vec::new();
         if !record || compact.is_empty() {
@@ -368,6 +532,8 @@ impl<'a> Session<'a> {
                 states.push(RecordedState {
                     load_step,
                     load_factor: factor,
+                    time: self.model.time,
+                    body_force: self.body_forces(),
                     iteration: iterations,
                     fields: fields.clone(),
                     interfaces: interfaces.clone(),
@@ -377,10 +543,18 @@ impl<'a> Session<'a> {
         // The final state of the step: the statuses found (even when not converged).
         let mut out_state = st.clone();
         for r in 0..n {
-            if self.problem.rows[r].kind == RowKind::Normal {
-                out_state.open[r] = final_state.open[r];
+            match self.problem.rows[r].kind {
+                RowKind::Normal => out_state.open[r] = final_state.open[r],
+                RowKind::Friction => {
+                    out_state.open[r] = final_state.open[r];
+                    out_state.sign[r] = final_state.sign[r];
+                    out_state.offset[r] = final_state.s[r];
+                }
+                _ => {}
             }
         }
+        out_state.path = path;
+        out_state.bound = bound;
         ContactResult {
             state: out_state,
             fields,
@@ -397,6 +571,7 @@ impl<'a> Session<'a> {
             failure,
             info,
             recorded: compact,
+            start: start.clone(),
             load_step,
             load_factor: factor,
         }
@@ -407,15 +582,18 @@ impl<'a> Session<'a> {
     pub fn expand(&self, result: &mut ContactResult) {
         let (step, factor) = (result.load_step, result.load_factor);
         for (it, open, s) in std::mem::take(&mut result.recorded) {
-            let (f, i, _) = self
+            let (f, mut i, _) = self
                 .problem
                 .state(self.model, self.prepared, factor, &s, &open);
+            self.mark_slip(&mut i, &s, &open, &result.start);
             result
                 .rows
                 .push(history_row(self.model, &i, step, factor, it, result.solver));
             result.states.push(RecordedState {
                 load_step: step,
                 load_factor: factor,
+                time: self.model.time,
+                body_force: self.body_forces(),
                 iteration: it,
                 fields: f,
                 interfaces: i,
@@ -423,23 +601,85 @@ impl<'a> Session<'a> {
         }
     }
 
-    /// Names the bodies and the motion that opening the `blocked` rows would leave free.
-    fn mechanism(&self, blocked: &[usize]) -> String {
+    /// The body of interface k that nothing else holds (no displacement condition), if
+    /// exactly one of its two bodies is such.
+    fn free_body(&self, k: usize) -> Option<usize> {
+        let it = &self.model.interfaces[k];
+        let held = |b: usize| self.model.bodies[b].dof_counts()[0] > 0;
+        match (held(it.body_a), held(it.body_b)) {
+            (true, false) => Some(it.body_b),
+            (false, true) => Some(it.body_a),
+            _ => None,
+        }
+    }
+
+    /// Names the bodies and the motion that opening (or letting slip) the `blocked` rows
+    /// would leave free, with the resultants of the last state `st`.
+    fn mechanism(&self, blocked: &[usize], st: &InnerState, inner: &Inner) -> String {
+        let n = self.problem.n_open_rows;
+        // Sliding: a friction row that cannot slip without a rigid motion.
+        if let Some(&r) = blocked
+            .iter()
+            .find(|&&r| self.problem.rows[r].kind == RowKind::Friction && !inner.free[r])
+        {
+            let k = self.problem.rows[r].iface;
+            let it = &self.model.interfaces[k];
+            let (mut t, mut nf, mut bound) = (0.0, 0.0, 0.0);
+            for q in 0..n {
+                let row = self.problem.rows[q];
+                if row.iface != k {
+                    continue;
+                }
+                match row.kind {
+                    RowKind::Normal if !st.open[q] => {
+                        nf += st.lambda[q] - inner.base.cohesion[q];
+                    }
+                    // The force the loads ask of the interface, before it slips.
+                    RowKind::Friction => {
+                        t += st.lambda[q];
+                        bound += inner.bound[q];
+                    }
+                    _ => {}
+                }
+            }
+            let mu = if nf > 0.0 { bound / nf } else { 0.0 };
+            let body = self.free_body(k).map_or("a body".to_string(), |b| {
+                format!("body \"{}\"", self.model.bodies[b].name)
+            });
+            return format!(
+                "no equilibrium exists (a sliding mechanism): {body} slides on interface \"{}\": \
+                 the tangential force it needs exceeds what friction holds, tangential/normal \
+                 resultant {:.3} > mu = {:.3}; reduce the tangential load or raise the \
+                 friction coefficient",
+                it.spec.name,
+                if nf > 0.0 {
+                    t.abs() / nf
+                } else {
+                    f64::INFINITY
+                },
+                mu
+            );
+        }
         let mut parts = Vec::new();
         for &r in blocked.iter().take(3) {
             let row = self.problem.rows[r];
             let it = &self.model.interfaces[row.iface];
             let pr = &it.pairs[row.pair];
             let dir = if row.comp == 1 { pr.normal } else { pr.tangent };
+            let who = match self.free_body(row.iface) {
+                Some(b) => format!("body \"{}\"", self.model.bodies[b].name),
+                None => format!(
+                    "body \"{}\" or body \"{}\"",
+                    self.model.bodies[it.body_b].name, self.model.bodies[it.body_a].name
+                ),
+            };
             parts.push(format!(
-                "interface \"{}\" at ({}, {}) cannot open without leaving body \"{}\" or \
-                 body \"{}\" free: the free motion is a translation or rotation that opens it \
-                 along ({:.3}, {:.3})",
+                "interface \"{}\" at ({}, {}) cannot open without leaving {who} free: the free \
+                 motion is a translation or rotation (tipping about the last closed point) \
+                 that opens it along ({:.3}, {:.3})",
                 it.spec.name,
                 crate::input::model::fmt_num(pr.x[0]),
                 crate::input::model::fmt_num(pr.x[1]),
-                self.model.bodies[it.body_b].name,
-                self.model.bodies[it.body_a].name,
                 dir[0],
                 dir[1],
             ));
@@ -453,10 +693,14 @@ impl<'a> Session<'a> {
     }
 }
 
+/// Outer iterations of the Tresca fixed point before a step is reported as not converged.
+const FRICTION_OUTER_LIMIT: usize = 300;
+
 /// Every row closed, nothing open: the state reported when no inner solve finished.
 fn all_closed_state(n: usize) -> InnerState {
     InnerState {
         open: vec![false; n],
+        sign: vec![0.0; n],
         s: vec![0.0; n],
         lambda: vec![0.0; n],
     }
@@ -467,9 +711,10 @@ fn exact_state(
     inner: &Inner,
     cols: &mut Columns,
     open: &[bool],
+    sign: &[f64],
 ) -> Result<evolutive::Outcome, String> {
     let (o, refused) = inner.factor(cols, open);
-    let state = inner.state(cols, &o);
+    let state = inner.state(cols, &o, sign);
     let converged = refused.is_empty() && inner.violations(&state).is_empty();
     let mut notes = Vec::new();
     if !refused.is_empty() {
@@ -545,7 +790,8 @@ pub fn detached_length(model: &Model, k: usize, r: &InterfaceResult) -> f64 {
         .sum()
 }
 
-/// Number of unilateral pairs whose statuses differ between two results.
+/// Number of unilateral pairs whose statuses (open/closed, and stick/slip with friction)
+/// differ between two results.
 pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
     a.iter()
         .zip(b)
@@ -553,7 +799,9 @@ pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
             x.pairs
                 .iter()
                 .zip(&y.pairs)
-                .filter(|(p, q)| p.status != q.status)
+                .filter(|(p, q)| {
+                    p.status != q.status || p.tangential_status() != q.tangential_status()
+                })
                 .count()
         })
         .sum()

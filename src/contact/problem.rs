@@ -103,6 +103,8 @@ pub enum RowKind {
     Normal,
     /// Tangential component of a `stick` pair: tied while the pair is closed.
     Stick,
+    /// Tangential component of a `friction` pair: sticks or slips (Coulomb).
+    Friction,
 }
 
 /// A relative-displacement row `[u]_r = U^B − U^A` of one pair component.
@@ -145,7 +147,11 @@ pub struct Problem {
 pub struct Base {
     pub factor: f64,
     pub v0: Vec<f64>,
+    /// Row forces with every row closed at its offset.
     pub lambda0: Vec<f64>,
+    /// The opening each row keeps while closed: the accumulated slip s̄ of friction rows,
+    /// zero on other rows.
+    pub offset: Vec<f64>,
     /// Offsets (initial gaps closed) and cohesion terms per row.
     pub cohesion: Vec<f64>,
 }
@@ -278,7 +284,8 @@ impl Problem {
                         (InterfaceModel::Bonded, _, _) => RowKind::Bonded,
                         (InterfaceModel::Unilateral, 1, _) => RowKind::Normal,
                         (InterfaceModel::Unilateral, _, Tangential::Slide) => continue,
-                        (InterfaceModel::Unilateral, _, _) => RowKind::Stick,
+                        (InterfaceModel::Unilateral, _, Tangential::Friction) => RowKind::Friction,
+                        (InterfaceModel::Unilateral, _, Tangential::Stick) => RowKind::Stick,
                     };
                     let row = Row {
                         iface: k,
@@ -470,9 +477,14 @@ impl Problem {
             .collect()
     }
 
-    /// The all-closed state for a load factor and the cohesion left at each pair.
-    pub fn base(&self, factor: f64, cohesion: &[Vec<f64>]) -> Base {
-        let s = vec![0.0; self.n_open_rows];
+    /// The all-closed state for a load factor, the cohesion left at each pair and the
+    /// accumulated slip `offset` of friction rows (zero elsewhere; empty for none).
+    pub fn base(&self, factor: f64, cohesion: &[Vec<f64>], offset: &[f64]) -> Base {
+        let s = if offset.is_empty() {
+            vec![0.0; self.n_open_rows]
+        } else {
+            offset.to_vec()
+        };
         let v0 = self.solve_glued(&self.glued_load(factor, &s));
         let u = self.displacements(&v0, &s);
         let p = self.forces(&u, factor);
@@ -493,6 +505,7 @@ impl Problem {
             factor,
             v0,
             lambda0,
+            offset: s,
             cohesion: coh,
         }
     }
@@ -588,8 +601,12 @@ impl Problem {
                         for (c, t) in traction.iter_mut().enumerate() {
                             match self.row_of[k][j][c] {
                                 // An open row carries no force (exactly: it is the
-                                // stationarity condition of its opening).
-                                Some(r) if r < self.n_open_rows && open[r] => {}
+                                // stationarity condition of its opening), except a slipping
+                                // friction row, which carries its slip bound.
+                                Some(r)
+                                    if r < self.n_open_rows
+                                        && open[r]
+                                        && self.rows[r].kind != RowKind::Friction => {}
                                 Some(r) => {
                                     let row = &self.rows[r];
                                     let (b, l) = self.body_of(row.dof_b);
@@ -630,6 +647,16 @@ impl Problem {
                             }
                             None => 0.0,
                         });
+                        // A friction pair slips where its tangential row is open.
+                        let slipping = match self.row_of[k][j][0] {
+                            Some(r)
+                                if r < self.n_open_rows
+                                    && self.rows[r].kind == RowKind::Friction =>
+                            {
+                                Some(open[r])
+                            }
+                            _ => None,
+                        };
                         PairResult {
                             status: if closed {
                                 PairStatus::Closed
@@ -638,6 +665,8 @@ impl Problem {
                             },
                             traction,
                             jump,
+                            slipping,
+                            slip: 0.0,
                         }
                     })
                     .collect();
@@ -766,11 +795,16 @@ fn smallest_eigen(mut a: [[f64; 3]; 3]) -> (f64, [f64; 3]) {
     (a[i][i], [v[0][i], v[1][i], v[2][i]])
 }
 
+/// Relative pivot below which A_OO counts as singular. A rigid motion left free shows as a
+/// pivot of a few 1e-12 (roundoff of the boundary operators); genuine pivots of the
+/// opening stiffness are above 1e-3 on every shipped and test scene.
+const SINGULAR_PIVOT: f64 = 1e-9;
+
 /// The Cholesky factor of A_OO for an open set O, updated one row at a time.
 ///
 /// Rows are kept in insertion order; `append` adds a row and column (O(m²)), `remove`
 /// deletes one with a rank-one update of the trailing factor (O(m²)). A pivot below
-/// `1e-12` of the column's diagonal means A_OO is singular: opening that row would leave a
+/// [`SINGULAR_PIVOT`] of the column's diagonal means A_OO is singular: opening that row would leave a
 /// body free (a mechanism), and the row is refused.
 #[derive(Debug, Clone, Default)]
 pub struct Opening {
@@ -803,7 +837,7 @@ impl Opening {
             x[i] = acc / self.l[i][i];
         }
         let d2 = col[r] - x.iter().map(|v| v * v).sum::<f64>();
-        if d2.is_nan() || d2 <= 1e-12 * col[r].abs() {
+        if d2.is_nan() || d2 <= SINGULAR_PIVOT * col[r].abs() {
             return false;
         }
         x.push(d2.sqrt());

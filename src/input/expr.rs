@@ -1,8 +1,8 @@
-//! Prescribed values: a number, or an expression in `x` and `y`.
+//! Prescribed values: a number, or an expression in `x`, `y` and the pseudo-time `t`.
 //!
 //! Place in the flow: used by `scene` (parsing and validation) and later stages (evaluation
 //! at nodes and quadrature points). Expressions are parsed once by the `evalexpr` crate and
-//! evaluated through a small context of our own that knows exactly `x`, `y`, `pi` and the
+//! evaluated through a small context of our own that knows exactly `x`, `y`, `t`, `pi` and the
 //! functions SPEC.md lists (`sqrt sin cos tan exp ln abs atan2 min max`), so any other name is
 //! refused when the scene is read, not in the middle of a solve.
 //!
@@ -29,9 +29,9 @@ pub const FUNCTIONS: [(&str, usize); 10] = [
 ];
 
 /// Variables an expression may read.
-pub const VARIABLES: [&str; 3] = ["x", "y", "pi"];
+pub const VARIABLES: [&str; 4] = ["x", "y", "t", "pi"];
 
-/// A prescribed scalar: constant or a function of the point (x, y).
+/// A prescribed scalar: constant or a function of the point (x, y) and the pseudo-time t.
 #[derive(Debug, Clone)]
 pub enum Scalar {
     Const(f64),
@@ -39,11 +39,22 @@ pub enum Scalar {
 }
 
 impl Scalar {
-    pub fn eval(&self, p: [f64; 2]) -> f64 {
+    /// Value at the point p and pseudo-time t.
+    pub fn eval(&self, p: [f64; 2], t: f64) -> f64 {
         match self {
             Scalar::Const(v) => *v,
-            Scalar::Expr(e) => e.eval(p),
+            Scalar::Expr(e) => e.eval(p, t),
         }
+    }
+
+    /// True when the value depends on the pseudo-time `t`.
+    pub fn uses_time(&self) -> bool {
+        matches!(self, Scalar::Expr(e) if e.reads("t"))
+    }
+
+    /// True when the value depends on the point (`x` or `y`).
+    pub fn uses_space(&self) -> bool {
+        matches!(self, Scalar::Expr(e) if e.reads("x") || e.reads("y"))
     }
 
     /// The constant value, if the value does not depend on the point.
@@ -69,7 +80,7 @@ impl std::fmt::Display for Scalar {
     }
 }
 
-/// A parsed expression in `x` and `y`.
+/// A parsed expression in `x`, `y` and `t`.
 #[derive(Debug, Clone)]
 pub struct Expr {
     pub text: String,
@@ -87,7 +98,7 @@ impl Expr {
             .find(|c| matches!(c, '=' | ';' | '"' | '&' | '|' | '!'))
         {
             return Err(format!(
-                "`{c}` is not allowed: an expression is arithmetic in x and y \
+                "`{c}` is not allowed: an expression is arithmetic in x, y and t \
                  (+ - * / ^, parentheses, {}, pi)",
                 function_list()
             ));
@@ -105,7 +116,7 @@ impl Expr {
         for name in tree.iter_read_variable_identifiers() {
             if !VARIABLES.contains(&name) {
                 return Err(format!(
-                    "unknown name `{name}`: an expression may use x, y and pi{}",
+                    "unknown name `{name}`: an expression may use x, y, t (pseudo-time) and pi{}",
                     did_you_mean(name, VARIABLES.iter().copied())
                 ));
             }
@@ -124,19 +135,28 @@ impl Expr {
             tree,
         };
         // Evaluate once: wrong argument counts and non-numeric results show up here.
-        expr.try_eval([0.25, 0.75])?;
+        expr.try_eval([0.25, 0.75], 1.0)?;
         Ok(expr)
     }
 
-    /// Value at p; NaN where the expression is undefined (the caller checks finiteness).
-    pub fn eval(&self, p: [f64; 2]) -> f64 {
-        self.try_eval(p).unwrap_or(f64::NAN)
+    /// Whether the expression reads the variable `name`.
+    pub fn reads(&self, name: &str) -> bool {
+        self.tree
+            .iter_read_variable_identifiers()
+            .any(|v| v == name)
     }
 
-    fn try_eval(&self, p: [f64; 2]) -> Result<f64, String> {
+    /// Value at p and pseudo-time t; NaN where the expression is undefined (the caller
+    /// checks finiteness).
+    pub fn eval(&self, p: [f64; 2], t: f64) -> f64 {
+        self.try_eval(p, t).unwrap_or(f64::NAN)
+    }
+
+    fn try_eval(&self, p: [f64; 2], t: f64) -> Result<f64, String> {
         let ctx = PointContext {
             x: Value::Float(p[0]),
             y: Value::Float(p[1]),
+            t: Value::Float(t),
             pi: Value::Float(std::f64::consts::PI),
         };
         match self.tree.eval_with_context(&ctx) {
@@ -270,6 +290,7 @@ fn floats_for_integers(text: &str) -> String {
 struct PointContext {
     x: Value,
     y: Value,
+    t: Value,
     pi: Value,
 }
 
@@ -280,6 +301,7 @@ impl Context for PointContext {
         match identifier {
             "x" => Some(&self.x),
             "y" => Some(&self.y),
+            "t" => Some(&self.t),
             "pi" => Some(&self.pi),
             _ => None,
         }
@@ -324,7 +346,7 @@ mod tests {
     use super::*;
 
     fn ev(text: &str, p: [f64; 2]) -> f64 {
-        Expr::parse(text).expect("parses").eval(p)
+        Expr::parse(text).expect("parses").eval(p, 1.0)
     }
 
     /// The worst texts within the limits parse (or are refused) quickly and without
@@ -352,7 +374,7 @@ mod tests {
             let mut out = Vec::new();
             for c in &cases {
                 let t = std::time::Instant::now();
-                let r = Expr::parse(c).map(|e| e.eval([0.5, 0.5]));
+                let r = Expr::parse(c).map(|e| e.eval([0.5, 0.5], 1.0));
                 out.push((c.len(), r, t.elapsed().as_secs_f64()));
             }
             out
@@ -411,6 +433,18 @@ mod tests {
         assert_eq!(ev("atan2(y, x)", [0.0, 1.0]), std::f64::consts::FRAC_PI_2);
         assert_eq!(ev("min(x, y) + max(x, y)", [2.0, 5.0]), 7.0);
         assert_eq!(ev("-(x+y)^2", [1.0, 1.0]), -4.0);
+    }
+
+    #[test]
+    fn pseudo_time_is_a_variable() {
+        let e = Expr::parse("5*max(t - 1, 0) + x").expect("parses");
+        assert_eq!(e.eval([2.0, 0.0], 0.5), 2.0);
+        assert_eq!(e.eval([2.0, 0.0], 3.0), 12.0);
+        let s = Scalar::Expr(e);
+        assert!(s.uses_time() && s.uses_space());
+        let s = Scalar::Expr(Expr::parse("2*t").expect("parses"));
+        assert!(s.uses_time() && !s.uses_space());
+        assert!(!Scalar::Const(1.0).uses_time());
     }
 
     #[test]

@@ -32,7 +32,9 @@ use std::path::{Path, PathBuf};
 
 use crate::error::{did_you_mean, Error, Result};
 use crate::input::mesh::Mesh;
-use crate::input::scene::{BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene};
+use crate::input::scene::{
+    BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene, Tangential,
+};
 
 /// Turning angle above which two elements meet at a corner, within one gmsh curve.
 const CORNER_ANGLE_IN_CURVE: f64 = 10.0 * std::f64::consts::PI / 180.0;
@@ -181,6 +183,8 @@ pub struct Pair {
     pub gap: f64,
     /// Cohesion c ≥ 0 (closed zones).
     pub cohesion: f64,
+    /// Coulomb coefficient μ ≥ 0 (`tangential = "friction"`; 0 otherwise).
+    pub friction: f64,
 }
 
 /// An interface element: the same segment seen from both bodies.
@@ -229,6 +233,9 @@ pub struct Model {
     pub sizes: SizeStats,
     /// Physical Curves that lie on no body boundary (ignored).
     pub unused_curves: Vec<String>,
+    /// The pseudo-time at which the prescribed values (gaps, cohesions, friction
+    /// coefficients, body forces, boundary values) are evaluated.
+    pub time: f64,
 }
 
 impl Model {
@@ -238,6 +245,98 @@ impl Model {
     pub fn pair_count(&self) -> usize {
         self.interfaces.iter().map(|i| i.pairs.len()).sum()
     }
+
+    /// The model with its prescribed values evaluated at pseudo-time `t` (a load step of
+    /// `[solve] time`): body forces, and the gap, cohesion and friction coefficient of
+    /// every pair; boundary values are evaluated at `time` by the assembly. Values that are
+    /// not finite or negative where they must not be are input errors naming the step.
+    pub fn at_time(&self, scene: &Scene, t: f64) -> Result<Model> {
+        let mut m = self.clone();
+        m.time = t;
+        for (body, spec) in m.bodies.iter_mut().zip(&scene.bodies) {
+            body.body_force = spec.body_force_at(t);
+            if let Some(b) = body.body_force {
+                if !b.iter().all(|c| c.is_finite()) {
+                    return Err(Error::input(
+                        &scene.path,
+                        format!(
+                            "`body.{}.body_force` is not finite at t = {}: it must be finite at \
+                             every step",
+                            body.name,
+                            fmt_num(t)
+                        ),
+                    ));
+                }
+            }
+        }
+        for it in &mut m.interfaces {
+            for p in &mut it.pairs {
+                let (gap, cohesion, friction) =
+                    pair_values(&it.spec, p.x, t).map_err(|msg| Error::input(&scene.path, msg))?;
+                p.gap = gap;
+                p.cohesion = cohesion;
+                p.friction = friction;
+            }
+        }
+        check_values(&m.bodies, &m.parts, &scene.path, t)?;
+        Ok(m)
+    }
+}
+
+/// The pseudo-time of the first load step (1 without `[solve] time`).
+fn first_time(scene: &Scene) -> f64 {
+    scene.solve.steps().first().map_or(1.0, |s| s.1)
+}
+
+/// Gap, cohesion and friction coefficient of a pair at x and pseudo-time t (each only where
+/// its interface's settings use it); an error message when one is not finite and >= 0.
+fn pair_values(
+    spec: &InterfaceSpec,
+    x: [f64; 2],
+    t: f64,
+) -> std::result::Result<(f64, f64, f64), String> {
+    let gap = spec.gap.eval(x, t);
+    let cohesion = spec.cohesion.eval(x, t);
+    let friction = spec.friction.eval(x, t);
+    if !gap.is_finite() {
+        return Err(format!(
+            "`interface.{}.gap` is {} at {} (t = {}): it must be a finite number at every \
+             interface node and step (negative: an interference)",
+            spec.name,
+            fmt_num(gap),
+            fmt_point(x),
+            fmt_num(t)
+        ));
+    }
+    for (what, v) in [("cohesion", cohesion), ("friction", friction)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "`interface.{}.{what}` is {} at {} (t = {}): it must be a finite number >= 0 \
+                 at every interface node and step",
+                spec.name,
+                fmt_num(v),
+                fmt_point(x),
+                fmt_num(t)
+            ));
+        }
+    }
+    Ok((
+        if spec.initial == InitialState::Open {
+            gap
+        } else {
+            0.0
+        },
+        if spec.initial == InitialState::Closed {
+            cohesion
+        } else {
+            0.0
+        },
+        if spec.tangential == Tangential::Friction {
+            friction
+        } else {
+            0.0
+        },
+    ))
 }
 
 // ---------------------------------------------------------------------------------------
@@ -289,6 +388,7 @@ enum CurveUse {
 
 /// Builds and validates the model of a scene on a mesh.
 pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
+    let t0 = first_time(scene);
     let mfile = mesh_path;
     let sfile = scene.path.as_path();
     let named = |dim: i32| -> Vec<&str> {
@@ -625,7 +725,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         )?;
         body.young = spec.young;
         body.poisson = spec.poisson;
-        body.body_force = spec.body_force;
+        body.body_force = spec.body_force_at(t0);
         body.surfaces = body_surfaces[bi].clone();
         body.triangles = mesh
             .triangles
@@ -667,11 +767,11 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.dofs = node_dofs(body, &parts);
     }
     align_pair_frames(&bodies, &mut interfaces);
-    check_values(&bodies, &parts, sfile)?;
+    check_values(&bodies, &parts, sfile, t0)?;
     check_held(&bodies, &interfaces, sfile, scale)?;
     let sizes = size_stats(&bodies);
 
-    Ok(Model {
+    let model = Model {
         mesh_path: mesh_path.to_path_buf(),
         bodies,
         parts,
@@ -679,7 +779,15 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         scale,
         sizes,
         unused_curves,
-    })
+        time: t0,
+    };
+    // Every step's values must be valid, not only the first's.
+    if scene.solve.time.is_some() {
+        for (_, t) in scene.solve.steps().into_iter().skip(1) {
+            model.at_time(scene, t)?;
+        }
+    }
+    Ok(model)
 }
 
 fn list_or_none(names: &[&str]) -> String {
@@ -988,6 +1096,7 @@ fn build_interface(
 ) -> Result<Interface> {
     let sfile = scene.path.as_path();
     let name = spec.name.as_str();
+    let t0 = first_time(scene);
     let curves: BTreeSet<i32> = mesh
         .curves
         .values()
@@ -1198,22 +1307,12 @@ fn build_interface(
     for (j, &na) in order.iter().enumerate() {
         let normal = unit(normals[j]);
         let x = a.nodes[na];
-        let gap = spec.gap.eval(x);
-        let cohesion = spec.cohesion.eval(x);
-        for (what, v) in [("gap", gap), ("cohesion", cohesion)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(Error::input(
-                    sfile,
-                    format!(
-                        "`interface.{name}.{what}` is {} at node {} {}: it must be a finite number \
-                         >= 0 at every interface node",
-                        fmt_num(v),
-                        mesh.node_tags[a.mesh_nodes[na]],
-                        fmt_point(x)
-                    ),
-                ));
-            }
-        }
+        let (gap, cohesion, friction) = pair_values(spec, x, t0).map_err(|m| {
+            Error::input(
+                sfile,
+                format!("{m} (node {})", mesh.node_tags[a.mesh_nodes[na]]),
+            )
+        })?;
         pairs.push(Pair {
             node_a: na,
             node_b: a_to_b[&na],
@@ -1221,16 +1320,9 @@ fn build_interface(
             normal,
             tangent: [-normal[1], normal[0]],
             s: s_of[j],
-            gap: if spec.initial == InitialState::Open {
-                gap
-            } else {
-                0.0
-            },
-            cohesion: if spec.initial == InitialState::Closed {
-                cohesion
-            } else {
-                0.0
-            },
+            gap,
+            cohesion,
+            friction,
         });
     }
 
@@ -1655,7 +1747,7 @@ fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
 }
 
 /// Prescribed values must be finite at every node of their part.
-fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path) -> Result<()> {
+fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path, t: f64) -> Result<()> {
     for body in bodies {
         for e in &body.elements {
             let Role::Boundary(pi) = e.role else { continue };
@@ -1667,7 +1759,7 @@ fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path) -> Result<()> {
                 }
                 for n in e.nodes {
                     let x = body.nodes[n];
-                    let val = v.eval(x);
+                    let val = v.eval(x, t);
                     if !val.is_finite() {
                         let comp = match (spec.frame, c, cond.is_displacement()) {
                             (Frame::Global, 0, true) => "ux",
@@ -1683,11 +1775,13 @@ fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path) -> Result<()> {
                             sfile,
                             format!(
                                 "`boundary.{}.{comp}` = {v} is {val} at {} (body \"{}\", element \
-                                 {}): the expression must be defined on the whole curve",
+                                 {}, t = {}): the expression must be defined on the whole curve \
+                                 at every step",
                                 spec.name,
                                 fmt_point(x),
                                 body.name,
-                                e.tag
+                                e.tag,
+                                fmt_num(t)
                             ),
                         ));
                     }

@@ -3,7 +3,8 @@
 //! Place in the flow: the first stage. `read_scene` turns the file into a validated
 //! [`Scene`]; nothing after it sees TOML. Validation here covers everything that can be
 //! judged without the mesh: unknown keys (with the nearest valid key suggested), types,
-//! ranges (`young > 0`, `-1 < poisson < 0.5`, non-negative gap and cohesion), conflicting
+//! ranges (`young > 0`, `-1 < poisson < 0.5`, non-negative cohesion and friction; a negative
+//! gap is an interference), conflicting
 //! conditions (`ux` with `tx`), expressions that do not parse. Checks that need the mesh
 //! (group names and kinds, loops, interfaces) are made by `model`.
 //!
@@ -29,8 +30,18 @@ pub struct BodySpec {
     pub name: String,
     pub young: f64,
     pub poisson: f64,
-    /// Force per unit volume; `None` when the scene gives none.
-    pub body_force: Option<[f64; 2]>,
+    /// Force per unit volume (uniform in the body; each component a number or an
+    /// expression in the pseudo-time `t`); `None` when the scene gives none.
+    pub body_force: Option<[Scalar; 2]>,
+}
+
+impl BodySpec {
+    /// The body force at pseudo-time t.
+    pub fn body_force_at(&self, t: f64) -> Option<[f64; 2]> {
+        self.body_force
+            .as_ref()
+            .map(|b| [b[0].eval([0.0, 0.0], t), b[1].eval([0.0, 0.0], t)])
+    }
 }
 
 /// The frame in which a boundary gives its components.
@@ -133,6 +144,18 @@ pub enum Tangential {
     Stick,
     /// Frictionless: the tangential component is always free.
     Slide,
+    /// Coulomb friction with the coefficient `friction` of the interface.
+    Friction,
+}
+
+impl Tangential {
+    pub fn name(self) -> &'static str {
+        match self {
+            Tangential::Stick => "stick",
+            Tangential::Slide => "slide",
+            Tangential::Friction => "friction",
+        }
+    }
 }
 
 /// An interface: a Physical Curve shared by two bodies.
@@ -144,6 +167,8 @@ pub struct InterfaceSpec {
     pub cohesion: Scalar,
     pub gap: Scalar,
     pub tangential: Tangential,
+    /// Coulomb coefficient μ ≥ 0 (with `tangential = "friction"`; 0 otherwise).
+    pub friction: Scalar,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -186,7 +211,20 @@ pub struct SolveSpec {
     pub tolerance: f64,
     pub max_iterations: usize,
     pub load_factors: Vec<f64>,
+    /// Pseudo-time steps (`[solve] time`), increasing; `None` with load factors.
+    pub time: Option<Vec<f64>>,
     pub quadrature: Quadrature,
+}
+
+impl SolveSpec {
+    /// The load steps as (load factor, pseudo-time): `(f, 1)` for each load factor, or
+    /// `(1, t)` for each pseudo-time value.
+    pub fn steps(&self) -> Vec<(f64, f64)> {
+        match &self.time {
+            Some(ts) => ts.iter().map(|&t| (1.0, t)).collect(),
+            None => self.load_factors.iter().map(|&f| (f, 1.0)).collect(),
+        }
+    }
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -500,7 +538,7 @@ enum RawScalar {
 struct RawBody {
     young: f64,
     poisson: f64,
-    body_force: Option<[f64; 2]>,
+    body_force: Option<[RawScalar; 2]>,
 }
 
 #[derive(Deserialize)]
@@ -524,6 +562,7 @@ struct RawInterface {
     cohesion: Option<RawScalar>,
     gap: Option<RawScalar>,
     tangential: Option<String>,
+    friction: Option<RawScalar>,
 }
 
 #[derive(Deserialize, Default)]
@@ -533,6 +572,7 @@ struct RawSolve {
     tolerance: Option<f64>,
     max_iterations: Option<i64>,
     load_factors: Option<Vec<f64>>,
+    time: Option<Vec<f64>>,
     quadrature: Option<String>,
 }
 
@@ -579,12 +619,20 @@ const TOP_KEYS: [&str; 10] = [
 const UNITS_KEYS: [&str; 2] = ["length", "force"];
 const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
 const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
-const INTERFACE_KEYS: [&str; 5] = ["model", "initial", "cohesion", "gap", "tangential"];
-const SOLVE_KEYS: [&str; 5] = [
+const INTERFACE_KEYS: [&str; 6] = [
+    "model",
+    "initial",
+    "cohesion",
+    "gap",
+    "tangential",
+    "friction",
+];
+const SOLVE_KEYS: [&str; 6] = [
     "method",
     "tolerance",
     "max_iterations",
     "load_factors",
+    "time",
     "quadrature",
 ];
 const OUTPUT_KEYS: [&str; 6] = [
@@ -704,18 +752,26 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
                 raw.poisson
             )));
         }
-        if let Some(b) = raw.body_force {
-            if !b.iter().all(|c| c.is_finite()) {
-                return Err(err(format!(
-                    "`{key}.body_force` must hold two finite numbers"
-                )));
+        let body_force = match raw.body_force {
+            Some([bx, by]) => {
+                let b = [
+                    scalar(bx, &format!("{key}.body_force[0]"), path)?,
+                    scalar(by, &format!("{key}.body_force[1]"), path)?,
+                ];
+                if let Some((c, _)) = b.iter().enumerate().find(|(_, v)| v.uses_space()) {
+                    return Err(err(format!(
+                        "`{key}.body_force[{c}]` depends on x or y: a body force is uniform in                          its body (it may depend on the pseudo-time t); split the body into                          parts with their own body forces"
+                    )));
+                }
+                Some(b)
             }
-        }
+            None => None,
+        };
         bodies.push(BodySpec {
             name: name.clone(),
             young: raw.young,
             poisson: raw.poisson,
-            body_force: raw.body_force,
+            body_force,
         });
     }
     if bodies.is_empty() {
@@ -1039,13 +1095,31 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
     let tangential = match raw.tangential.as_deref() {
         None | Some("stick") => Tangential::Stick,
         Some("slide") => Tangential::Slide,
+        Some("friction") => Tangential::Friction,
         Some(other) => {
             return Err(err(choice_error(
                 &format!("{key}.tangential"),
                 other,
-                &["stick", "slide"],
+                &["stick", "slide", "friction"],
             )))
         }
+    };
+    let friction = match (raw.friction, tangential) {
+        (Some(v), Tangential::Friction) => scalar(v, &format!("{key}.friction"), path)?,
+        (None, Tangential::Friction) => {
+            return Err(err(format!(
+                "`{key}` has tangential = \"friction\" but no `friction`: give the Coulomb \
+                 coefficient, e.g. friction = 0.6"
+            )))
+        }
+        (Some(_), other) => {
+            return Err(err(format!(
+                "`{key}.friction` is given but tangential = \"{}\": the coefficient applies \
+                 with tangential = \"friction\"; set it or remove `friction`",
+                other.name()
+            )))
+        }
+        (None, _) => Scalar::Const(0.0),
     };
     let cohesion = match raw.cohesion {
         Some(v) => scalar(v, &format!("{key}.cohesion"), path)?,
@@ -1055,7 +1129,8 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
         Some(v) => scalar(v, &format!("{key}.gap"), path)?,
         None => Scalar::Const(0.0),
     };
-    for (what, v) in [("cohesion", &cohesion), ("gap", &gap)] {
+    // A negative gap is an interference (a shrink fit): the pair starts overlapping.
+    for (what, v) in [("cohesion", &cohesion), ("friction", &friction)] {
         if let Some(c) = v.as_const() {
             if c < 0.0 {
                 return Err(err(format!("`{key}.{what}` = {c} must be >= 0")));
@@ -1069,8 +1144,12 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
             Some("cohesion")
         } else if !gap.is_zero() {
             Some("gap")
-        } else if tangential == Tangential::Slide {
-            Some("tangential = \"slide\"")
+        } else if tangential != Tangential::Stick {
+            Some(if tangential == Tangential::Slide {
+                "tangential = \"slide\""
+            } else {
+                "tangential = \"friction\""
+            })
         } else {
             None
         };
@@ -1100,6 +1179,7 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
         cohesion,
         gap,
         tangential,
+        friction,
     })
 }
 
@@ -1141,6 +1221,7 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
             "`solve.max_iterations` = {max_iterations} must be at least 1"
         )));
     }
+    let has_factors = raw.load_factors.is_some();
     let load_factors = raw.load_factors.unwrap_or_else(|| vec![1.0]);
     if load_factors.is_empty() {
         return Err(err(
@@ -1152,11 +1233,40 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
             "`solve.load_factors` holds {f}, which is not finite"
         )));
     }
+    let time = match raw.time {
+        None => None,
+        Some(_) if has_factors => {
+            return Err(err(
+                "`solve.time` and `solve.load_factors` are both given: use load factors to \
+                 scale every load, or pseudo-time steps with loads that are expressions in t, \
+                 not both"
+                    .into(),
+            ))
+        }
+        Some(ts) => {
+            if ts.is_empty() {
+                return Err(err(
+                    "`solve.time` is empty: give at least one pseudo-time, e.g. [1.0]".into(),
+                ));
+            }
+            if let Some(t) = ts.iter().find(|t| !t.is_finite()) {
+                return Err(err(format!("`solve.time` holds {t}, which is not finite")));
+            }
+            if let Some(w) = ts.windows(2).find(|w| w[1] <= w[0]) {
+                return Err(err(format!(
+                    "`solve.time` must increase: {} follows {}; list the pseudo-times in order",
+                    w[1], w[0]
+                )));
+            }
+            Some(ts)
+        }
+    };
     Ok(SolveSpec {
         method,
         tolerance,
         max_iterations: max_iterations as usize,
         load_factors,
+        time,
         quadrature,
     })
 }
@@ -1298,12 +1408,12 @@ points = 41
         assert_eq!(s.plane, Plane::Stress);
         assert_eq!(s.bodies.len(), 2);
         assert_eq!(s.bodies[0].name, "A");
-        assert_eq!(s.bodies[0].body_force, Some([0.0, -0.0018]));
-        assert_eq!(s.bodies[1].body_force, None);
+        assert_eq!(s.bodies[0].body_force_at(1.0), Some([0.0, -0.0018]));
+        assert_eq!(s.bodies[1].body_force_at(1.0), None);
         let top = s.boundary("top").unwrap();
         assert_eq!(top.frame, Frame::Global);
         match &top.components[1] {
-            Condition::Traction(v) => assert_eq!(v.eval([200.0, 40.0]), -5.0),
+            Condition::Traction(v) => assert_eq!(v.eval([200.0, 40.0], 1.0), -5.0),
             _ => panic!("ty is a traction"),
         }
         assert!(matches!(top.components[0], Condition::Traction(Scalar::Const(z)) if z == 0.0));

@@ -775,6 +775,34 @@ fn write_state(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
             "normal opening: gap + normal jump where open, 0 where closed",
             u.len(),
         )?;
+        if r.pairs.iter().any(|p| p.slipping.is_some()) {
+            let ts: Vec<i8> = r
+                .pairs
+                .iter()
+                .map(|p| match p.slipping {
+                    None => -1,
+                    Some(false) => 1,
+                    Some(true) => 2,
+                })
+                .collect();
+            put(
+                &gg,
+                "tangential_status",
+                &[np],
+                &ts,
+                "friction: 1 stick, 2 slip (of a closed pair; see status for open pairs)",
+                "1",
+            )?;
+            let slip: Vec<f64> = r.pairs.iter().map(|p| p.slip).collect();
+            put_f64(
+                &gg,
+                "slip",
+                &[np],
+                &slip,
+                "friction: accumulated slip path sum |ds| over the load steps while closed",
+                u.len(),
+            )?;
+        }
     }
     if !st.interior.is_empty() {
         let gf = group(g, "interior")?;
@@ -1191,17 +1219,30 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
         let (_, status) = get::<i8>(&gg, "status", &[np])?;
         let tr = get_vec2(&gg, "traction", np)?;
         let jump = get_vec2(&gg, "jump", np)?;
-        st.interfaces.push(InterfaceResult {
-            pairs: status
-                .iter()
-                .zip(tr.iter().zip(&jump))
-                .map(|(&s, (&traction, &jump))| PairResult {
-                    status: status_of(s),
-                    traction,
-                    jump,
-                })
-                .collect(),
-        });
+        let mut pairs: Vec<PairResult> = status
+            .iter()
+            .zip(tr.iter().zip(&jump))
+            .map(|(&s, (&traction, &jump))| PairResult {
+                status: status_of(s),
+                traction,
+                jump,
+                slipping: None,
+                slip: 0.0,
+            })
+            .collect();
+        if gg.link_exists("tangential_status") {
+            let (_, ts) = get::<i8>(&gg, "tangential_status", &[np])?;
+            let (_, slip) = get::<f64>(&gg, "slip", &[np])?;
+            for ((p, &t), &sl) in pairs.iter_mut().zip(&ts).zip(&slip) {
+                p.slipping = match t {
+                    1 => Some(false),
+                    2 => Some(true),
+                    _ => None,
+                };
+                p.slip = sl;
+            }
+        }
+        st.interfaces.push(InterfaceResult { pairs });
     }
     if g.link_exists("interior") {
         let gf = open_group(g, "interior")?;

@@ -8,10 +8,19 @@ use crate::solution::{InterfaceResult, PairStatus};
 /// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:
 /// tractions on the first body (tension positive); the opening is the current normal
 /// distance `gap + n·(u_B − u_A)`; the slip `s·(u_B − u_A)`.
+///
+/// Friction interfaces add `tangential_status` (`stick`, `slip`, `open`) and `slip`, the
+/// accumulated slip path Σ|Δs| over the load steps while the pair is closed.
 pub fn interface_table(it: &Interface, r: &InterfaceResult) -> String {
+    let friction = r.pairs.iter().any(|p| p.slipping.is_some());
     let mut o = String::from(
-        "x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap\n",
+        "x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap",
     );
+    o.push_str(if friction {
+        ",tangential_status,slip\n"
+    } else {
+        "\n"
+    });
     for (p, q) in it.pairs.iter().zip(&r.pairs) {
         let status = match q.status {
             PairStatus::Closed => "closed",
@@ -22,11 +31,20 @@ pub fn interface_table(it: &Interface, r: &InterfaceResult) -> String {
             PairStatus::Open => p.gap + q.jump[1],
         };
         let slip = q.jump[0];
-        let _ = writeln!(
+        let _ = write!(
             o,
             "{:e},{:e},{:e},{status},{:e},{:e},{:e},{:e},{:e}",
             p.x[0], p.x[1], p.s, q.traction[1], q.traction[0], opening, slip, p.gap
         );
+        if friction {
+            let _ = write!(
+                o,
+                ",{},{:e}",
+                q.tangential_status().unwrap_or("none"),
+                q.slip
+            );
+        }
+        o.push('\n');
     }
     o
 }

@@ -24,7 +24,7 @@ use crate::bem::condensation::Condensed;
 use crate::error::{Error, Result};
 use crate::input::mesh::Mesh;
 use crate::input::model::{fmt_num, Interface, Model};
-use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential, Units};
+use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Units};
 use crate::post::NodeValue;
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
 
@@ -287,11 +287,7 @@ impl InterfaceRecord {
                 InitialState::Open => "open",
             }
             .into(),
-            tangential: match it.spec.tangential {
-                Tangential::Stick => "stick",
-                Tangential::Slide => "slide",
-            }
-            .into(),
+            tangential: it.spec.tangential.name().into(),
             node_a: it.pairs.iter().map(|p| p.node_a).collect(),
             node_b: it.pairs.iter().map(|p| p.node_b).collect(),
             x: it.pairs.iter().map(|p| p.x).collect(),

@@ -36,7 +36,7 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
         .iter()
         .filter(|p| p.status == PairStatus::Open)
         .count();
-    json!({
+    let mut out = json!({
         "detached_length": detached,
         "closed_length": closed,
         "open_pairs": open,
@@ -45,7 +45,30 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
         "tangential_resultant": tangential * thickness,
         "max_normal_traction": tn.iter().copied().fold(f64::NEG_INFINITY, f64::max),
         "min_normal_traction": tn.iter().copied().fold(f64::INFINITY, f64::min),
-    })
+    });
+    if r.pairs.iter().any(|p| p.slipping.is_some()) {
+        // Lengths of elements whose two ends stick / slip (an element with one end of each
+        // counts half to both).
+        let (mut stick, mut slip) = (0.0, 0.0);
+        for e in &it.elements {
+            let [j, k] = e.pairs;
+            let l =
+                (it.pairs[k].x[0] - it.pairs[j].x[0]).hypot(it.pairs[k].x[1] - it.pairs[j].x[1]);
+            for p in [j, k] {
+                match r.pairs[p].tangential_status() {
+                    Some("stick") => stick += 0.5 * l,
+                    Some("slip") => slip += 0.5 * l,
+                    _ => {}
+                }
+            }
+        }
+        let max_slip = r.pairs.iter().map(|p| p.slip).fold(0.0, f64::max);
+        let m = out.as_object_mut().expect("an object");
+        m.insert("stick_length".into(), json!(stick));
+        m.insert("slip_length".into(), json!(slip));
+        m.insert("max_accumulated_slip".into(), json!(max_slip));
+    }
+    out
 }
 
 /// Builds the `interfaces` object.

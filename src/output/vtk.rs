@@ -26,7 +26,9 @@
 //!
 //! Boundary point data: `displacement`, `traction` (average of the element-end values at
 //! the node), `normal` (unit, average of the adjacent element normals), `contact_status`
-//! (1 closed, 0 open, −1 not an interface node), `normal_traction` (interface nodes: the
+//! (1 closed, 0 open, −1 not an interface node), with friction `tangential_status` (1 stick,
+//! 2 slip, 0 open, −1 not a friction node) and `slip` (accumulated slip path),
+//! `normal_traction` (interface nodes: the
 //! pair's normal traction, tension positive; elsewhere the average of t·n over the adjacent
 //! element ends), `normal_opening` (interface nodes: gap + normal jump where open, 0 where
 //! closed; elsewhere 0), `body` (index). Field point data: `displacement`, `stress` (the
@@ -366,6 +368,11 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
     let (mut status, mut tn, mut opening, mut body) =
         (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let friction = st
+        .interfaces
+        .iter()
+        .any(|r| r.pairs.iter().any(|p| p.slipping.is_some()));
+    let (mut tstatus, mut slip) = (Vec::new(), Vec::new());
     let mut conn = Vec::new();
     let mut offset = 0usize;
     for (bi, (b, f)) in rec.bodies.iter().zip(&st.fields).enumerate() {
@@ -393,6 +400,8 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         let mut st_code = vec![-1i32; n];
         let mut node_tn: Vec<f64> = (0..n).map(|i| tn_sum[i] / count[i].max(1) as f64).collect();
         let mut node_open = vec![0.0; n];
+        let mut node_ts = vec![-1i32; n];
+        let mut node_slip = vec![0.0; n];
         for (it, r) in rec.interfaces.iter().zip(&st.interfaces) {
             let side = if it.body_a == bi {
                 &it.node_a
@@ -408,6 +417,15 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
                 };
                 node_tn[node] = r.pairs[j].traction[1];
                 node_open[node] = it.opening(r, j);
+                let p = &r.pairs[j];
+                if p.slipping.is_some() {
+                    node_ts[node] = match p.tangential_status() {
+                        Some("stick") => 1,
+                        Some("slip") => 2,
+                        _ => 0,
+                    };
+                    node_slip[node] = p.slip;
+                }
             }
         }
         pts.extend(vec3(&b.nodes));
@@ -421,23 +439,30 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         status.extend(st_code);
         tn.extend(node_tn);
         opening.extend(node_open);
+        tstatus.extend(node_ts);
+        slip.extend(node_slip);
         body.extend(std::iter::repeat_n(bi as i32, n));
         offset += n;
+    }
+    let mut point_data = vec![
+        array("displacement", 3, Values::F64(disp)),
+        array("traction", 3, Values::F64(trac)),
+        array("normal", 3, Values::F64(normal)),
+        array("contact_status", 1, Values::I32(status)),
+        array("normal_traction", 1, Values::F64(tn)),
+        array("normal_opening", 1, Values::F64(opening)),
+        array("body", 1, Values::I32(body)),
+    ];
+    if friction {
+        point_data.push(array("tangential_status", 1, Values::I32(tstatus)));
+        point_data.push(array("slip", 1, Values::F64(slip)));
     }
     Grid {
         points: pts,
         connectivity: conn,
         per_cell: 2,
         cell_type: VTK_LINE,
-        point_data: vec![
-            array("displacement", 3, Values::F64(disp)),
-            array("traction", 3, Values::F64(trac)),
-            array("normal", 3, Values::F64(normal)),
-            array("contact_status", 1, Values::I32(status)),
-            array("normal_traction", 1, Values::F64(tn)),
-            array("normal_opening", 1, Values::F64(opening)),
-            array("body", 1, Values::I32(body)),
-        ],
+        point_data,
         active: ["contact_status", "displacement", ""],
     }
 }

@@ -261,6 +261,9 @@ pub struct InterfaceRow {
     pub opening: f64,
     pub slip: f64,
     pub gap: f64,
+    /// Friction interfaces: `stick`, `slip` or `open`, and the accumulated slip path.
+    pub tangential_status: Option<String>,
+    pub slip_path: f64,
 }
 
 /// Reads an interface table written by `sgbem run`, checking its header.
@@ -268,10 +271,12 @@ pub fn read_interface_csv(path: &Path) -> Vec<InterfaceRow> {
     let text = std::fs::read_to_string(path)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
     let mut lines = text.lines();
-    assert_eq!(
-        lines.next(),
-        Some("x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap"),
-        "{}: header",
+    let header = lines.next().unwrap_or("");
+    let base =
+        "x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap";
+    assert!(
+        header == base || header == format!("{base},tangential_status,slip"),
+        "{}: header {header}",
         path.display()
     );
     lines
@@ -293,6 +298,8 @@ pub fn read_interface_csv(path: &Path) -> Vec<InterfaceRow> {
                 opening: num(6),
                 slip: num(7),
                 gap: num(8),
+                tangential_status: f.get(9).map(|v| v.to_string()),
+                slip_path: f.get(10).map_or(0.0, |v| v.parse().expect("a number")),
             }
         })
         .collect()

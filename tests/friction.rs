@@ -1,0 +1,586 @@
+//! Coulomb friction on unilateral interfaces, and load paths in pseudo-time, end to end:
+//! gmsh meshes a `.geo` into a temporary folder, `sgbem run` solves a scene written here,
+//! the test reads `summary.json` and `interfaces/<name>.csv`.
+//!
+//! * Cattaneo–Mindlin: two elastically similar bodies in Hertzian line contact under a
+//!   normal force P, then a tangential force Q < μP at the top (held at uniform vertical
+//!   displacement, so the upper body does not rotate): the stick zone's half-width c and the
+//!   tangential traction against Johnson §7.1, for Q/(μP) = 0.19, 0.5, 0.75.
+//! * Path dependence (Mindlin–Deresiewicz): Q up to 0.75 μP and back to 0.25 μP leaves
+//!   reversed traction at the contact edges and a slip that the direct path to 0.25 μP does
+//!   not have.
+//! * Sliding and tipping thresholds: a block on a base under a body force tilted by θ stands
+//!   for tan θ = 0.9 μ (0.9 b/h) and ends with exit 3 naming the body for 1.1 μ (1.1 b/h).
+//!
+//! Every run uses `method = "both"`: the evolutive path, the active set, Lemke and the QP
+//! solve the same problem and must agree pair by pair (open/closed and stick/slip).
+//!
+//! Run with `cargo test --release --test friction -- --nocapture` to see the numbers.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use serde_json::Value;
+use support::{read_interface_csv, InterfaceRow};
+
+struct Run {
+    code: i32,
+    stderr: String,
+    summary: Value,
+    rows: Vec<InterfaceRow>,
+}
+
+impl Run {
+    fn iface(&self, name: &str, key: &str) -> f64 {
+        self.summary["interfaces"][name][key]
+            .as_f64()
+            .unwrap_or_else(|| panic!("summary.json has no interfaces.{name}.{key}"))
+    }
+
+    /// Every cross-check converged and agrees with the main solver on every pair.
+    fn solvers_agree(&self) {
+        let checks = self.summary["contact"]["cross_checks"]
+            .as_array()
+            .expect("cross_checks");
+        let solvers: Vec<&str> = checks.iter().filter_map(|c| c["solver"].as_str()).collect();
+        for s in ["active-set", "qp", "lemke"] {
+            assert!(solvers.contains(&s), "no {s} cross-check: {solvers:?}");
+        }
+        for c in checks {
+            assert_eq!(c["converged"], true, "cross-check did not converge: {c}");
+            assert_eq!(c["differing_pairs"], 0, "cross-check differs: {c}");
+        }
+    }
+}
+
+fn run(dir: &Path, name: &str, scene: &str, iface: &str) -> Run {
+    let path = support::write(dir, &format!("{name}.toml"), scene);
+    let out = dir.join(format!("out_{name}"));
+    let (code, _, stderr) = support::sgbem(&[
+        "run",
+        path.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    let summary: Value = match std::fs::read_to_string(out.join("summary.json")) {
+        Ok(s) => serde_json::from_str(&s).expect("summary.json is JSON"),
+        Err(_) => panic!("{name}: no summary.json (exit {code}): {stderr}"),
+    };
+    let csv = out.join("interfaces").join(format!("{iface}.csv"));
+    let mut rows = if csv.is_file() {
+        read_interface_csv(&csv)
+    } else {
+        Vec::new()
+    };
+    rows.sort_by(|a, b| a.x.total_cmp(&b.x));
+    Run {
+        code,
+        stderr,
+        summary,
+        rows,
+    }
+}
+
+fn geo(name: &str) -> PathBuf {
+    support::root().join("geo").join(format!("{name}.geo"))
+}
+
+// ------------------------------------------------------------------------------------------
+// Cattaneo–Mindlin
+
+const MU: f64 = 0.5;
+const RADIUS: f64 = 100.0;
+const H_FINE: f64 = 0.1;
+/// Width of the loaded top face of the upper block.
+const TOP: f64 = 100.0;
+
+/// Two equal blocks (E 1000, ν 0.3), the upper pushed down by 0.1 and loaded on its top by
+/// the shear traction `tx` (an expression in t) at the pseudo-times `time`.
+fn cm_scene(mesh: &Path, tx: &str, time: &str) -> String {
+    format!(
+        r#"
+title = "Cattaneo-Mindlin"
+mesh = "{}"
+plane = "strain"
+[body.upper]
+young = 1000.0
+poisson = 0.3
+[body.lower]
+young = 1000.0
+poisson = 0.3
+[boundary.top]
+uy = -0.1
+tx = "{tx}"
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[interface.contact]
+model = "unilateral"
+initial = "open"
+gap = "x^2/(2*{RADIUS})"
+tangential = "friction"
+friction = {MU}
+[solve]
+time = {time}
+method = "both"
+[output]
+directory = "out"
+history = "final"
+field = false
+vtk = false
+"#,
+        mesh.display()
+    )
+}
+
+/// Hertz for the full-model load P of two equal bodies: (a, p0).
+fn hertz(p: f64) -> (f64, f64) {
+    let e_star = 1000.0 / (2.0 * (1.0 - 0.3f64 * 0.3));
+    let a = (4.0 * p * RADIUS / (std::f64::consts::PI * e_star)).sqrt();
+    (a, 2.0 * p / (std::f64::consts::PI * a))
+}
+
+/// Half-width of the run of rows satisfying `pick` (from the axis), to the midpoint between
+/// its last row and the next: the zone boundary lies inside that element.
+fn half_width(rows: &[InterfaceRow], pick: impl Fn(&InterfaceRow) -> bool) -> (f64, f64) {
+    let xs: Vec<f64> = rows.iter().filter(|r| pick(r)).map(|r| r.x).collect();
+    assert!(!xs.is_empty(), "no row in the zone");
+    let (lo, hi) = (xs[0], xs[xs.len() - 1]);
+    // Every row between the extremes belongs to the zone (one connected run).
+    let inside = rows.iter().filter(|r| r.x >= lo && r.x <= hi).count();
+    assert_eq!(inside, xs.len(), "the zone is not one connected run");
+    (0.5 * (hi - lo) + 0.5 * H_FINE, 0.5 * (hi + lo))
+}
+
+/// Meshes the Cattaneo–Mindlin blocks into a fresh folder and runs the normal load alone
+/// (t = 0: no shear): the folder, the mesh and that run.
+fn cm_normal(name: &str) -> (PathBuf, PathBuf, Run) {
+    let dir = support::tmpdir(name);
+    let mesh = support::gmsh(
+        &geo("cattaneo_mindlin"),
+        &dir,
+        "cm.msh",
+        false,
+        &["-setnumber", "h_fine", &H_FINE.to_string()],
+    );
+    let normal = run(
+        &dir,
+        "normal",
+        &cm_scene(&mesh, "0.0*t", "[0.0]"),
+        "contact",
+    );
+    assert_eq!(normal.code, 0, "{}", normal.stderr);
+    normal.solvers_agree();
+    (dir, mesh, normal)
+}
+
+#[test]
+fn cattaneo_mindlin_stick_zone_and_traction() {
+    let (dir, mesh, normal) = cm_normal("cattaneo_mindlin");
+    let p = -normal.iface("contact", "normal_resultant");
+    let (a, p0) = hertz(p);
+    let (a_run, centre) = half_width(&normal.rows, |r| r.closed);
+    eprintln!("P = {p:.4}: Hertz a = {a:.4}, p0 = {p0:.4}; closed half-width {a_run:.4}");
+    assert!(
+        (a_run - a).abs() <= H_FINE,
+        "contact half-width {a_run} vs Hertz {a}"
+    );
+    assert!(centre.abs() < 1e-9, "contact zone centred: {centre}");
+    // With no shear the interface carries almost none: only the clamped base makes the two
+    // blocks differ from half-spaces of the same material (where normal and tangential
+    // problems decouple exactly); the contact edges may slip under that small shear.
+    let tt_max = normal.rows.iter().map(|r| r.tt.abs()).fold(0.0, f64::max);
+    eprintln!(
+        "normal load alone: largest shear {:.4} of μp0",
+        tt_max / (MU * p0)
+    );
+    assert!(tt_max < 0.02 * MU * p0, "shear under normal load: {tt_max}");
+
+    for ratio in [0.19, 0.5, 0.75] {
+        // Q = ratio μ P as a uniform shear on the top face, reached in one step t = 1.
+        let tx = format!("{:.10}*t", ratio * MU * p / TOP);
+        let r = run(
+            &dir,
+            &format!("q{ratio}"),
+            &cm_scene(&mesh, &tx, "[0.0, 1.0]"),
+            "contact",
+        );
+        assert_eq!(r.code, 0, "Q/μP = {ratio}: {}", r.stderr);
+        r.solvers_agree();
+        // Similar bodies: the normal problem does not change with the shear (Dundurs β = 0).
+        let p1 = -r.iface("contact", "normal_resultant");
+        assert!((p1 - p).abs() < 1e-3 * p, "P changed with Q: {p} → {p1}");
+        let q = r.iface("contact", "tangential_resultant").abs();
+        assert!(
+            (q - ratio * MU * p).abs() < 1e-9 * p,
+            "Q = {q} vs {}",
+            ratio * MU * p
+        );
+        let (c_run, c_centre) =
+            half_width(&r.rows, |x| x.tangential_status.as_deref() == Some("stick"));
+        let c = a * (1.0 - ratio).sqrt();
+        eprintln!(
+            "Q/μP = {ratio}: stick half-width {c_run:.4} (centre {c_centre:.2e}) vs \
+             c = a sqrt(1 - Q/μP) = {c:.4}; c/a {:.4} vs {:.4}",
+            c_run / a,
+            c / a
+        );
+        assert!(
+            (c_run - c).abs() <= H_FINE,
+            "stick half-width {c_run} vs {c} (one element = {H_FINE})"
+        );
+        assert!(
+            c_centre.abs() <= 0.5 * H_FINE,
+            "stick zone centred: {c_centre}"
+        );
+        // Slip zones on both sides of the stick zone, inside the contact.
+        assert!(r
+            .rows
+            .iter()
+            .any(|x| x.tangential_status.as_deref() == Some("slip")));
+        // The tangential traction in the stick zone against Johnson's q(x).
+        let sign = if r.rows.iter().map(|x| x.tt).sum::<f64>() > 0.0 {
+            1.0
+        } else {
+            -1.0
+        };
+        let (mut sum, mut count) = (0.0, 0);
+        for x in r
+            .rows
+            .iter()
+            .filter(|x| x.tangential_status.as_deref() == Some("stick"))
+        {
+            let xi = x.x;
+            let exact = MU
+                * p0
+                * ((1.0 - xi * xi / (a * a)).max(0.0).sqrt()
+                    - (c / a) * (1.0 - xi * xi / (c * c)).max(0.0).sqrt());
+            sum += (sign * x.tt - exact).powi(2);
+            count += 1;
+        }
+        let rms = (sum / count as f64).sqrt() / (MU * p0);
+        eprintln!("Q/μP = {ratio}: RMS error of q in the stick zone {rms:.4} of μp0");
+        assert!(rms < 0.03, "RMS error {rms} of μp0 in the stick zone");
+        // In the slip zones the traction is μ times the pressure, exactly (nodal forces).
+        for x in r
+            .rows
+            .iter()
+            .filter(|x| x.tangential_status.as_deref() == Some("slip"))
+        {
+            assert!(
+                (x.tt.abs() - MU * x.tn.abs()).abs() <= 1e-9 * MU * p0,
+                "slip at x = {}: |q| {} vs μ|p| {}",
+                x.x,
+                x.tt.abs(),
+                MU * x.tn.abs()
+            );
+        }
+        // Sticking pairs hold less than μ times their pressure.
+        for x in r
+            .rows
+            .iter()
+            .filter(|x| x.tangential_status.as_deref() == Some("stick"))
+        {
+            assert!(x.tt.abs() <= MU * x.tn.abs() * (1.0 + 1e-9) + 1e-12);
+        }
+    }
+}
+
+#[test]
+fn unloading_leaves_reversed_traction_and_slip_and_depends_on_path() {
+    let (dir, mesh, normal) = cm_normal("mindlin_deresiewicz");
+    let p = -normal.iface("contact", "normal_resultant");
+    let (_, p0) = hertz(p);
+    let qmax = 0.75 * MU * p / TOP;
+    // Up to Q = 0.75 μP at t = 1, back down to 0.25 μP at t = 2.
+    let cycle = run(
+        &dir,
+        "cycle",
+        &cm_scene(
+            &mesh,
+            &format!("{qmax:.10}*min(t, (5 - 2*t)/3)"),
+            "[0.0, 1.0, 2.0]",
+        ),
+        "contact",
+    );
+    assert_eq!(cycle.code, 0, "{}", cycle.stderr);
+    cycle.solvers_agree();
+    // Straight to Q = 0.25 μP.
+    let direct = run(
+        &dir,
+        "direct",
+        &cm_scene(&mesh, &format!("{:.10}*t", qmax / 3.0), "[0.0, 1.0]"),
+        "contact",
+    );
+    assert_eq!(direct.code, 0, "{}", direct.stderr);
+    let qc = cycle.iface("contact", "tangential_resultant");
+    let qd = direct.iface("contact", "tangential_resultant");
+    assert!((qc - qd).abs() < 1e-9 * p, "same final load: {qc} vs {qd}");
+    // The sign of the net shear on the lower body.
+    let sign = qd.signum();
+    // Direct loading: the traction has the sign of Q everywhere in the contact.
+    let closed = |r: &Run| -> Vec<(f64, f64)> {
+        r.rows
+            .iter()
+            .filter(|x| x.closed)
+            .map(|x| (x.x, x.tt))
+            .collect()
+    };
+    let d = closed(&direct);
+    assert!(
+        d.iter().all(|(_, t)| t * sign >= -1e-9 * p0),
+        "direct: {d:?}"
+    );
+    // Unloaded: the traction is reversed at the contact edges (Mindlin–Deresiewicz).
+    let c = closed(&cycle);
+    let (first, last) = (c[0], c[c.len() - 1]);
+    eprintln!(
+        "unloaded: edge tractions {:.4} at {:.2}, {:.4} at {:.2}; Q sign {sign}",
+        first.1, first.0, last.1, last.0
+    );
+    assert!(
+        first.1 * sign < 0.0 && last.1 * sign < 0.0,
+        "no reversal at the edges"
+    );
+    // Different states for the same final load, and slip left by the cycle.
+    let diff = c
+        .iter()
+        .zip(&d)
+        .map(|(a, b)| (a.1 - b.1).abs())
+        .fold(0.0, f64::max);
+    eprintln!(
+        "largest traction difference between the paths {:.4} of μp0",
+        diff / (MU * p0)
+    );
+    assert!(diff > 0.1 * MU * p0, "the two paths give the same state");
+    let slip_c = cycle.iface("contact", "max_accumulated_slip");
+    let slip_d = direct.iface("contact", "max_accumulated_slip");
+    eprintln!("accumulated slip: cycle {slip_c:.3e}, direct {slip_d:.3e}");
+    assert!(
+        slip_c > 2.0 * slip_d,
+        "cycle slip {slip_c} vs direct {slip_d}"
+    );
+    let tangential_slip_differs = cycle
+        .rows
+        .iter()
+        .zip(&direct.rows)
+        .any(|(a, b)| a.closed && (a.slip - b.slip).abs() > 1e-6);
+    assert!(tangential_slip_differs, "residual slip");
+}
+
+// ------------------------------------------------------------------------------------------
+// Sliding and tipping thresholds
+
+/// A block 1 × 0.5 (`upper`) on a base (`lower`, clamped at its bottom) under a unit body
+/// force tilted by θ from the vertical, with friction μ on the joint.
+fn block_scene(tan: f64, mu: f64) -> String {
+    let th = tan.atan();
+    format!(
+        r#"
+mesh = "tb.msh"
+plane = "strain"
+[body.lower]
+young = 1000.0
+poisson = 0.3
+[body.upper]
+young = 1000.0
+poisson = 0.3
+body_force = [{}, {}]
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[interface.joint]
+model = "unilateral"
+initial = "closed"
+tangential = "friction"
+friction = {mu}
+[solve]
+method = "both"
+[output]
+directory = "out"
+field = false
+vtk = false
+"#,
+        th.sin(),
+        -th.cos()
+    )
+}
+
+/// A fresh folder with the two blocks meshed (16 elements per unit length) as `tb.msh`.
+fn block_mesh(name: &str) -> PathBuf {
+    let dir = support::tmpdir(name);
+    support::gmsh(
+        &geo("two_blocks"),
+        &dir,
+        "tb.msh",
+        false,
+        &["-setnumber", "n", "16"],
+    );
+    dir
+}
+
+#[test]
+fn block_slides_beyond_the_friction_angle_and_not_below() {
+    let dir = block_mesh("sliding_block");
+    let mu = 0.5;
+    let stands = run(&dir, "below", &block_scene(0.9 * mu, mu), "joint");
+    assert_eq!(stands.code, 0, "tan θ = 0.9 μ: {}", stands.stderr);
+    stands.solvers_agree();
+    // Equilibrium: the joint carries the block's weight and the tilted component.
+    let (n, t) = (
+        stands.iface("joint", "normal_resultant"),
+        stands.iface("joint", "tangential_resultant"),
+    );
+    let th = (0.9 * mu).atan();
+    eprintln!(
+        "tan θ = 0.9 μ: N = {n:.6}, T = {t:.6}, stick length {:.4}, slip length {:.4}, \
+         max accumulated slip {:.3e}",
+        stands.iface("joint", "stick_length"),
+        stands.iface("joint", "slip_length"),
+        stands.iface("joint", "max_accumulated_slip"),
+    );
+    // The block's weight is 0.5 (area) × 1 (body force): N = 0.5 cos θ, |T| = 0.5 sin θ.
+    assert!((n.abs() - 0.5 * th.cos()).abs() < 1e-9, "N = {n}");
+    assert!((t.abs() - 0.5 * th.sin()).abs() < 1e-9, "T = {t}");
+    // The block stands: a stick zone holds it (local microslip where the pressure is low).
+    assert!(stands.iface("joint", "stick_length") > 0.0);
+
+    let slides = run(&dir, "above", &block_scene(1.1 * mu, mu), "joint");
+    assert_eq!(slides.code, 3, "tan θ = 1.1 μ must end with exit 3");
+    eprintln!("tan θ = 1.1 μ: {}", slides.stderr.trim());
+    assert!(
+        slides
+            .stderr
+            .contains("body \"upper\" slides on interface \"joint\""),
+        "{}",
+        slides.stderr
+    );
+    assert!(
+        slides.stderr.contains("0.550 > mu = 0.500"),
+        "{}",
+        slides.stderr
+    );
+    assert_eq!(slides.summary["status"], "not converged");
+    // Every output is written.
+    assert!(!slides.rows.is_empty());
+}
+
+#[test]
+fn block_tips_beyond_its_aspect_and_not_below() {
+    let dir = block_mesh("tipping_block");
+    // b / h = 1 / 0.5; friction high enough that the block cannot slide.
+    let bh = 2.0;
+    let stands = run(&dir, "below", &block_scene(0.9 * bh, 10.0), "joint");
+    assert_eq!(stands.code, 0, "tan θ = 0.9 b/h: {}", stands.stderr);
+    stands.solvers_agree();
+    assert!(
+        stands.iface("joint", "detached_length") > 0.5,
+        "the heel lifts"
+    );
+    let tips = run(&dir, "above", &block_scene(1.1 * bh, 10.0), "joint");
+    assert_eq!(tips.code, 3, "tan θ = 1.1 b/h must end with exit 3");
+    eprintln!("tan θ = 1.1 b/h: {}", tips.stderr.trim());
+    assert!(
+        tips.stderr.contains("without leaving body \"upper\" free")
+            && tips.stderr.contains("tipping"),
+        "{}",
+        tips.stderr
+    );
+}
+
+// ------------------------------------------------------------------------------------------
+// Shrink fit
+
+/// A hollow shaft (radii a = 0.25, b = 0.5) pressed into a hub (b, c = 1) by the radial
+/// interference `delta` (a negative gap), plane stress, E 2e5, ν 0.3, friction μ on the fit;
+/// at t = 1 the hole carries the uniform shear `tau` (a torque 2π a² τ per unit thickness).
+fn fit_scene(delta: f64, mu: f64, tau: f64) -> String {
+    format!(
+        r#"
+mesh = "sf.msh"
+plane = "stress"
+[body.shaft]
+young = 2e5
+poisson = 0.3
+[body.hub]
+young = 2e5
+poisson = 0.3
+[boundary.outer]        # held tangentially (rigid modes), free radially
+ut = 0.0
+tn = 0.0
+[boundary.hole]
+tt = "{tau}*t"
+[interface.fit]
+model = "unilateral"
+initial = "open"
+gap = -{delta}
+tangential = "friction"
+friction = {mu}
+[solve]
+time = [0.0, 1.0]
+method = "both"
+[output]
+directory = "out"
+field = false
+vtk = false
+"#
+    )
+}
+
+#[test]
+fn shrink_fit_pressure_is_lame_and_friction_holds_the_torque_below_its_limit() {
+    let dir = support::tmpdir("shrink_fit");
+    support::gmsh(
+        &geo("shrink_fit"),
+        &dir,
+        "sf.msh",
+        false,
+        &["-setnumber", "n", "32"],
+    );
+    let (e, delta, mu) = (2e5, 0.6667e-3, 0.2);
+    let (a, b, c) = (0.25f64, 0.5f64, 1.0f64);
+    // Lamé, plane stress, equal materials: p = E δ (c² − b²)(b² − a²) / (2 b³ (c² − a²)).
+    let p = e * delta * (c * c - b * b) * (b * b - a * a) / (2.0 * b.powi(3) * (c * c - a * a));
+    let pi = std::f64::consts::PI;
+    let t_hold = 2.0 * pi * b * b * mu * p;
+    for (k, holds) in [(0.9, true), (1.1, false)] {
+        let tau = k * t_hold / (2.0 * pi * a * a);
+        let r = run(&dir, &format!("k{k}"), &fit_scene(delta, mu, tau), "fit");
+        if holds {
+            assert_eq!(r.code, 0, "torque {k} of the limit: {}", r.stderr);
+            r.solvers_agree();
+            let (lo, hi) = r.rows.iter().fold((f64::INFINITY, 0.0f64), |(lo, hi), x| {
+                (lo.min(-x.tn), hi.max(-x.tn))
+            });
+            eprintln!("shrink fit: pressure {lo:.4} .. {hi:.4} vs Lamé {p:.4}");
+            assert!(
+                (lo - p).abs() < 0.01 * p && (hi - p).abs() < 0.01 * p,
+                "pressure {lo} .. {hi} vs {p}"
+            );
+            // The torque is carried by sticking pairs: the shear is T/(2π b²) < μp.
+            assert!(r
+                .rows
+                .iter()
+                .all(|x| x.tangential_status.as_deref() == Some("stick")));
+            let shear = k * t_hold / (2.0 * pi * b * b);
+            let worst = r
+                .rows
+                .iter()
+                .map(|x| (x.tt.abs() - shear).abs())
+                .fold(0.0, f64::max);
+            assert!(worst < 0.01 * shear, "fit shear vs {shear}: off by {worst}");
+        } else {
+            assert_eq!(r.code, 3, "torque {k} of the limit must slip");
+            eprintln!("shrink fit, torque 1.1: {}", r.stderr.trim());
+            assert!(
+                r.stderr
+                    .contains("body \"shaft\" slides on interface \"fit\""),
+                "{}",
+                r.stderr
+            );
+            assert!(r.stderr.contains("0.220 > mu = 0.200"), "{}", r.stderr);
+        }
+    }
+}
