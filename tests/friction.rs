@@ -584,3 +584,67 @@ fn shrink_fit_pressure_is_lame_and_friction_holds_the_torque_below_its_limit() {
         }
     }
 }
+
+// ------------------------------------------------------------------------------------------
+// Klarbring's coupled friction LCP against the Tresca fixed point
+
+#[test]
+fn coupled_friction_lcp_reaches_the_fixed_point_state() {
+    use sgbem::bem::quadrature::QuadratureSettings;
+    use sgbem::contact::{Method, Session};
+    let dir = block_mesh("klarbring");
+    // Dissimilar bodies (normal and tangential problems coupled) with partial slip.
+    let scene = block_scene(0.8, 1.0)
+        .replacen("young = 1000.0", "young = 5000.0", 1)
+        .replacen("poisson = 0.3", "poisson = 0.45", 1);
+    let path = support::write(&dir, "k.toml", &scene);
+    let l =
+        sgbem::pipeline::load(&path, Some(&dir.join("tb.msh"))).unwrap_or_else(|e| panic!("{e}"));
+    let q = QuadratureSettings::standard();
+    let prep =
+        sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {})
+            .unwrap_or_else(|e| panic!("{e}"));
+    let mut fixed = Session::new(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
+    fixed.coupled_after = usize::MAX;
+    let start = fixed.initial();
+    let a = fixed.solve_step(&start, Method::Evolutive, 1e-10, 1000, 0, 1.0, false);
+    assert!(a.converged, "{:?}", a.failure.as_ref().map(|e| e.message()));
+    let mut coupled = Session::new(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
+    coupled.coupled_after = 1;
+    let b = coupled.solve_step(&start, Method::Evolutive, 1e-10, 1000, 0, 1.0, false);
+    assert!(b.converged, "{:?}", b.failure.as_ref().map(|e| e.message()));
+    assert!(
+        b.notes.iter().any(|n| n.contains("Klarbring")),
+        "the coupled LCP was not used: {:?}",
+        b.notes
+    );
+    eprintln!(
+        "fixed point: {} outer iterations; restarted from Klarbring's LCP: {}",
+        a.outer_iterations, b.outer_iterations
+    );
+    assert!(
+        b.outer_iterations <= 3,
+        "{} outer iterations",
+        b.outer_iterations
+    );
+    assert_eq!(
+        sgbem::contact::differing_pairs(&a.interfaces, &b.interfaces),
+        0
+    );
+    let slipping = a.interfaces[0]
+        .pairs
+        .iter()
+        .filter(|p| p.slipping == Some(true))
+        .count();
+    assert!(
+        slipping > 0,
+        "no pair slips: the test would not test friction"
+    );
+    let scale = a.nodal_force[0].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+    for (x, y) in a.nodal_force[0].iter().zip(&b.nodal_force[0]) {
+        assert!((x - y).abs() < 1e-8 * scale, "nodal force {x} vs {y}");
+    }
+    for (p, r) in a.interfaces[0].pairs.iter().zip(&b.interfaces[0].pairs) {
+        assert!((p.traction[0] - r.traction[0]).abs() < 1e-8 * scale / 0.0625);
+    }
+}

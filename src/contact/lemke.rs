@@ -186,6 +186,88 @@ pub fn solve_inner(
     Ok((open, sign, sol.pivots))
 }
 
+/// Solves Coulomb friction exactly, without the Tresca fixed point: Klarbring's 2D
+/// friction LCP (Klarbring 1986) on the dense form of the inner problem. Per friction row
+/// with the normal row n of its pair, the slip variables p, m ≥ 0 are complementary to
+///
+/// ```text
+///   w_p = μ (λ_n − c_n) + λ_t ≥ 0,   w_m = μ (λ_n − c_n) − λ_t ≥ 0
+/// ```
+///
+/// (c_n the cohesion term), i.e. the Tresca rows with the bound μλ_n taken from the solution
+/// itself. M is not symmetric, so Lemke's method may end on a secondary ray for large μ
+/// (existence is known only for small μ); that is reported, not hidden. `inner` must have
+/// no free friction rows (its bounds are ignored); `mu` is the coefficient of each row.
+/// Returns the open rows, the slip directions and the bounds μ max(λ_n − c_n, 0) of the
+/// solution.
+#[allow(clippy::type_complexity)]
+pub fn solve_coupled(
+    inner: &crate::contact::lcp::Inner,
+    cols: &mut crate::contact::lcp::Columns,
+    mu: &[f64],
+    normal_of: &[Option<usize>],
+) -> Result<(Vec<bool>, Vec<f64>, Vec<f64>), String> {
+    let dense = inner
+        .dense(cols)
+        .ok_or_else(|| "the free tangential openings leave a body free".to_string())?;
+    let n = dense.q.len();
+    let var_of_normal: std::collections::HashMap<usize, usize> = dense
+        .vars
+        .iter()
+        .enumerate()
+        .filter(|(_, (r, _))| inner.is_normal(*r))
+        .map(|(i, (r, _))| (*r, i))
+        .collect();
+    let (mut m, mut q) = (dense.m.clone(), dense.q.clone());
+    for (i, &(r, _)) in dense.vars.iter().enumerate() {
+        if !inner.is_friction(r) {
+            continue;
+        }
+        let k = normal_of[r]
+            .and_then(|rn| var_of_normal.get(&rn).copied())
+            .ok_or_else(|| "a friction row without a normal row".to_string())?;
+        let rn = dense.vars[k].0;
+        // Dense rows give λ_t (σ = +1) or −λ_t (σ = −1) and λ_n; add μ (λ_n − c_n).
+        q[i] = dense.q[i] + mu[r] * (dense.q[k] - inner.base.cohesion[rn]);
+        for j in 0..n {
+            m[i * n + j] = dense.m[i * n + j] + mu[r] * dense.m[k * n + j];
+        }
+    }
+    let d: Vec<f64> = (0..n)
+        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    for i in 0..n {
+        q[i] *= d[i];
+        for j in 0..n {
+            m[i * n + j] *= d[i] * d[j];
+        }
+    }
+    let sol = lemke(&m, &q, 40 * n + 100).map_err(|f| match f {
+        LemkeFailure::SecondaryRay { pivots } => format!(
+            "Lemke's method on the coupled friction LCP ended on a secondary ray after \
+             {pivots} pivots (no solution found: a mechanism, or a friction coefficient too \
+             large for the method)"
+        ),
+        LemkeFailure::PivotLimit { pivots } => {
+            format!("Lemke's method reached its pivot limit ({pivots} pivots)")
+        }
+    })?;
+    let active: Vec<bool> = (0..n).map(|i| sol.z[i] > sol.w[i]).collect();
+    let (open, sign) = inner.statuses(&dense, &active);
+    // λ_n of each normal row from its (unscaled) complementary variable.
+    let mut bound = vec![0.0; inner.n()];
+    for (r, b) in bound.iter_mut().enumerate() {
+        let Some(rn) = normal_of[r] else { continue };
+        if let Some(&k) = var_of_normal.get(&rn) {
+            if !open[rn] {
+                let lambda = sol.w[k] / d[k];
+                *b = mu[r] * (lambda - inner.base.cohesion[rn]).max(0.0);
+            }
+        }
+    }
+    Ok((open, sign, bound))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -138,6 +138,9 @@ pub struct Session<'a> {
     pub prepared: &'a Prepared,
     pub problem: Problem,
     pub cols: Columns,
+    /// Outer iterations of the Tresca fixed point after which Coulomb's problem is solved
+    /// exactly (Klarbring's LCP through Lemke) to restart it.
+    pub coupled_after: usize,
 }
 
 impl<'a> Session<'a> {
@@ -147,6 +150,7 @@ impl<'a> Session<'a> {
             prepared,
             problem: Problem::new(model, prepared)?,
             cols: Columns::default(),
+            coupled_after: FRICTION_COUPLED_AFTER,
         })
     }
 
@@ -276,6 +280,7 @@ impl<'a> Session<'a> {
         // (first step) from those with every pair closed.
         let mut bound = start.bound.clone();
         let mut bound_changes: Vec<f64> = Vec::new();
+        let mut finishing = 0;
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
@@ -339,17 +344,23 @@ impl<'a> Session<'a> {
                 )),
                 Method::Lemke => {
                     lemke::solve_inner(&inner, &mut self.cols).and_then(|(open, sign, pivots)| {
-                        info = serde_json::json!({ "pivots": pivots });
-                        exact_state(&inner, &mut self.cols, &open, &sign)
+                        let (out, finish) = exact_state(&inner, &mut self.cols, &open, &sign)?;
+                        finishing += finish;
+                        info = serde_json::json!({
+                            "pivots": pivots, "friction_finishing_pivots": finishing,
+                        });
+                        Ok(out)
                     })
                 }
                 Method::Qp => qp::solve(&inner, &mut self.cols, tol).and_then(|q| {
+                    let (out, finish) = exact_state(&inner, &mut self.cols, &q.open, &q.sign)?;
+                    finishing += finish;
                     info = serde_json::json!({
                         "iterations": q.iterations, "solver_status": q.solver_status,
                         "objective": q.objective, "variables": q.variables,
-                        "constraints": q.constraints,
+                        "constraints": q.constraints, "friction_finishing_pivots": finishing,
                     });
-                    exact_state(&inner, &mut self.cols, &q.open, &q.sign)
+                    Ok(out)
                 }),
             };
             let outcome = match outcome {
@@ -440,6 +451,55 @@ impl<'a> Session<'a> {
                 bound_changes.push(change);
             }
             bound = new_bound;
+            if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
+                // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
+                // LCP through Lemke) and restart the fixed point from its bounds.
+                let free: Vec<bool> = (0..n)
+                    .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r])
+                    .collect();
+                let exact = Inner {
+                    problem: &self.problem,
+                    base: &base,
+                    free,
+                    bound: vec![0.0; n],
+                    tol,
+                };
+                let mu: Vec<f64> = self.problem.rows[..n]
+                    .iter()
+                    .map(|r| match r.kind {
+                        RowKind::Friction => self.model.interfaces[r.iface].pairs[r.pair].friction,
+                        _ => 0.0,
+                    })
+                    .collect();
+                let normal_of: Vec<Option<usize>> = self.problem.rows[..n]
+                    .iter()
+                    .map(|r| self.problem.row_of[r.iface][r.pair][1].filter(|&q| q < n))
+                    .collect();
+                match lemke::solve_coupled(&exact, &mut self.cols, &mu, &normal_of) {
+                    Ok((open, sign, b)) => {
+                        for r in 0..n {
+                            if matches!(
+                                self.problem.rows[r].kind,
+                                RowKind::Normal | RowKind::Friction
+                            ) {
+                                next.open[r] = open[r];
+                                next.sign[r] = sign[r];
+                            }
+                        }
+                        bound = b;
+                        notes.push(format!(
+                            "the Tresca fixed point had not settled after {outer} outer \
+                             iterations (last relative change {change:.1e}): restarted from \
+                             the exact solution of Klarbring's friction LCP (Lemke)"
+                        ));
+                    }
+                    Err(e) => notes.push(format!(
+                        "the Tresca fixed point had not settled after {outer} outer iterations \
+                         and Klarbring's friction LCP gave no solution ({e}); the fixed point \
+                         continued"
+                    )),
+                }
+            }
             iterates.push(st.open.clone());
             last = Some((state, residual));
             let same = (0..n).all(|r| {
@@ -483,7 +543,7 @@ impl<'a> Session<'a> {
                     failure = Some(Error::numerical(format!(
                         "the stick ties cycle at the contact edge after {outer} outer \
                          iterations: tangential = \"stick\" has no consistent state there; use \
-                         \"slide\", or friction when available"
+                         tangential = \"friction\" (or \"slide\")"
                     )));
                     st = next;
                     break;
@@ -695,6 +755,11 @@ impl<'a> Session<'a> {
 
 /// Outer iterations of the Tresca fixed point before a step is reported as not converged.
 const FRICTION_OUTER_LIMIT: usize = 300;
+/// Largest number of rows for the dense coupled LCP (Lemke's tableau is dense).
+const COUPLED_MAX_ROWS: usize = 3000;
+/// Outer iterations of the Tresca fixed point after which the exact coupled problem
+/// (Klarbring's LCP) is solved to restart it.
+const FRICTION_COUPLED_AFTER: usize = 10;
 
 /// Every row closed, nothing open: the state reported when no inner solve finished.
 fn all_closed_state(n: usize) -> InnerState {
@@ -707,15 +772,30 @@ fn all_closed_state(n: usize) -> InnerState {
 }
 
 /// The exact state of the statuses `open` found by a solver that does not pivot (Lemke, QP).
+///
+/// With friction, a row at the stick/slip threshold whose slip increment is below the
+/// solver's precision can come out with the wrong slip direction (where most pairs slip, the
+/// slipping block of A is nearly singular and amplifies the last digits): such friction rows
+/// only are finished by the pivoting iteration from the solver's statuses, and the number of
+/// pivots is returned (0 when the statuses were exact).
 fn exact_state(
     inner: &Inner,
     cols: &mut Columns,
     open: &[bool],
     sign: &[f64],
-) -> Result<evolutive::Outcome, String> {
+) -> Result<(evolutive::Outcome, usize), String> {
     let (o, refused) = inner.factor(cols, open);
     let state = inner.state(cols, &o, sign);
-    let converged = refused.is_empty() && inner.violations(&state).is_empty();
+    let violations = inner.violations(&state);
+    if refused.is_empty()
+        && !violations.is_empty()
+        && violations.iter().all(|v| inner.is_friction(v.row))
+    {
+        let out = evolutive::solve(inner, cols, &state.open, &state.sign, 100, &mut |_| {});
+        let pivots = out.iterations;
+        return Ok((out, pivots));
+    }
+    let converged = refused.is_empty() && violations.is_empty();
     let mut notes = Vec::new();
     if !refused.is_empty() {
         notes.push(format!(
@@ -723,13 +803,16 @@ fn exact_state(
             refused.len()
         ));
     }
-    Ok(evolutive::Outcome {
-        state,
-        iterations: 0,
-        converged,
-        notes,
-        blocked: refused,
-    })
+    Ok((
+        evolutive::Outcome {
+            state,
+            iterations: 0,
+            converged,
+            notes,
+            blocked: refused,
+        },
+        0,
+    ))
 }
 
 /// A history row of a state.
