@@ -1,6 +1,7 @@
 //! `make bench` (second part): the contact stage of every solver on the paper's examples 1
-//! and 2 and on example 2 with its joint refined (104 / 208 / 416 / 832 elements), with the
-//! peak memory of each case. Writes out/bench/contact.csv and prints a table.
+//! (stick, frictionless, Coulomb friction μ = 0.6), 3 (stick, friction) and 2 with its joint
+//! refined (104 / 208 / 416 / 832 elements), with the peak memory of each case and the outer
+//! iterations (brittle cohesion, stick ties, the Tresca fixed point of friction). Writes out/bench/contact.csv and prints a table.
 //!
 //! Each solver runs on the same prepared bodies and the same problem (columns of the opening
 //! stiffness computed once per run and shared, as in `sgbem run`): `lcp` is the evolutive
@@ -48,6 +49,24 @@ fn main() {
             "pipelines/beam_on_blocks_slide.toml",
             vec![],
         ),
+        (
+            "example 1 (friction 0.6)".into(),
+            "geo/beam_on_blocks.geo",
+            "pipelines/beam_on_blocks_friction.toml",
+            vec![],
+        ),
+        (
+            "example 3 (stick)".into(),
+            "geo/vault.geo",
+            "pipelines/vault_c0.toml",
+            vec![],
+        ),
+        (
+            "example 3 (friction 0.6)".into(),
+            "geo/vault.geo",
+            "pipelines/vault_friction.toml",
+            vec![],
+        ),
     ];
     let sizes: Vec<usize> = std::env::var("SGBEM_BENCH_JOINTS")
         .ok()
@@ -68,12 +87,13 @@ fn main() {
         rayon::current_num_threads()
     );
     println!(
-        "{:<26} {:>5} {:>8} {:>8} {:>7} {:>7} {:>7} {:>7} {:>7} {:>7} {:>6} {:>9} {:>7}",
+        "{:<26} {:>5} {:>8} {:>8} {:>7} {:>5} {:>7} {:>7} {:>7} {:>7} {:>7} {:>6} {:>9} {:>7}",
         "case",
         "pairs",
         "prepare",
         "system",
         "lcp",
+        "outer",
         "record",
         "act.set",
         "lemke",
@@ -84,7 +104,7 @@ fn main() {
         "peak"
     );
     let mut csv = String::from(
-        "case,pairs,prepare_s,interface_system_s,lcp_s,record_s,active_set_s,lemke_s,qp_s,lcp_switches,differing_pairs,detached_length,peak_mb\n",
+        "case,pairs,prepare_s,interface_system_s,lcp_s,outer_iterations,record_s,active_set_s,lemke_s,qp_s,lcp_switches,differing_pairs,detached_length,peak_mb\n",
     );
     for (name, geo, scene, opts) in cases {
         let o: Vec<&str> = opts.iter().map(|s| s.as_str()).collect();
@@ -124,12 +144,13 @@ fn main() {
             .sum();
         let peak = peak_kb() as f64 / 1024.0;
         println!(
-            "{:<26} {:>5} {:>8.3} {:>8.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7} {:>6} {:>9.4} {:>7.0}",
+            "{:<26} {:>5} {:>8.3} {:>8.3} {:>7.3} {:>5} {:>7.3} {:>7.3} {:>7.3} {:>7.3} {:>7} {:>6} {:>9.4} {:>7.0}",
             name,
             l.model.pair_count(),
             t_prep,
             t_sys,
             t_lcp,
+            e.outer_iterations,
             t_rec,
             times[0],
             times[1],
@@ -140,8 +161,9 @@ fn main() {
             peak
         );
         csv += &format!(
-            "{name},{},{t_prep},{t_sys},{t_lcp},{t_rec},{},{},{},{},{differ},{det},{peak}\n",
+            "{name},{},{t_prep},{t_sys},{t_lcp},{},{t_rec},{},{},{},{},{differ},{det},{peak}\n",
             l.model.pair_count(),
+            e.outer_iterations,
             times[0],
             times[1],
             times[2],

@@ -792,6 +792,14 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
     }
+    if let Some(ts) = &scene.solve.time {
+        // The load path: the pseudo-time of the final state and every step's.
+        summary["time"] = serde_json::json!(result.time);
+        summary["load_path"] = serde_json::json!({
+            "time": ts,
+            "depends_on_t": crate::plan::time_dependent(scene),
+        });
+    }
     // Figures that overflow (serialised as null): a resultant of finite tractions can.
     if result.failure.is_none() {
         let overflow = summary["interfaces"].as_object().and_then(|m| {

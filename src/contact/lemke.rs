@@ -148,6 +148,22 @@ pub fn lemke(m: &[f64], q: &[f64], max_pivots: usize) -> Result<LemkeSolution, L
     Ok(LemkeSolution { z, w, pivots })
 }
 
+/// Scales the LCP (M, q) to `D M D, D q` with D = diag(1/√|M_ii|), which keeps the pivots
+/// O(1); returns D (the solution's z is D z̃, its w is w̃ / D).
+fn jacobi_scale(m: &mut [f64], q: &mut [f64]) -> Vec<f64> {
+    let n = q.len();
+    let d: Vec<f64> = (0..n)
+        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
+        .collect();
+    for i in 0..n {
+        q[i] *= d[i];
+        for j in 0..n {
+            m[i * n + j] *= d[i] * d[j];
+        }
+    }
+    d
+}
+
 /// Solves the inner contact LCP (`lcp`) by Lemke's method on its dense form (every column of
 /// the opening stiffness, free rows eliminated, friction rows split into their two slip
 /// directions). Returns the open statuses of the rows, the slip directions and the number
@@ -161,16 +177,7 @@ pub fn solve_inner(
         .ok_or_else(|| "the free tangential openings leave a body free".to_string())?;
     let n = dense.q.len();
     let (mut m, mut q) = (dense.m.clone(), dense.q.clone());
-    // Jacobi scaling keeps the pivots O(1).
-    let d: Vec<f64> = (0..n)
-        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
-        .collect();
-    for i in 0..n {
-        q[i] *= d[i];
-        for j in 0..n {
-            m[i * n + j] *= d[i] * d[j];
-        }
-    }
+    jacobi_scale(&mut m, &mut q);
     let sol = lemke(&m, &q, 20 * n + 100).map_err(|f| match f {
         LemkeFailure::SecondaryRay { pivots } => format!(
             "Lemke's method ended on a secondary ray after {pivots} pivots: no equilibrium \
@@ -233,15 +240,7 @@ pub fn solve_coupled(
             m[i * n + j] = dense.m[i * n + j] + mu[r] * dense.m[k * n + j];
         }
     }
-    let d: Vec<f64> = (0..n)
-        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
-        .collect();
-    for i in 0..n {
-        q[i] *= d[i];
-        for j in 0..n {
-            m[i * n + j] *= d[i] * d[j];
-        }
-    }
+    let d = jacobi_scale(&mut m, &mut q);
     let sol = lemke(&m, &q, 40 * n + 100).map_err(|f| match f {
         LemkeFailure::SecondaryRay { pivots } => format!(
             "Lemke's method on the coupled friction LCP ended on a secondary ray after \

@@ -684,7 +684,9 @@ impl<'a> Session<'a> {
         {
             let k = self.problem.rows[r].iface;
             let it = &self.model.interfaces[k];
-            let (mut t, mut nf, mut bound) = (0.0, 0.0, 0.0);
+            // Resultants of the last state: normal force, the tangential force the loads
+            // ask of the interface, and the friction it can hold (Σ μ N per pair).
+            let (mut t, mut nf, mut hold) = (0.0, 0.0, 0.0);
             for q in 0..n {
                 let row = self.problem.rows[q];
                 if row.iface != k {
@@ -692,17 +694,15 @@ impl<'a> Session<'a> {
                 }
                 match row.kind {
                     RowKind::Normal if !st.open[q] => {
-                        nf += st.lambda[q] - inner.base.cohesion[q];
+                        let f = st.lambda[q] - inner.base.cohesion[q];
+                        nf += f;
+                        hold += self.model.interfaces[k].pairs[row.pair].friction * f.max(0.0);
                     }
-                    // The force the loads ask of the interface, before it slips.
-                    RowKind::Friction => {
-                        t += st.lambda[q];
-                        bound += inner.bound[q];
-                    }
+                    RowKind::Friction => t += st.lambda[q],
                     _ => {}
                 }
             }
-            let mu = if nf > 0.0 { bound / nf } else { 0.0 };
+            let mu = if nf > 0.0 { hold / nf } else { 0.0 };
             let body = self.free_body(k).map_or("a body".to_string(), |b| {
                 format!("body \"{}\"", self.model.bodies[b].name)
             });
