@@ -290,35 +290,31 @@ pub fn solve_loaded_with(
         stage: &stage,
     };
     let mut last_prepared = None;
-    for (step, &(f, time)) in steps.iter().enumerate() {
-        if step == 0 || !timed {
-            contact_step(&mut session, &ctx, step, f, &mut state, &mut acc, timings);
-        } else {
-            let t = Instant::now();
-            let model_t = model.at_time(scene, time)?;
-            let prepared_t = prepare(&model_t, scene.plane, settings, 1.0, &scene.path, &|_| {})
-                .map_err(cause)?;
-            timings.add("assemble", prepared_t.assemble_seconds);
-            timings.add("condense", prepared_t.condense_seconds);
-            let t1 = Instant::now();
-            {
-                let mut s = Session::new(&model_t, &prepared_t).map_err(cause)?;
-                s.cols = std::mem::take(&mut session.cols);
-                timings.add("interface_system", t1.elapsed().as_secs_f64());
-                // Cohesion follows its expression where the pair has never opened.
-                for (k, it) in model_t.interfaces.iter().enumerate() {
-                    for (j, p) in it.pairs.iter().enumerate() {
-                        if !state.broken[k][j] {
-                            state.cohesion[k][j] = p.cohesion;
-                        }
-                    }
-                }
-                contact_step(&mut s, &ctx, step, f, &mut state, &mut acc, timings);
-                session.cols = std::mem::take(&mut s.cols);
-            }
-            let _ = t;
-            last_prepared = Some(prepared_t);
-        }
+    let stepper = Stepper {
+        scene,
+        model,
+        settings,
+        timed,
+        cause: &cause,
+    };
+    for (step, &to) in steps.iter().enumerate() {
+        // Where the step starts, for substeps: the previous step, or (timed paths aside)
+        // the unloaded state.
+        let from = match step {
+            0 if timed => None,
+            0 => Some((0.0, to.1)),
+            _ => Some(steps[step - 1]),
+        };
+        load_step(
+            &stepper,
+            &mut session,
+            &ctx,
+            (step, from, to, 0),
+            &mut state,
+            &mut acc,
+            timings,
+            &mut last_prepared,
+        )?;
         if acc.failure.is_some() {
             break;
         }
@@ -334,6 +330,7 @@ pub fn solve_loaded_with(
         history,
         states,
         failure,
+        ..
     } = acc;
     let converged = failure.is_none();
     let contact = serde_json::json!({
@@ -397,6 +394,206 @@ type FinalSolution = (
     Vec<Vec<f64>>,
 );
 
+/// What a load step needs to evaluate the model at another pseudo-time.
+struct Stepper<'a> {
+    scene: &'a crate::input::scene::Scene,
+    model: &'a Model,
+    settings: &'a crate::bem::quadrature::QuadratureSettings,
+    timed: bool,
+    cause: &'a dyn Fn(Error) -> Error,
+}
+
+/// A (sub)step: the load step, where it starts (load factor, time; none for the first step
+/// of a load path), where it ends, and the subdivision level.
+type StepSpan = (usize, Option<(f64, f64)>, (f64, f64), usize);
+
+/// Substep levels of a load step that does not converge (up to 2³ substeps).
+const MAX_SUBDIVISION: usize = 3;
+
+/// One load step from the state `state`, to the load factor and pseudo-time `to`; a step
+/// that does not converge for a reason other than a mechanism is solved again in two halves
+/// from `from` (recursively, up to [`MAX_SUBDIVISION`] levels). `at` = (step, from, to,
+/// level).
+#[allow(clippy::too_many_arguments)]
+fn load_step(
+    stp: &Stepper,
+    session: &mut crate::contact::Session,
+    ctx: &StepContext,
+    at: StepSpan,
+    state: &mut crate::contact::StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+    last_prepared: &mut Option<crate::contact::solve::Prepared>,
+) -> Result<()> {
+    let (step, from, to, level) = at;
+    if level == 0 {
+        acc.substeps = 0;
+    }
+    let saved = (state.clone(), acc.mark());
+    step_at(
+        stp,
+        session,
+        ctx,
+        step,
+        to,
+        state,
+        acc,
+        timings,
+        last_prepared,
+    )?;
+    let Some(from) = from else { return Ok(()) };
+    if acc.failure.is_none() || acc.mechanism || level >= MAX_SUBDIVISION {
+        acc.substeps += 1;
+        return Ok(());
+    }
+    let why = acc
+        .failure
+        .as_ref()
+        .map(|e| e.message().to_string())
+        .unwrap_or_default();
+    acc.restore(saved.1);
+    *state = saved.0;
+    let mid = (0.5 * (from.0 + to.0), 0.5 * (from.1 + to.1));
+    load_step(
+        stp,
+        session,
+        ctx,
+        (step, Some(from), mid, level + 1),
+        state,
+        acc,
+        timings,
+        last_prepared,
+    )?;
+    if acc.failure.is_none() {
+        load_step(
+            stp,
+            session,
+            ctx,
+            (step, Some(mid), to, level + 1),
+            state,
+            acc,
+            timings,
+            last_prepared,
+        )?;
+    }
+    if level == 0 {
+        acc.notes.push(format!(
+            "load step {} (load factor {}, t = {}) did not converge in one step ({why}); it \
+             was solved again in {} substeps from load factor {}, t = {}{}",
+            step + 1,
+            crate::input::model::fmt_num(to.0),
+            crate::input::model::fmt_num(to.1),
+            acc.substeps,
+            crate::input::model::fmt_num(from.0),
+            crate::input::model::fmt_num(from.1),
+            if acc.failure.is_none() {
+                ", which converged"
+            } else {
+                ", the last of which did not converge either"
+            }
+        ));
+        acc.substeps = 0;
+    }
+    Ok(())
+}
+
+/// Solves one (sub)step at `(f, time)`: on the run's session, or, where the loads depend on
+/// t and the pseudo-time differs from the model's, on the model evaluated and assembled at
+/// `time` (the columns of the opening stiffness move between the sessions).
+#[allow(clippy::too_many_arguments)]
+fn step_at(
+    stp: &Stepper,
+    session: &mut crate::contact::Session,
+    ctx: &StepContext,
+    step: usize,
+    (f, time): (f64, f64),
+    state: &mut crate::contact::StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+    last_prepared: &mut Option<crate::contact::solve::Prepared>,
+) -> Result<()> {
+    use crate::contact::solve::prepare;
+    use crate::contact::Session;
+    use std::time::Instant;
+    if !stp.timed || time == stp.model.time {
+        contact_step(session, ctx, step, f, state, acc, timings);
+        return Ok(());
+    }
+    let (scene, model) = (stp.scene, stp.model);
+    let model_t = model.at_time(scene, time)?;
+    let prepared_t = prepare(
+        &model_t,
+        scene.plane,
+        stp.settings,
+        1.0,
+        &scene.path,
+        &|_| {},
+    )
+    .map_err(stp.cause)?;
+    timings.add("assemble", prepared_t.assemble_seconds);
+    timings.add("condense", prepared_t.condense_seconds);
+    let t1 = Instant::now();
+    {
+        let mut s = Session::new(&model_t, &prepared_t).map_err(stp.cause)?;
+        s.cols = std::mem::take(&mut session.cols);
+        s.coupled_after = session.coupled_after;
+        timings.add("interface_system", t1.elapsed().as_secs_f64());
+        // Cohesion follows its expression where the pair has never opened.
+        for (k, it) in model_t.interfaces.iter().enumerate() {
+            for (j, p) in it.pairs.iter().enumerate() {
+                if !state.broken[k][j] {
+                    state.cohesion[k][j] = p.cohesion;
+                }
+            }
+        }
+        contact_step(&mut s, ctx, step, f, state, acc, timings);
+        session.cols = std::mem::take(&mut s.cols);
+    }
+    *last_prepared = Some(prepared_t);
+    Ok(())
+}
+
+/// Lengths and values of a [`StepAcc`] to go back to.
+struct AccMark {
+    iterations: usize,
+    residual: f64,
+    final_sol: Option<FinalSolution>,
+    cross: usize,
+    qp_block: Option<serde_json::Value>,
+    notes: usize,
+    rows: usize,
+    states: usize,
+}
+
+impl StepAcc {
+    fn mark(&self) -> AccMark {
+        AccMark {
+            iterations: self.iterations,
+            residual: self.residual,
+            final_sol: self.final_sol.clone(),
+            cross: self.cross.len(),
+            qp_block: self.qp_block.clone(),
+            notes: self.notes.len(),
+            rows: self.history.rows.len(),
+            states: self.states.len(),
+        }
+    }
+
+    /// Forgets what was accumulated since `m` (a failed step solved again in substeps).
+    fn restore(&mut self, m: AccMark) {
+        self.iterations = m.iterations;
+        self.residual = m.residual;
+        self.final_sol = m.final_sol;
+        self.cross.truncate(m.cross);
+        self.qp_block = m.qp_block;
+        self.notes.truncate(m.notes);
+        self.history.rows.truncate(m.rows);
+        self.states.truncate(m.states);
+        self.failure = None;
+        self.mechanism = false;
+    }
+}
+
 /// What the load steps of a contact run accumulate.
 #[derive(Default)]
 struct StepAcc {
@@ -409,6 +606,10 @@ struct StepAcc {
     history: crate::solution::History,
     states: Vec<crate::contact::RecordedState>,
     failure: Option<Error>,
+    /// The failure is a mechanism (no equilibrium): no substeps help.
+    mechanism: bool,
+    /// Substeps solved since the last load step that was subdivided.
+    substeps: usize,
 }
 
 /// One load step of a contact run: the main solver, the cross-checks, the history.
@@ -509,6 +710,7 @@ fn contact_step(
     ));
     if let Some(e) = r.failure {
         acc.failure = Some(e);
+        acc.mechanism = r.mechanism;
     }
 }
 

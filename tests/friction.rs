@@ -648,3 +648,55 @@ fn coupled_friction_lcp_reaches_the_fixed_point_state() {
         assert!((p.traction[0] - r.traction[0]).abs() < 1e-8 * scale / 0.0625);
     }
 }
+
+// ------------------------------------------------------------------------------------------
+// Load paths: a step that does not converge is solved again in substeps
+
+#[test]
+fn a_step_that_does_not_converge_is_subdivided_and_reaches_the_same_state() {
+    let dir = support::tmpdir("substeps");
+    let mesh = support::gmsh(
+        &geo("hertz_contact"),
+        &dir,
+        "hertz.msh",
+        false,
+        &["-setnumber", "h_fine", "0.1"],
+    );
+    // The Hertz scene with its indentation as a load path t = 0 → 1; closing about 30
+    // pairs at once needs about 30 switches, more than max_iterations = 12 allows.
+    let base = std::fs::read_to_string(support::root().join("pipelines/hertz_contact.toml"))
+        .expect("hertz scene")
+        .replace(
+            "mesh = \"../out/mesh/hertz_contact.msh\"",
+            &format!("mesh = \"{}\"", mesh.display()),
+        )
+        .replace("\nuy = -0.17\n", "\nuy = \"-0.17*t\"\n")
+        .replace(
+            "tolerance = 1e-10",
+            "tolerance = 1e-10\ntime = [0.0, 1.0]\nmax_iterations = MAXIT",
+        );
+    let direct = run(&dir, "direct", &base.replace("MAXIT", "1000"), "contact");
+    assert_eq!(direct.code, 0, "{}", direct.stderr);
+    let switches = direct.summary["contact"]["iterations"]
+        .as_u64()
+        .unwrap_or(0);
+    assert!(switches > 12, "the direct step needs {switches} switches");
+    let sub = run(&dir, "sub", &base.replace("MAXIT", "12"), "contact");
+    assert_eq!(sub.code, 0, "{}", sub.stderr);
+    let notes = sub.summary["notes"].to_string();
+    eprintln!("{notes}");
+    assert!(
+        notes.contains("substeps") && notes.contains("which converged"),
+        "{notes}"
+    );
+    // The same final state (frictionless contact is path-independent).
+    assert_eq!(sub.rows.len(), direct.rows.len());
+    for (a, b) in sub.rows.iter().zip(&direct.rows) {
+        assert_eq!(a.closed, b.closed, "status at x = {}", a.x);
+        assert!(
+            (a.tn - b.tn).abs() < 1e-8 * (1.0 + b.tn.abs()),
+            "pressure at x = {}",
+            a.x
+        );
+    }
+}

@@ -120,6 +120,8 @@ pub struct ContactResult {
     pub states: Vec<RecordedState>,
     pub notes: Vec<String>,
     pub failure: Option<Error>,
+    /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
+    pub mechanism: bool,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
     pub info: serde_json::Value,
     /// The states of the evolutive path in compact form (iteration, open rows, openings),
@@ -269,6 +271,7 @@ impl<'a> Session<'a> {
         let mut outer = 0;
         let mut converged = false;
         let mut failure = None;
+        let mut mechanism = false;
         let mut info = serde_json::json!({});
         let mut last: Option<(InnerState, f64)> = None;
         // The outer iterates' open rows, to find the rows of a stick edge cycle.
@@ -375,6 +378,7 @@ impl<'a> Session<'a> {
                         max_iterations,
                         &mut |_| {},
                     );
+                    mechanism = !probe.blocked.is_empty();
                     let hint = if probe.blocked.is_empty() {
                         String::new()
                     } else {
@@ -395,6 +399,7 @@ impl<'a> Session<'a> {
             let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {
+                mechanism = !outcome_blocked.is_empty();
                 let hint = if outcome_blocked.is_empty() {
                     String::new()
                 } else {
@@ -629,6 +634,7 @@ impl<'a> Session<'a> {
             states,
             notes,
             failure,
+            mechanism,
             info,
             recorded: compact,
             start: start.clone(),
