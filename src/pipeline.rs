@@ -433,7 +433,9 @@ fn body_inputs<'a>(
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
     use crate::output::{csv, summary, write_atomic};
-    use crate::post::{evaluate_points, section_points};
+    use crate::post::{section_points, PointSampler};
+    use rayon::prelude::*;
+    use std::fmt::Write as _;
     use std::time::Instant;
 
     let mut timings = Timings::default();
@@ -491,10 +493,17 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Post-processing.
     let t2 = Instant::now();
     let inputs = body_inputs(model, scene.plane, &result.fields, factor);
+    // Each section's points are located, planned and integrated once (post::PointSampler),
+    // then evaluated for the final state and, with history = "full", for every recorded
+    // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
+    let full_path =
+        scene.output.history == crate::input::scene::History::Full && !result.states.is_empty();
     let mut sections = Vec::new();
+    let mut section_paths = Vec::new();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
-        let vals = evaluate_points(&inputs, &settings, &pts);
+        let sampler = PointSampler::new(&inputs, &settings, &pts);
+        let vals = sampler.evaluate(&inputs);
         let rows: Vec<csv::SectionRow> = pts
             .iter()
             .zip(vals)
@@ -524,33 +533,36 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             ));
         }
         sections.push((s.name.clone(), rows));
-    }
-    // Sections along the contact path (history = "full"): the same points at every
-    // recorded iteration, for plots like the paper's Fig. 6.
-    let mut section_paths = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full && !result.states.is_empty() {
-        for s in &scene.output.sections {
-            let pts = section_points(s.from, s.to, s.points);
+        if full_path {
+            let blocks: Vec<String> = result
+                .states
+                .par_iter()
+                .zip(&result.history.rows)
+                .map(|(st, row)| {
+                    let inputs = body_inputs(model, scene.plane, &st.fields, st.load_factor);
+                    let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
+                    let mut text = String::new();
+                    for (x, v) in pts.iter().zip(sampler.evaluate(&inputs)) {
+                        let vals = match v {
+                            Some(p) => format!(
+                                "{:e},{:e},{:e},{:e},{:e}",
+                                p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
+                            ),
+                            None => "nan,nan,nan,nan,nan".into(),
+                        };
+                        let _ = writeln!(
+                            text,
+                            "{},{},{:e},{:e},{:e},{:e},{vals}",
+                            st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
+                        );
+                    }
+                    text
+                })
+                .collect();
             let mut text = String::from(
                 "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
             );
-            for (st, row) in result.states.iter().zip(&result.history.rows) {
-                let inputs = body_inputs(model, scene.plane, &st.fields, st.load_factor);
-                let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
-                for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
-                    let vals = match v {
-                        Some(p) => format!(
-                            "{:e},{:e},{:e},{:e},{:e}",
-                            p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
-                        ),
-                        None => "nan,nan,nan,nan,nan".into(),
-                    };
-                    text += &format!(
-                        "{},{},{:e},{:e},{:e},{:e},{vals}\n",
-                        st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
-                    );
-                }
-            }
+            text.extend(blocks);
             section_paths.push((s.name.clone(), text));
         }
     }
