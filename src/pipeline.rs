@@ -432,7 +432,7 @@ fn body_inputs<'a>(
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
-    use crate::output::{csv, summary, write_atomic};
+    use crate::output::{csv, summary, write_staged};
     use crate::post::{section_points, PointSampler};
     use rayon::prelude::*;
     use std::fmt::Write as _;
@@ -600,7 +600,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Outputs.
     let t3 = Instant::now();
     for (it, r) in model.interfaces.iter().zip(&result.interfaces) {
-        write_atomic(
+        write_staged(
             &out_dir
                 .join("interfaces")
                 .join(format!("{}.csv", it.spec.name)),
@@ -608,13 +608,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         )?;
     }
     for (name, rows) in &sections {
-        write_atomic(
+        write_staged(
             &out_dir.join("sections").join(format!("{name}.csv")),
             csv::section_table(rows).as_bytes(),
         )?;
     }
     for (name, text) in &section_paths {
-        write_atomic(
+        write_staged(
             &out_dir.join("sections").join(format!("{name}_path.csv")),
             text.as_bytes(),
         )?;
@@ -731,10 +731,24 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     rec.status = result.status.clone();
     rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
     rec.summary_json = text.clone();
-    crate::output::archive::write_archive(&out_dir.join("archive.h5"), &rec)?;
-    if scene.output.vtk {
-        crate::output::vtk::write_vtk(&out_dir.join("vtk"), &rec)?;
-    }
+    // The archive (one thread: the HDF5 library is serial) beside the VTK files (the
+    // others, in parallel).
+    let (archived, vtk) = std::thread::scope(|s| {
+        let archive = s.spawn(|| {
+            crate::output::archive::write_archive_staged(&out_dir.join("archive.h5"), &rec)
+        });
+        let vtk = if scene.output.vtk {
+            crate::output::vtk::write_vtk_staged(&out_dir.join("vtk"), &rec).map(|_| ())
+        } else {
+            Ok(())
+        };
+        let archived = archive
+            .join()
+            .unwrap_or_else(|p| std::panic::resume_unwind(p));
+        (archived, vtk)
+    });
+    archived?;
+    vtk?;
     stage.finish();
     timings.add("write", t4.elapsed().as_secs_f64());
     // Dates and timings in their own file: summary.json stays byte-identical between runs.
@@ -743,9 +757,9 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "stages": timings.json(),
     }))
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
-    write_atomic(&out_dir.join("timings.json"), timing_text.as_bytes())?;
+    write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;
     // The summary last, then the whole folder swapped in.
-    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    write_staged(&out_dir.join("summary.json"), text.as_bytes())?;
     let out_dir = folder.target().to_path_buf();
     folder.commit()?;
     if let Some(f) = result.failure {

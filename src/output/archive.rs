@@ -40,8 +40,8 @@
 //! Every dataset carries `description` and `units` attributes. Datasets of 4096 values or
 //! more are chunked and compressed (shuffle + deflate) when the HDF5 library has deflate.
 //!
-//! The file is written under a temporary name in the same folder and renamed when
-//! complete: an interrupted run never leaves a file named `archive.h5` that looks finished.
+//! The file is written under a temporary name in the same folder (synced, unless it is in a
+//! run's staging folder, which is synced when committed) and renamed when complete: an interrupted run never leaves a file named `archive.h5` that looks finished.
 //! HDF5 file locking is off for both writing and reading: the temporary name is private to
 //! the writer, and the library opens files without close-on-exec, so a child process
 //! started meanwhile (by another thread) would otherwise keep the lock after the rename.
@@ -71,8 +71,17 @@ const CHUNK_VALUES: usize = 65_536;
 
 type R<T> = std::result::Result<T, String>;
 
-/// Writes the archive of `rec` to `path` atomically.
+/// Writes the archive of `rec` to `path` atomically and durably (synced before the rename).
 pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
+    write_archive_with(path, rec, true)
+}
+
+/// [`write_archive`] into a run's staging folder: not synced (the folder's commit syncs it).
+pub fn write_archive_staged(path: &Path, rec: &RunRecord) -> Result<()> {
+    write_archive_with(path, rec, false)
+}
+
+fn write_archive_with(path: &Path, rec: &RunRecord, durable: bool) -> Result<()> {
     rec.validate().map_err(|m| {
         Error::io(
             path,
@@ -98,9 +107,11 @@ pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
         write_all(&file, rec)?;
         file.close().map_err(|e| e.to_string())?;
         // Make the content durable before the rename makes it visible.
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .map_err(|e| e.to_string())?;
+        if durable {
+            std::fs::File::open(&tmp)
+                .and_then(|f| f.sync_all())
+                .map_err(|e| e.to_string())?;
+        }
         std::fs::rename(&tmp, path).map_err(|e| e.to_string())
     })();
     written.map_err(|m| {
