@@ -168,6 +168,18 @@ pub fn solve_loaded_with(
     timings: &mut Timings,
     progress: &crate::output::progress::Progress,
 ) -> Result<(crate::contact::solve::Prepared, RunResult)> {
+    solve_loaded_then(loaded, settings, timings, progress, &mut |_| {})
+}
+
+/// [`solve_loaded_with`] calling `after_prepare` with the body operators as soon as they are
+/// assembled and condensed, before the contact stage (the run starts writing the archive).
+fn solve_loaded_then(
+    loaded: &Loaded,
+    settings: &crate::bem::quadrature::QuadratureSettings,
+    timings: &mut Timings,
+    progress: &crate::output::progress::Progress,
+    after_prepare: &mut dyn FnMut(&crate::contact::solve::Prepared),
+) -> Result<(crate::contact::solve::Prepared, RunResult)> {
     use crate::contact::solve::prepare;
     use crate::contact::{differing_pairs, Method as Solver, Session};
     use crate::input::scene::Method;
@@ -206,6 +218,7 @@ pub fn solve_loaded_with(
     stage.finish();
     timings.add("assemble", prepared.assemble_seconds);
     timings.add("condense", prepared.condense_seconds);
+    after_prepare(&prepared);
     let factors = &scene.solve.load_factors;
     let last = factors.len() - 1;
     let mut notes = Vec::new();
@@ -432,6 +445,8 @@ fn body_inputs<'a>(
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
+    use crate::output::archive::{ArchivePart, ArchiveWriter};
+    use crate::output::record::{RunRecord, StateRecord};
     use crate::output::{csv, summary, write_staged};
     use crate::post::{section_points, PointSampler};
     use rayon::prelude::*;
@@ -475,10 +490,74 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
         .unwrap_or_else(QuadratureSettings::standard);
     let progress = crate::output::progress::Progress::new(opts.quiet);
-    let (prepared, mut result) = solve_loaded_with(&loaded, &settings, &mut timings, &progress)?;
+    // The archive is written on a thread of its own from the moment the body operators
+    // exist (output::archive::ArchiveWriter): the model now, the contact results before
+    // post-processing, the final state at the end.
+    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
+    let archive_path = folder.staging().join("archive.h5");
+    let mut archive: Option<ArchiveWriter> = None;
+    let (prepared, mut result) =
+        solve_loaded_then(&loaded, &settings, &mut timings, &progress, &mut |p| {
+            let mut model = rec.clone();
+            if loaded.scene.output.operators {
+                model.set_operators(&p.systems, &p.condensed);
+            }
+            archive = Some(ArchiveWriter::start(&archive_path, model));
+        })?;
+    let archive = archive.unwrap_or_else(|| ArchiveWriter::start(&archive_path, rec.clone()));
     let Loaded {
         scene, model, plan, ..
     } = &loaded;
+    // The contact results of the archive: the paper's mixed interface operators of the final
+    // status (dense over every interface: for scenes of up to 3000 interface unknowns only),
+    // the history and the states.
+    let t1 = Instant::now();
+    let mut contact_operators = None;
+    if scene.output.operators {
+        let final_status = final_status(model, &result);
+        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
+        if layout.n <= 3000 {
+            let (k, l) = crate::contact::interface::assemble_scaled(
+                &layout,
+                &prepared.condensed,
+                result.load_factor,
+            );
+            contact_operators = Some(
+                crate::contact::interface::reduced_operators(&layout, &k, &l)
+                    .into_iter()
+                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
+                    .collect(),
+            );
+        }
+    }
+    let mut states: Vec<StateRecord> = Vec::new();
+    if scene.output.history == crate::input::scene::History::Full {
+        let recorded = result.states.len().saturating_sub(1);
+        for st in &result.states[..recorded] {
+            states.push(StateRecord::new(
+                states.len(),
+                st.load_step,
+                st.load_factor,
+                st.fields.clone(),
+                st.interfaces.clone(),
+            ));
+        }
+    }
+    states.push(StateRecord::new(
+        states.len(),
+        scene.solve.load_factors.len() - 1,
+        result.load_factor,
+        result.fields.clone(),
+        result.interfaces.clone(),
+    ));
+    rec.states = states;
+    rec.history = result.history.clone();
+    archive.send(ArchivePart::Solved {
+        contact_operators,
+        history: rec.history.clone(),
+        states: rec.states.clone(),
+    });
+    timings.add("write", t1.elapsed().as_secs_f64());
     if let Some(where_) = non_finite(model, &result) {
         result.status = "failed: non-finite results".into();
         if result.failure.is_none() {
@@ -683,71 +762,29 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Archive and VTK files.
     let t4 = Instant::now();
     let stage = progress.spinner("archive and VTK");
-    let mut rec = crate::output::record::RunRecord::from_model(scene, &loaded.mesh, model)?;
-    if scene.output.operators {
-        rec.set_operators(&prepared.systems, &prepared.condensed);
-        let final_status = final_status(model, &result);
-        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
-        // The paper's mixed interface operators of the final status (dense over every
-        // interface): archived for scenes of up to 3000 interface unknowns only.
-        if layout.n <= 3000 {
-            let (k, l) = crate::contact::interface::assemble_scaled(
-                &layout,
-                &prepared.condensed,
-                result.load_factor,
-            );
-            rec.contact_operators = Some(
-                crate::contact::interface::reduced_operators(&layout, &k, &l)
-                    .into_iter()
-                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
-                    .collect(),
-            );
-        }
+    if let Some(last) = rec.states.last_mut() {
+        last.interior = interior;
     }
-    let mut states: Vec<crate::output::record::StateRecord> = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full {
-        let recorded = result.states.len().saturating_sub(1);
-        for st in &result.states[..recorded] {
-            states.push(crate::output::record::StateRecord::new(
-                states.len(),
-                st.load_step,
-                st.load_factor,
-                st.fields.clone(),
-                st.interfaces.clone(),
-            ));
-        }
-    }
-    let mut last = crate::output::record::StateRecord::new(
-        states.len(),
-        scene.solve.load_factors.len() - 1,
-        result.load_factor,
-        result.fields.clone(),
-        result.interfaces.clone(),
-    );
-    last.interior = interior;
-    states.push(last);
-    rec.states = states;
-    rec.history = result.history.clone();
     rec.status = result.status.clone();
     rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
     rec.summary_json = text.clone();
-    // The archive (one thread: the HDF5 library is serial) beside the VTK files (the
-    // others, in parallel).
-    let (archived, vtk) = std::thread::scope(|s| {
-        let archive = s.spawn(|| {
-            crate::output::archive::write_archive_staged(&out_dir.join("archive.h5"), &rec)
-        });
-        let vtk = if scene.output.vtk {
-            crate::output::vtk::write_vtk_staged(&out_dir.join("vtk"), &rec).map(|_| ())
-        } else {
-            Ok(())
-        };
-        let archived = archive
-            .join()
-            .unwrap_or_else(|p| std::panic::resume_unwind(p));
-        (archived, vtk)
+    archive.send(ArchivePart::Finished {
+        interior: rec
+            .states
+            .last()
+            .map(|l| l.interior.clone())
+            .unwrap_or_default(),
+        status: rec.status.clone(),
+        timings: rec.timings.clone(),
+        summary_json: text.clone(),
     });
-    archived?;
+    // The VTK files (in parallel) while the archive's thread writes the final state.
+    let vtk = if scene.output.vtk {
+        crate::output::vtk::write_vtk_staged(&out_dir.join("vtk"), &rec).map(|_| ())
+    } else {
+        Ok(())
+    };
+    archive.finish()?;
     vtk?;
     stage.finish();
     timings.add("write", t4.elapsed().as_secs_f64());
