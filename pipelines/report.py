@@ -98,6 +98,11 @@ def suptitle(fig, msg, fontsize):
     fig.suptitle("\n".join(lines), fontsize=fontsize)
 
 
+def vtk_iteration(mesh):
+    """The contact iteration a VTK file holds (its field data `iteration`)."""
+    return int(np.ravel(mesh.field_data["iteration"])[0])
+
+
 def nice_factor(x):
     """Largest of 1, 2, 5 x 10^k not above x (at least 1e-12)."""
     if not np.isfinite(x) or x <= 0:
@@ -219,7 +224,8 @@ def shape_picture(run, out):
     box = (lo[0] - pad, hi[0] + pad, lo[1] - pad, hi[1] + pad)
     aspect = (box[3] - box[2]) / (box[1] - box[0])
 
-    iteration = int(final_f[0] if final_f else final_b[0])
+    # The pvd's times are load-step fractions; each file's field data names its iteration.
+    iteration = vtk_iteration(m)
     when = f"final state (contact iteration {iteration})" if len(bnd) > 1 else "final state"
     head = (f"{run.title}\n{when}; displacements × {fmt_factor(factor)}"
             f" (largest |u| = {umax:.3g} {run.ulen})")
@@ -231,7 +237,7 @@ def shape_picture(run, out):
         if first_b and first_b[1] != final_b[1]:
             _, x1s = boundary_polylines(first_b[1], factor)
             overlays.append((x1s, dict(color="tab:blue", lw=0.9, ls="--"),
-                             f"iteration {int(first_b[0])} (before any status change)"))
+                             f"iteration {vtk_iteration(meshio.read(first_b[1]))} (before any status change)"))
         overlays.append((xds, dict(color="k", lw=0.9), "final"))
 
     def draw_overlays(ax):

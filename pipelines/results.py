@@ -42,8 +42,8 @@ PAPER_TABLES = [
     },
 ]
 
-STAGES = ["read", "assemble", "condense", "solve", "contact_lcp", "contact_active_set", "contact_qp",
-          "postprocess", "write", "total"]
+STAGES = ["read", "assemble", "condense", "interface_system", "solve", "contact_lcp", "contact_record",
+          "contact_active_set", "contact_lemke", "contact_qp", "postprocess", "write", "total"]
 
 
 def num(v, digits=4):
@@ -180,11 +180,15 @@ def paper_table(spec, runs):
                          f"complementarity residual {num(c.get('complementarity_residual'))}")
         if "qp" in s:
             q = s["qp"]
-            raw = q.get("raw", {}).get("interfaces", {}).get(iface, {})
-            extra.append(f"QP {q.get('iterations', '—')} interior-point iterations ({q.get('solver_status', '')}); "
-                         f"before polishing by the mixed system the QP's own zones gave "
-                         f"{num(raw.get('detached_length'))} cm detached; "
-                         f"{q.get('differing_pairs_from_lcp', '—')} pairs differ from the LCP")
+            info = q.get("info", {})
+            own = q.get("interfaces", {}).get(iface, {})
+            extra.append(f"QP {info.get('iterations', '—')} interior-point iterations "
+                         f"({info.get('solver_status', '—')}), its own zones (no polishing) "
+                         f"{num(own.get('detached_length'))} cm detached")
+        checks = c.get("cross_checks", [])
+        if checks:
+            extra.append("pairs differing from the LCP: " + ", ".join(
+                f"{x.get('solver', '?')} {x.get('differing_pairs', '—')}" for x in checks))
         for n in s.get("notes", []):
             extra.append(f"note: {n}")
         if extra:
@@ -212,7 +216,7 @@ def run_section(name, path, s, img_dir, md_dir):
         head.append(("LCP iterations, load steps", f"{contact['iterations']}, {contact.get('load_steps', '—')}"))
         head.append(("complementarity residual", num(contact.get("complementarity_residual"))))
     if "qp" in s:
-        head.append(("QP iterations", s["qp"].get("iterations", "—")))
+        head.append(("QP iterations", s["qp"].get("info", {}).get("iterations", "—")))
     v = tool_version(path)
     if v:
         head.append(("sgbem version", v))

@@ -28,8 +28,36 @@
 //! program itself with its mesh. Time: the Galerkin pair loop costs about
 //! `c_q` per element pair (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
 //! one core of a 2020s machine), and the LU condensation `(2/3) n_x³ + 2 n_x² n_x0` flops at
-//! about 1 Gflop/s; post-processing about 8 µs per (interior-field node or section point,
-//! boundary element). All are rough: they are there to tell minutes from days.
+//! about 1 Gflop/s; post-processing about 1 µs per (interior-field node or section point,
+//! boundary element) (example 2: 525 000 such pairs in 0.3 s of CPU; a section sampled at
+//! every iteration reuses its kernel integrals, so the iterations add little). All are rough:
+//! they are there to tell minutes from days.
+//!
+//! **Contact stage** ([`ContactEstimate`], only with a unilateral interface). With `p`
+//! unilateral pairs, `r` open rows (a normal row per pair, and a tangential one unless
+//! `slide`), `n_u(b)` interface displacement unknowns of body b (the dense blocks of the glued
+//! sparse system), `n(b)`, `n_x0(b)` as above and `k` load steps, the expected number of
+//! status switches of the evolutive path is taken as `s = p` per load step (every pair
+//! switches once: an upper bound on a monotone path; the paper's example 2 switches 89 of
+//! its 105 pairs), and
+//!
+//! ```text
+//! system   = C_SYSTEM · Σ_b n_u(b)³                     factorising the glued system once
+//! path     = C_PATH · k s³                              evolutive: rank-one updates of the
+//!                                                       open rows' Cholesky, columns on demand
+//! record   = C_RECORD · (k s + 1) · Σ_b n(b) n_x0(b)    each recorded state expanded into the
+//!                                                       boundary solution (history = "full")
+//! checks   = k p³ · (C_ACTIVE + [both] (C_QP + C_LEMKE [r ≤ 2000]))
+//! ```
+//!
+//! (the QP as the main solver costs `C_QP · k p³` in place of the path). The constants are
+//! calibrated on `cargo bench --bench contact` (README, Speed: example 2 with 104 / 208 / 416 /
+//! 832 joint elements, 105–833 pairs, 89–711 switches; one core of this shared 2-core
+//! machine) and chosen to meet the two largest cases within about 30 %: system 0.24 / 1.38 s
+//! at 416 / 832, path 0.56 / 7.7 s, record 2.2 / 14.0 s, active set 0.19 / 1.3 s, Lemke 0.36 /
+//! 5.6 s, QP 2.5 / 16.4 s. The small cases run faster than the cubes say (overheads, caches).
+//! Memory: the recorded states, `8 (k s + 1) Σ_b (2 nodes + 4 elements)` bytes with history
+//! = "full", and the dense LCP / QP matrices of the cross-checks, `3 · 8 r²`.
 
 use crate::error::{Error, Result};
 use crate::input::model::{DofClass, Model, Role};
@@ -53,6 +81,116 @@ pub struct Estimate {
     pub seconds: f64,
     /// Interior field and sections, in seconds.
     pub post_seconds: f64,
+    /// The contact stage, with a unilateral interface.
+    pub contact: Option<ContactEstimate>,
+}
+
+/// The estimated cost of the contact stage (see the module doc).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ContactEstimate {
+    /// Unilateral pairs and open rows.
+    pub pairs: usize,
+    pub rows: usize,
+    /// Expected status switches over the run (every pair once per load step).
+    pub switches: usize,
+    /// Interface displacement unknowns over all bodies (before gluing).
+    pub interface_unknowns: usize,
+    /// Seconds of the glued system, the main solver, the recording of its states and the
+    /// cross-checks.
+    pub system: f64,
+    pub path: f64,
+    pub record: f64,
+    pub checks: f64,
+    /// Bytes of the recorded states and the dense matrices of the cross-checks.
+    pub bytes: f64,
+}
+
+impl ContactEstimate {
+    /// Seconds of the whole contact stage.
+    pub fn seconds(&self) -> f64 {
+        self.system + self.path + self.record + self.checks
+    }
+}
+
+/// Seconds per `n_u³` of factorising the glued system (416 / 832 joint elements: 0.24 /
+/// 1.38 s for Σ n_u³ = 1.16e9 / 9.25e9).
+const C_SYSTEM: f64 = 1.6e-10;
+/// Seconds per `s³` of the evolutive path with `s = p` (0.56 s at p = 417, 7.7 s at p = 833:
+/// 356 and 711 switches).
+const C_PATH: f64 = 1.2e-8;
+/// Seconds per recorded state and `Σ n·n_x0` (2.2 s for 357 states of 6.36e6, 14.0 s for 712
+/// states of 2.38e7).
+const C_RECORD: f64 = 9e-10;
+/// Seconds per `p³` of the active set, the QP and Lemke (1.3, 16.4 and 5.6 s at p = 833; 0.19,
+/// 2.5 and 0.36 s at p = 417).
+const C_ACTIVE: f64 = 2.5e-9;
+const C_QP: f64 = 3.0e-8;
+const C_LEMKE: f64 = 9.0e-9;
+
+/// The contact stage of a run of `scene` on `model` (see the module doc); None without a
+/// unilateral interface.
+pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<ContactEstimate> {
+    use crate::input::scene::{History, InterfaceModel, Method, Tangential};
+    let (mut pairs, mut rows) = (0usize, 0usize);
+    for it in &model.interfaces {
+        if it.spec.model == InterfaceModel::Unilateral {
+            pairs += it.pairs.len();
+            rows += it.pairs.len()
+                * if it.spec.tangential == Tangential::Slide {
+                    1
+                } else {
+                    2
+                };
+        }
+    }
+    if pairs == 0 {
+        return None;
+    }
+    let steps = scene.solve.load_factors.len();
+    let switches = steps * pairs;
+    let (p, s, k) = (pairs as f64, switches as f64 / steps as f64, steps as f64);
+    let mut interface_unknowns = 0usize;
+    let (mut cubes, mut expand, mut per_state) = (0.0, 0.0, 0.0);
+    for (b, size) in model.bodies.iter().zip(bodies) {
+        let n_u = b
+            .dofs
+            .iter()
+            .flat_map(|d| d.class)
+            .filter(|c| *c == DofClass::Interface)
+            .count();
+        interface_unknowns += n_u;
+        cubes += (n_u as f64).powi(3);
+        expand += ((size.n_x + size.n_x0) * size.n_x0) as f64;
+        per_state += 8.0 * (2 * b.nodes.len() + 4 * b.elements.len()) as f64;
+    }
+    let recorded = if scene.output.history == History::Full {
+        switches as f64 + 1.0
+    } else {
+        k
+    };
+    let path = match scene.solve.method {
+        Method::Qp => C_QP * k * p * p * p,
+        _ => C_PATH * k * s * s * s,
+    };
+    let mut per_cube = C_ACTIVE;
+    if scene.solve.method == Method::Both {
+        per_cube += C_QP + if rows <= 2000 { C_LEMKE } else { 0.0 };
+    }
+    let dense = match scene.solve.method {
+        Method::Lcp => 0.0,
+        _ => 3.0 * 8.0 * (rows as f64).powi(2),
+    };
+    Some(ContactEstimate {
+        pairs,
+        rows,
+        switches,
+        interface_unknowns,
+        system: C_SYSTEM * cubes,
+        path,
+        record: C_RECORD * recorded * expand,
+        checks: per_cube * k * p * p * p,
+        bytes: recorded * per_state + dense,
+    })
 }
 
 /// Bytes the program needs besides the dense operators.
@@ -124,7 +262,7 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
         Quadrature::Accurate => 30e-6,
     };
     // Post-processing: every interior-field node and section point meets every boundary
-    // element of its body (about 8 µs each; all elements, for a section).
+    // element of its body (about 1 µs each; all elements, for a section).
     let total_elements: f64 = bodies.iter().map(|b| b.elements as f64).sum();
     let mut evaluations: f64 = scene
         .output
@@ -140,11 +278,14 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
             evaluations += v.len() as f64 * size.elements as f64;
         }
     }
+    let contact = contact(model, scene, &bodies);
+    let contact_bytes = contact.as_ref().map_or(0.0, |c| c.bytes);
     Estimate {
         bodies,
-        peak_bytes: kept + work + 8.0 * ni * ni + BASE_BYTES,
+        peak_bytes: kept + work + 8.0 * ni * ni + contact_bytes + BASE_BYTES,
         seconds: pairs * per_pair + flops / 1e9,
-        post_seconds: evaluations * 8e-6,
+        post_seconds: evaluations * 1e-6,
+        contact,
     }
 }
 
@@ -252,6 +393,26 @@ impl Estimate {
             fmt_seconds(self.seconds),
             fmt_seconds(self.post_seconds)
         )
+    }
+
+    /// The contact stage's line for `sgbem check`, with a unilateral interface.
+    pub fn contact_line(&self) -> Option<String> {
+        self.contact.as_ref().map(|c| {
+            format!(
+                "about {} for the contact stage ({} unilateral pairs, {} rows, up to {} \
+                 switches; {} interface unknowns: glued system {}, main solver {}, recording \
+                 its states {}, cross-checks {})",
+                fmt_seconds(c.seconds()),
+                c.pairs,
+                c.rows,
+                c.switches,
+                c.interface_unknowns,
+                fmt_seconds(c.system),
+                fmt_seconds(c.path),
+                fmt_seconds(c.record),
+                fmt_seconds(c.checks)
+            )
+        })
     }
 }
 

@@ -172,6 +172,18 @@ pub fn solve_loaded_with(
     timings: &mut Timings,
     progress: &crate::output::progress::Progress,
 ) -> Result<(crate::contact::solve::Prepared, RunResult)> {
+    solve_loaded_then(loaded, settings, timings, progress, &mut |_| {})
+}
+
+/// [`solve_loaded_with`] calling `after_prepare` with the body operators as soon as they are
+/// assembled and condensed, before the contact stage (the run starts writing the archive).
+fn solve_loaded_then(
+    loaded: &Loaded,
+    settings: &crate::bem::quadrature::QuadratureSettings,
+    timings: &mut Timings,
+    progress: &crate::output::progress::Progress,
+    after_prepare: &mut dyn FnMut(&crate::contact::solve::Prepared),
+) -> Result<(crate::contact::solve::Prepared, RunResult)> {
     use crate::contact::solve::prepare;
     use crate::contact::{Method as Solver, Session};
     use crate::input::scene::Method;
@@ -210,6 +222,7 @@ pub fn solve_loaded_with(
     stage.finish();
     timings.add("assemble", prepared.assemble_seconds);
     timings.add("condense", prepared.condense_seconds);
+    after_prepare(&prepared);
     let steps = scene.solve.steps();
     let last = steps.len() - 1;
     // With `[solve] time` and values that depend on t, every step has its own loads: the
@@ -765,8 +778,12 @@ fn body_inputs<'a>(
 /// Reads, validates, solves and writes every output of a scene.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     use crate::bem::quadrature::QuadratureSettings;
-    use crate::output::{csv, summary, write_atomic};
-    use crate::post::{evaluate_points, section_points};
+    use crate::output::archive::{ArchivePart, ArchiveWriter};
+    use crate::output::record::{RunRecord, StateRecord};
+    use crate::output::{csv, summary, write_staged};
+    use crate::post::{section_points, PointSampler};
+    use rayon::prelude::*;
+    use std::fmt::Write as _;
     use std::time::Instant;
 
     let mut timings = Timings::default();
@@ -806,10 +823,74 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
         .unwrap_or_else(QuadratureSettings::standard);
     let progress = crate::output::progress::Progress::new(opts.quiet);
-    let (prepared, mut result) = solve_loaded_with(&loaded, &settings, &mut timings, &progress)?;
+    // The archive is written on a thread of its own from the moment the body operators
+    // exist (output::archive::ArchiveWriter): the model now, the contact results before
+    // post-processing, the final state at the end.
+    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
+    let archive_path = folder.staging().join("archive.h5");
+    let mut archive: Option<ArchiveWriter> = None;
+    let (prepared, mut result) =
+        solve_loaded_then(&loaded, &settings, &mut timings, &progress, &mut |p| {
+            let mut model = rec.clone();
+            if loaded.scene.output.operators {
+                model.set_operators(&p.systems, &p.condensed);
+            }
+            archive = Some(ArchiveWriter::start(&archive_path, model));
+        })?;
+    let archive = archive.unwrap_or_else(|| ArchiveWriter::start(&archive_path, rec.clone()));
     let Loaded {
         scene, model, plan, ..
     } = &loaded;
+    // The contact results of the archive: the paper's mixed interface operators of the final
+    // status (dense over every interface: for scenes of up to 3000 interface unknowns only),
+    // the history and the states.
+    let t1 = Instant::now();
+    let mut contact_operators = None;
+    if scene.output.operators {
+        let final_status = final_status(model, &result);
+        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
+        if layout.n <= 3000 {
+            let (k, l) = crate::contact::interface::assemble_scaled(
+                &layout,
+                &prepared.condensed,
+                result.load_factor,
+            );
+            contact_operators = Some(
+                crate::contact::interface::reduced_operators(&layout, &k, &l)
+                    .into_iter()
+                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
+                    .collect(),
+            );
+        }
+    }
+    let mut states: Vec<StateRecord> = Vec::new();
+    if scene.output.history == crate::input::scene::History::Full {
+        let recorded = result.states.len().saturating_sub(1);
+        for st in &result.states[..recorded] {
+            states.push(StateRecord::new(
+                states.len(),
+                st.load_step,
+                st.load_factor,
+                st.fields.clone(),
+                st.interfaces.clone(),
+            ));
+        }
+    }
+    states.push(StateRecord::new(
+        states.len(),
+        scene.solve.load_factors.len() - 1,
+        result.load_factor,
+        result.fields.clone(),
+        result.interfaces.clone(),
+    ));
+    rec.states = states;
+    rec.history = result.history.clone();
+    archive.send(ArchivePart::Solved {
+        contact_operators,
+        history: rec.history.clone(),
+        states: rec.states.clone(),
+    });
+    timings.add("write", t1.elapsed().as_secs_f64());
     if let Some(where_) = non_finite(model, &result) {
         result.status = "failed: non-finite results".into();
         if result.failure.is_none() {
@@ -830,10 +911,17 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         &result.body_force,
         factor,
     );
+    // Each section's points are located, planned and integrated once (post::PointSampler),
+    // then evaluated for the final state and, with history = "full", for every recorded
+    // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
+    let full_path =
+        scene.output.history == crate::input::scene::History::Full && !result.states.is_empty();
     let mut sections = Vec::new();
+    let mut section_paths = Vec::new();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
-        let vals = evaluate_points(&inputs, &settings, &pts);
+        let sampler = PointSampler::new(&inputs, &settings, &pts);
+        let vals = sampler.evaluate(&inputs);
         let rows: Vec<csv::SectionRow> = pts
             .iter()
             .zip(vals)
@@ -863,39 +951,42 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             ));
         }
         sections.push((s.name.clone(), rows));
-    }
-    // Sections along the contact path (history = "full"): the same points at every
-    // recorded iteration, for plots like the paper's Fig. 6.
-    let mut section_paths = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full && !result.states.is_empty() {
-        for s in &scene.output.sections {
-            let pts = section_points(s.from, s.to, s.points);
+        if full_path {
+            let blocks: Vec<String> = result
+                .states
+                .par_iter()
+                .zip(&result.history.rows)
+                .map(|(st, row)| {
+                    let inputs = body_inputs(
+                        model,
+                        scene.plane,
+                        &st.fields,
+                        &st.body_force,
+                        st.load_factor,
+                    );
+                    let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
+                    let mut text = String::new();
+                    for (x, v) in pts.iter().zip(sampler.evaluate(&inputs)) {
+                        let vals = match v {
+                            Some(p) => format!(
+                                "{:e},{:e},{:e},{:e},{:e}",
+                                p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
+                            ),
+                            None => "nan,nan,nan,nan,nan".into(),
+                        };
+                        let _ = writeln!(
+                            text,
+                            "{},{},{:e},{:e},{:e},{:e},{vals}",
+                            st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
+                        );
+                    }
+                    text
+                })
+                .collect();
             let mut text = String::from(
                 "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
             );
-            for (st, row) in result.states.iter().zip(&result.history.rows) {
-                let inputs = body_inputs(
-                    model,
-                    scene.plane,
-                    &st.fields,
-                    &st.body_force,
-                    st.load_factor,
-                );
-                let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
-                for (x, v) in pts.iter().zip(evaluate_points(&inputs, &settings, &pts)) {
-                    let vals = match v {
-                        Some(p) => format!(
-                            "{:e},{:e},{:e},{:e},{:e}",
-                            p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
-                        ),
-                        None => "nan,nan,nan,nan,nan".into(),
-                    };
-                    text += &format!(
-                        "{},{},{:e},{:e},{:e},{:e},{vals}\n",
-                        st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
-                    );
-                }
-            }
+            text.extend(blocks);
             section_paths.push((s.name.clone(), text));
         }
     }
@@ -933,7 +1024,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Outputs.
     let t3 = Instant::now();
     for (it, r) in model.interfaces.iter().zip(&result.interfaces) {
-        write_atomic(
+        write_staged(
             &out_dir
                 .join("interfaces")
                 .join(format!("{}.csv", it.spec.name)),
@@ -941,13 +1032,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         )?;
     }
     for (name, rows) in &sections {
-        write_atomic(
+        write_staged(
             &out_dir.join("sections").join(format!("{name}.csv")),
             csv::section_table(rows).as_bytes(),
         )?;
     }
     for (name, text) in &section_paths {
-        write_atomic(
+        write_staged(
             &out_dir.join("sections").join(format!("{name}_path.csv")),
             text.as_bytes(),
         )?;
@@ -1024,58 +1115,30 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Archive and VTK files.
     let t4 = Instant::now();
     let stage = progress.spinner("archive and VTK");
-    let mut rec = crate::output::record::RunRecord::from_model(scene, &loaded.mesh, model)?;
-    if scene.output.operators {
-        rec.set_operators(&prepared.systems, &prepared.condensed);
-        let final_status = final_status(model, &result);
-        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
-        // The paper's mixed interface operators of the final status (dense over every
-        // interface): archived for scenes of up to 3000 interface unknowns only.
-        if layout.n <= 3000 {
-            let (k, l) = crate::contact::interface::assemble_scaled(
-                &layout,
-                &prepared.condensed,
-                result.load_factor,
-            );
-            rec.contact_operators = Some(
-                crate::contact::interface::reduced_operators(&layout, &k, &l)
-                    .into_iter()
-                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
-                    .collect(),
-            );
-        }
+    if let Some(last) = rec.states.last_mut() {
+        last.interior = interior;
     }
-    let mut states: Vec<crate::output::record::StateRecord> = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full {
-        let recorded = result.states.len().saturating_sub(1);
-        for st in &result.states[..recorded] {
-            states.push(crate::output::record::StateRecord::new(
-                states.len(),
-                st.load_step,
-                st.load_factor,
-                st.fields.clone(),
-                st.interfaces.clone(),
-            ));
-        }
-    }
-    let mut last = crate::output::record::StateRecord::new(
-        states.len(),
-        scene.solve.load_factors.len() - 1,
-        result.load_factor,
-        result.fields.clone(),
-        result.interfaces.clone(),
-    );
-    last.interior = interior;
-    states.push(last);
-    rec.states = states;
-    rec.history = result.history.clone();
     rec.status = result.status.clone();
     rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
     rec.summary_json = text.clone();
-    crate::output::archive::write_archive(&out_dir.join("archive.h5"), &rec)?;
-    if scene.output.vtk {
-        crate::output::vtk::write_vtk(&out_dir.join("vtk"), &rec)?;
-    }
+    archive.send(ArchivePart::Finished {
+        interior: rec
+            .states
+            .last()
+            .map(|l| l.interior.clone())
+            .unwrap_or_default(),
+        status: rec.status.clone(),
+        timings: rec.timings.clone(),
+        summary_json: text.clone(),
+    });
+    // The VTK files (in parallel) while the archive's thread writes the final state.
+    let vtk = if scene.output.vtk {
+        crate::output::vtk::write_vtk_staged(&out_dir.join("vtk"), &rec).map(|_| ())
+    } else {
+        Ok(())
+    };
+    archive.finish()?;
+    vtk?;
     stage.finish();
     timings.add("write", t4.elapsed().as_secs_f64());
     // Dates and timings in their own file: summary.json stays byte-identical between runs.
@@ -1084,9 +1147,9 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "stages": timings.json(),
     }))
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
-    write_atomic(&out_dir.join("timings.json"), timing_text.as_bytes())?;
+    write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;
     // The summary last, then the whole folder swapped in.
-    write_atomic(&out_dir.join("summary.json"), text.as_bytes())?;
+    write_staged(&out_dir.join("summary.json"), text.as_bytes())?;
     let out_dir = folder.target().to_path_buf();
     folder.commit()?;
     if let Some(f) = result.failure {

@@ -224,6 +224,9 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     let cost = crate::estimate::estimate(model, scene);
     let unknowns: usize = cost.bodies.iter().map(|b| b.n_x + b.n_x0).sum();
     let _ = writeln!(o, "  cost:    {} ({unknowns} unknowns)", cost.line());
+    if let Some(line) = cost.contact_line() {
+        let _ = writeln!(o, "  cost:    {line}");
+    }
     if let Some((avail, source)) = crate::estimate::available_memory() {
         if cost.peak_bytes > avail {
             let _ = writeln!(

@@ -9,7 +9,7 @@ use std::path::{Path, PathBuf};
 
 use hdf5_metno as h5;
 use sgbem::input::scene::{Plane, Units};
-use sgbem::output::archive::{read_archive, write_archive, FORMAT};
+use sgbem::output::archive::{read_archive, write_archive, ArchivePart, ArchiveWriter, FORMAT};
 use sgbem::output::record::{
     Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord, RunRecord,
     StateRecord, FORMAT_VERSION,
@@ -376,6 +376,45 @@ fn large_datasets_are_chunked_and_compressed() {
     let back = read_archive(&path).unwrap();
     let op = back.bodies[0].operators.as_ref().unwrap();
     assert_eq!(op.a00, matrix(80, 80, 3));
+}
+
+#[test]
+fn an_archive_written_part_by_part_is_the_archive_written_at_once() {
+    // The run hands its archive over in three parts (model and operators, contact results,
+    // the end) to a writer thread; what it reads back must be what write_archive writes.
+    let dir = tmpdir("outputs-parts");
+    let rec = fabricated(80);
+    assert!(rec.states.len() > 1 && rec.states.last().is_some_and(|s| !s.interior.is_empty()));
+    write_archive(&dir.join("whole.h5"), &rec).expect("write");
+    let mut model = rec.clone();
+    (model.states, model.history, model.contact_operators) = (Vec::new(), Default::default(), None);
+    let writer = ArchiveWriter::start(&dir.join("parts.h5"), model);
+    let mut states = rec.states.clone();
+    let interior = std::mem::take(&mut states.last_mut().unwrap().interior);
+    writer.send(ArchivePart::Solved {
+        contact_operators: rec.contact_operators.clone(),
+        history: rec.history.clone(),
+        states,
+    });
+    writer.send(ArchivePart::Finished {
+        interior,
+        status: rec.status.clone(),
+        timings: rec.timings.clone(),
+        summary_json: rec.summary_json.clone(),
+    });
+    writer.finish().expect("finish");
+    let (whole, parts) = (
+        read_archive(&dir.join("whole.h5")).unwrap(),
+        read_archive(&dir.join("parts.h5")).unwrap(),
+    );
+    assert_eq!(format!("{parts:?}"), format!("{whole:?}"));
+    // A writer dropped before the end (a failed run) leaves no archive and no temporary.
+    let writer = ArchiveWriter::start(&dir.join("dropped.h5"), rec.clone());
+    drop(writer);
+    assert_eq!(
+        files(&dir).into_keys().collect::<Vec<_>>(),
+        ["parts.h5", "whole.h5"]
+    );
 }
 
 #[test]

@@ -722,21 +722,19 @@ fn field_at_triangle_nodes() {
     }
 }
 
-#[test]
-fn points_are_located_in_bodies() {
-    let set = QuadratureSettings::standard();
-    // A = [0,1]×[0,0.5], B = [0,1]×[0.5,1] with a hole [0.4,0.6]×[0.7,0.8]; different
-    // materials, each with the exact linear field of its own stiffness.
+/// A = [0,1]×[0,0.5] (E = 1, ν = 0.3) and B = [0,1]×[0.5,1] (E = 5, ν = 0.2) with a hole
+/// [0.4,0.6]×[0.7,0.8], n elements per side, with their materials.
+fn two_bodies(n: usize) -> (Body, Body, Material, Material) {
     let a = polygon_body(
         &[&[[0.0, 0.0], [1.0, 0.0], [1.0, 0.5], [0.0, 0.5]]],
-        4,
+        n,
         1.0,
         0.3,
     );
     let hole: [Vec2; 4] = [[0.4, 0.7], [0.4, 0.8], [0.6, 0.8], [0.6, 0.7]];
     let b = polygon_body(
         &[&[[0.0, 0.5], [1.0, 0.5], [1.0, 1.0], [0.0, 1.0]], &hole],
-        4,
+        n,
         5.0,
         0.2,
     );
@@ -744,6 +742,14 @@ fn points_are_located_in_bodies() {
         Material::new(1.0, 0.3, false),
         Material::new(5.0, 0.2, false),
     );
+    (a, b, ma, mb)
+}
+
+#[test]
+fn points_are_located_in_bodies() {
+    let set = QuadratureSettings::standard();
+    // Different materials, each with the exact linear field of its own stiffness.
+    let (a, b, ma, mb) = two_bodies(4);
     let (ua, sa) = linear(ma);
     let (ub, sb) = linear(mb);
     let (fa, fb) = (exact_field(&a, &ua, &sa), exact_field(&b, &ub, &sb));
@@ -802,6 +808,63 @@ fn points_are_located_in_bodies() {
     assert_eq!(bodies[0], Some(0));
     assert_eq!(bodies[17], Some(1));
     assert!(bodies.contains(&None));
+}
+
+#[test]
+fn a_point_sampler_gives_the_values_of_evaluate_points_for_every_state() {
+    // Two bodies with a hole; states with different fields and body forces; points inside,
+    // in the boundary layer (rays from elements and from corners), on boundaries, in the
+    // hole and outside. The sampler plans and integrates once; its values must be those of
+    // evaluate_points bit for bit, state after state.
+    let set = QuadratureSettings::standard();
+    let (a, b, ma, mb) = two_bodies(6);
+    let mut pts = section_points([0.5, -0.1], [0.5, 1.1], 31);
+    pts.extend(section_points([0.0, 0.01], [1.0, 0.49], 23));
+    pts.extend([
+        [0.002, 0.003],
+        [0.999, 0.25],
+        [0.41, 0.69],
+        [0.6, 0.75],
+        [1.0, 0.3],
+    ]);
+    let states: Vec<State> = (0..3)
+        .map(|k| {
+            let f = [1.0 + k as f64, 0.6 - 0.4 * k as f64];
+            let (ua, sa) = kelvin(ma, [0.5, -0.35 - 0.1 * k as f64], f);
+            let (ub, sb) = kelvin(mb, [1.3, 1.2], [-0.2, f[0]]);
+            let bf = (k == 2).then_some([0.0, -0.7]);
+            (exact_field(&a, &ua, &sa), exact_field(&b, &ub, &sb), bf)
+        })
+        .collect();
+    type State = (BodyField, BodyField, Option<Vec2>);
+    fn pair<'a>(a: &'a Body, b: &'a Body, m: [Material; 2], st: &'a State) -> [BodyInput<'a>; 2] {
+        let (fa, fb, bf) = st;
+        [
+            BodyInput {
+                body: a,
+                material: m[0],
+                field: fa,
+                body_force: *bf,
+            },
+            BodyInput {
+                body: b,
+                material: m[1],
+                field: fb,
+                body_force: *bf,
+            },
+        ]
+    }
+    let sampler = PointSampler::new(&pair(&a, &b, [ma, mb], &states[0]), &set, &pts);
+    let mut located = 0;
+    for st in &states {
+        let inputs = pair(&a, &b, [ma, mb], st);
+        let got = sampler.evaluate(&inputs);
+        let want = evaluate_points(&inputs, &set, &pts);
+        assert_eq!(got, want);
+        located = want.iter().flatten().count();
+    }
+    // Some points lie in the hole or outside, most in a body.
+    assert!(located > 40 && located < pts.len(), "{located}");
 }
 
 #[test]

@@ -799,3 +799,71 @@ fn an_extreme_stiffness_contrast_is_named() {
         "{err}"
     );
 }
+
+/// The estimate of the contact stage grows with refinement as its model says (src/estimate.rs):
+/// with n elements per side the joint has n + 1 unilateral pairs (stick: two rows each) and
+/// every pair is expected to switch once; the evolutive path and the cross-checks grow with
+/// the cube of the pairs, the glued system with the cube of the interface unknowns, and the
+/// recording with the states times Σ n·n_x0. `check` prints it; history = "final" records one
+/// state; bonded joints have no contact stage.
+#[test]
+fn the_contact_estimate_grows_with_refinement_as_its_model_says() {
+    use sgbem::estimate::{estimate, ContactEstimate};
+    let dir = tmpdir("rb-contact-estimate");
+    let close = |a: f64, b: f64| (a / b - 1.0).abs() < 1e-9;
+    let expand = |e: &sgbem::estimate::Estimate| -> f64 {
+        e.bodies
+            .iter()
+            .map(|b| ((b.n_x + b.n_x0) * b.n_x0) as f64)
+            .sum()
+    };
+    let mut last: Option<(ContactEstimate, f64)> = None;
+    for n in [4, 8, 16, 32] {
+        let (sc, msh) = stacked(&dir, STACKED_SCENE, n);
+        let l = sgbem::pipeline::load(&sc, Some(&msh)).unwrap_or_else(|e| panic!("{e}"));
+        let e = estimate(&l.model, &l.scene);
+        let c = e.contact.clone().expect("a unilateral interface");
+        let p = n + 1;
+        assert_eq!((c.pairs, c.rows, c.switches), (p, 2 * p, p));
+        // Both components of every pair node on both bodies.
+        assert_eq!(c.interface_unknowns, 4 * p);
+        if let Some((prev, prev_expand)) = &last {
+            let q = c.pairs as f64 / prev.pairs as f64;
+            assert!(close(c.path / prev.path, q.powi(3)), "{c:?} {prev:?}");
+            assert!(close(c.checks / prev.checks, q.powi(3)), "{c:?} {prev:?}");
+            let qu = c.interface_unknowns as f64 / prev.interface_unknowns as f64;
+            assert!(close(c.system / prev.system, qu.powi(3)), "{c:?} {prev:?}");
+            let states = (c.switches + 1) as f64 / (prev.switches + 1) as f64;
+            assert!(close(
+                c.record / prev.record,
+                states * expand(&e) / prev_expand
+            ));
+            // Σ n·n_x0 grows at least like the square of the refinement.
+            assert!(expand(&e) / prev_expand > 0.9 * q * q);
+            // Pairs 5, 9, 17, 33: every term grows by at least 1.8³ ≈ 5.8.
+            assert!(c.seconds() > 5.0 * prev.seconds() && c.bytes > prev.bytes);
+        }
+        last = Some((c, expand(&e)));
+    }
+    let (sc, msh) = stacked(&dir, STACKED_SCENE, 16);
+    let (code, text, err) = check(&sc, &msh);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        text.lines().any(|l| l.contains("cost:")
+            && l.contains("for the contact stage (17 unilateral pairs, 34 rows")),
+        "{text}"
+    );
+    let load = |scene: &str| {
+        let (sc, msh) = stacked(&dir, scene, 16);
+        let l = sgbem::pipeline::load(&sc, Some(&msh)).unwrap_or_else(|e| panic!("{e}"));
+        estimate(&l.model, &l.scene)
+    };
+    let full = load(STACKED_SCENE).contact.unwrap();
+    let final_only = load(&format!("{STACKED_SCENE}[output]\nhistory = \"final\"\n"))
+        .contact
+        .unwrap();
+    assert!(close(final_only.record * 18.0, full.record));
+    assert!(load(&STACKED_SCENE.replace("\"unilateral\"", "\"bonded\""))
+        .contact
+        .is_none());
+}

@@ -545,67 +545,65 @@ fn point_rule(
     point_rule(x, f, lf, (mid, eta1), depth + 1, settings, visit);
 }
 
-/// Displacement-identity integrals of element f at the field point x (x not on f).
+/// Displacement-identity integrals of element f at the field point x (x not on f): the
+/// first half of [`point_integrals`].
 pub fn point_displacement_integrals(
     m: &Material,
     x: Vec2,
     f: &Segment,
     settings: &QuadratureSettings,
 ) -> PointDisplacement {
-    let n = f.normal();
-    let lf = f.length();
-    // r = (x − P) − η(Q − P): the large coordinates cancel once, before the quadrature.
-    let xp = [x[0] - f.p[0], x[1] - f.p[1]];
-    let c = f.chord();
-    let mut out = PointDisplacement::default();
-    point_rule(x, f, lf, (0.0, 1.0), 0, settings, &mut |eta, w| {
-        let r = [xp[0] - eta * c[0], xp[1] - eta * c[1]];
-        let u = crate::bem::kernels::u_kernel(m, r);
-        let t = crate::bem::kernels::t_kernel(m, r, n);
-        let nb = [1.0 - eta, eta];
-        for b in 0..2 {
-            let wb = w * nb[b];
-            for i in 0..2 {
-                for k in 0..2 {
-                    out.single[b][i][k] += wb * u[i][k];
-                    out.double[b][i][k] += wb * t[i][k];
-                }
-            }
-        }
-    });
-    out
+    point_integrals(m, x, f, settings).0
 }
 
-/// Stress-identity integrals of element f at the field point x (x not on f).
+/// Stress-identity integrals of element f at the field point x (x not on f): the second
+/// half of [`point_integrals`].
 pub fn point_stress_integrals(
     m: &Material,
     x: Vec2,
     f: &Segment,
     settings: &QuadratureSettings,
 ) -> PointStress {
+    point_integrals(m, x, f, settings).1
+}
+
+/// Point–element integrals of both Somigliana identities of element f at the field point x
+/// (x not on f), from one pass of the adaptive rule with the four kernels evaluated together
+/// ([`crate::bem::kernels::point_kernels`]).
+pub fn point_integrals(
+    m: &Material,
+    x: Vec2,
+    f: &Segment,
+    settings: &QuadratureSettings,
+) -> (PointDisplacement, PointStress) {
     let n = f.normal();
     let lf = f.length();
+    // r = (x − P) − η(Q − P): the large coordinates cancel once, before the quadrature.
     let xp = [x[0] - f.p[0], x[1] - f.p[1]];
     let c = f.chord();
-    let mut out = PointStress::default();
+    let mut pd = PointDisplacement::default();
+    let mut ps = PointStress::default();
     point_rule(x, f, lf, (0.0, 1.0), 0, settings, &mut |eta, w| {
         let r = [xp[0] - eta * c[0], xp[1] - eta * c[1]];
-        let sg = crate::bem::kernels::sigma_kernel(m, r);
-        let s = crate::bem::kernels::s_kernel(m, r, n);
+        let (u, t, sg, s) = crate::bem::kernels::point_kernels(m, r, n);
         let nb = [1.0 - eta, eta];
         for b in 0..2 {
             let wb = w * nb[b];
             for i in 0..2 {
+                for k in 0..2 {
+                    pd.single[b][i][k] += wb * u[i][k];
+                    pd.double[b][i][k] += wb * t[i][k];
+                }
                 for j in 0..2 {
                     for k in 0..2 {
-                        out.single[b][i][j][k] += wb * sg[i][j][k];
-                        out.double[b][i][j][k] += wb * s[i][j][k];
+                        ps.single[b][i][j][k] += wb * sg[i][j][k];
+                        ps.double[b][i][j][k] += wb * s[i][j][k];
                     }
                 }
             }
         }
     });
-    out
+    (pd, ps)
 }
 
 /// Galerkin body-force loads of one test element e (formulation §4.1), per shape function a:

@@ -126,6 +126,11 @@ fn delta(i: usize, j: usize) -> f64 {
 #[inline]
 pub fn u_kernel(m: &Material, r: Vec2) -> Mat2 {
     let (len, e) = split(r);
+    u_kernel_split(m, len, e)
+}
+
+#[inline(always)]
+fn u_kernel_split(m: &Material, len: f64, e: Vec2) -> Mat2 {
     let c = m.c_u();
     let diag = -(3.0 - 4.0 * m.nu) * len.ln();
     let off = c * e[0] * e[1];
@@ -140,6 +145,11 @@ pub fn u_kernel(m: &Material, r: Vec2) -> Mat2 {
 #[inline]
 pub fn sigma_kernel(m: &Material, r: Vec2) -> Tensor3 {
     let (len, e) = split(r);
+    sigma_kernel_split(m, len, e)
+}
+
+#[inline(always)]
+fn sigma_kernel_split(m: &Material, len: f64, e: Vec2) -> Tensor3 {
     let c = -m.c_t() / len;
     let a = 1.0 - 2.0 * m.nu;
     let mut s = [[[0.0; 2]; 2]; 2];
@@ -179,6 +189,11 @@ pub fn tu_kernel(m: &Material, r: Vec2, n_x: Vec2) -> Mat2 {
 #[inline]
 pub fn t_kernel(m: &Material, r: Vec2, n_y: Vec2) -> Mat2 {
     let (len, e) = split(r);
+    t_kernel_split(m, len, e, n_y)
+}
+
+#[inline(always)]
+fn t_kernel_split(m: &Material, len: f64, e: Vec2, n_y: Vec2) -> Mat2 {
     let c = m.c_t() / len;
     let a = 1.0 - 2.0 * m.nu;
     let q = e[0] * n_y[0] + e[1] * n_y[1];
@@ -202,6 +217,11 @@ pub fn t_kernel(m: &Material, r: Vec2, n_y: Vec2) -> Mat2 {
 #[inline]
 pub fn s_kernel(m: &Material, r: Vec2, n_y: Vec2) -> Tensor3 {
     let (len, e) = split(r);
+    s_kernel_split(m, len, e, n_y)
+}
+
+#[inline(always)]
+fn s_kernel_split(m: &Material, len: f64, e: Vec2, n_y: Vec2) -> Tensor3 {
     let c = m.c_s() / (len * len);
     let nu = m.nu;
     let a = 1.0 - 2.0 * nu;
@@ -226,6 +246,21 @@ pub fn s_kernel(m: &Material, r: Vec2, n_y: Vec2) -> Tensor3 {
         }
     }
     s
+}
+
+/// The four kernels of the Somigliana identities at one pair of points, `(U, T, Σ, S)` with
+/// the normal `n_y` at the cause point: the values of [`u_kernel`], [`t_kernel`],
+/// [`sigma_kernel`] and [`s_kernel`] bit for bit, with `|r|` and `r̂` computed once (the
+/// post-processing evaluates all four at every quadrature point).
+#[inline]
+pub fn point_kernels(m: &Material, r: Vec2, n_y: Vec2) -> (Mat2, Mat2, Tensor3, Tensor3) {
+    let (len, e) = split(r);
+    (
+        u_kernel_split(m, len, e),
+        t_kernel_split(m, len, e, n_y),
+        sigma_kernel_split(m, len, e),
+        s_kernel_split(m, len, e, n_y),
+    )
 }
 
 /// Regularised hypersingular kernel `B = c_S(−ln r I + r̂r̂ᵀ)`: the Galerkin hypersingular
@@ -488,4 +523,28 @@ pub fn body_force_gradient(m: &Material, x: Vec2, boundary: &[Segment], b: Vec2)
 /// Body-force stress `σ^b = ∫_Ω Σ b dΩ = Hooke(∇u^b)`.
 pub fn body_force_stress(m: &Material, x: Vec2, boundary: &[Segment], b: Vec2) -> Mat2 {
     m.stress_from_gradient(body_force_gradient(m, x, boundary, b))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn point_kernels_are_the_four_kernels_bit_for_bit() {
+        let m = Material::new(210.0, 0.3, true);
+        let n = [0.6, -0.8];
+        for r in [
+            [1.0, 0.0],
+            [0.3, -2.0],
+            [-1e-7, 3e-8],
+            [123.0, 45.6],
+            [0.0, -0.5],
+        ] {
+            let (u, t, sg, s) = point_kernels(&m, r, n);
+            assert_eq!(u, u_kernel(&m, r));
+            assert_eq!(t, t_kernel(&m, r, n));
+            assert_eq!(sg, sigma_kernel(&m, r));
+            assert_eq!(s, s_kernel(&m, r, n));
+        }
+    }
 }

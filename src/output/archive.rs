@@ -40,8 +40,8 @@
 //! Every dataset carries `description` and `units` attributes. Datasets of 4096 values or
 //! more are chunked and compressed (shuffle + deflate) when the HDF5 library has deflate.
 //!
-//! The file is written under a temporary name in the same folder and renamed when
-//! complete: an interrupted run never leaves a file named `archive.h5` that looks finished.
+//! The file is written under a temporary name in the same folder (synced, unless it is in a
+//! run's staging folder, which is synced when committed) and renamed when complete: an interrupted run never leaves a file named `archive.h5` that looks finished.
 //! HDF5 file locking is off for both writing and reading: the temporary name is private to
 //! the writer, and the library opens files without close-on-exec, so a child process
 //! started meanwhile (by another thread) would otherwise keep the lock after the rename.
@@ -71,14 +71,29 @@ const CHUNK_VALUES: usize = 65_536;
 
 type R<T> = std::result::Result<T, String>;
 
-/// Writes the archive of `rec` to `path` atomically.
+/// Writes the archive of `rec` to `path` atomically and durably (synced before the rename).
 pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
+    write_archive_with(path, rec, true)
+}
+
+/// [`write_archive`] into a run's staging folder: not synced (the folder's commit syncs it).
+pub fn write_archive_staged(path: &Path, rec: &RunRecord) -> Result<()> {
+    write_archive_with(path, rec, false)
+}
+
+fn write_archive_with(path: &Path, rec: &RunRecord, durable: bool) -> Result<()> {
     rec.validate().map_err(|m| {
         Error::io(
             path,
             format!("cannot write the archive: the run record is inconsistent: {m}"),
         )
     })?;
+    write_file(path, durable, |file| write_all(file, rec))
+}
+
+/// Creates the archive under a temporary name beside `path`, lets `write` fill it, closes it,
+/// syncs it when `durable`, and renames it into place; on failure removes it.
+fn write_file(path: &Path, durable: bool, write: impl FnOnce(&h5::File) -> R<()>) -> Result<()> {
     let dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d.to_path_buf(),
         _ => std::path::PathBuf::from("."),
@@ -95,12 +110,14 @@ pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
             .with_fapl(|p| p.file_locking(false))
             .create(&tmp)
             .map_err(|e| e.to_string())?;
-        write_all(&file, rec)?;
+        write(&file)?;
         file.close().map_err(|e| e.to_string())?;
         // Make the content durable before the rename makes it visible.
-        std::fs::File::open(&tmp)
-            .and_then(|f| f.sync_all())
-            .map_err(|e| e.to_string())?;
+        if durable {
+            std::fs::File::open(&tmp)
+                .and_then(|f| f.sync_all())
+                .map_err(|e| e.to_string())?;
+        }
         std::fs::rename(&tmp, path).map_err(|e| e.to_string())
     })();
     written.map_err(|m| {
@@ -110,6 +127,125 @@ pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
             format!("cannot write the archive: {m}; check that the folder is writable and the disk not full"),
         )
     })
+}
+
+/// What an [`ArchiveWriter`] is handed after the model: the contact results, then the end.
+pub enum ArchivePart {
+    /// The results of the contact stage: the interface operators of the final status, the
+    /// history and every state, the last one without its interior field.
+    Solved {
+        contact_operators: Option<Vec<(String, Array)>>,
+        history: History,
+        states: Vec<StateRecord>,
+    },
+    /// The end of the run: the interior field of the final state, the status, the timings
+    /// and the text of summary.json.
+    Finished {
+        interior: Vec<InteriorRecord>,
+        status: String,
+        timings: Vec<(String, f64)>,
+        summary_json: String,
+    },
+}
+
+impl ArchivePart {
+    /// Puts the part into the record.
+    fn apply(self, rec: &mut RunRecord) {
+        match self {
+            ArchivePart::Solved {
+                contact_operators,
+                history,
+                states,
+            } => {
+                rec.contact_operators = contact_operators;
+                rec.history = history;
+                rec.states = states;
+            }
+            ArchivePart::Finished {
+                interior,
+                status,
+                timings,
+                summary_json,
+            } => {
+                if let Some(last) = rec.states.last_mut() {
+                    last.interior = interior;
+                }
+                rec.status = status;
+                rec.timings = timings;
+                rec.summary_json = summary_json;
+            }
+        }
+    }
+}
+
+/// An archive written part by part on a thread of its own while the run goes on (the
+/// HDF5 library is serial, and compressing the operators is the largest single piece of
+/// writing): the model and the body operators during the contact stage, the contact results
+/// during post-processing, the final state beside the VTK files. The file is the one
+/// [`write_archive`] writes for the whole record; it is renamed into place (not synced: a
+/// run's staging folder is synced when committed) only when [`ArchiveWriter::finish`] has
+/// been handed both parts. Dropped before, the writer removes its temporary file.
+pub struct ArchiveWriter {
+    parts: Option<std::sync::mpsc::Sender<ArchivePart>>,
+    worker: Option<std::thread::JoinHandle<Result<()>>>,
+}
+
+impl ArchiveWriter {
+    /// Starts writing `model` (root attributes, mesh, bodies with their operators,
+    /// interfaces; its states, history and contact operators are ignored) into `path`.
+    pub fn start(path: &Path, model: RunRecord) -> ArchiveWriter {
+        let (tx, rx) = std::sync::mpsc::channel::<ArchivePart>();
+        let path = path.to_path_buf();
+        let worker = std::thread::spawn(move || {
+            let mut rec = model;
+            write_file(&path, false, |file| {
+                let inconsistent = |m: String| format!("the run record is inconsistent: {m}");
+                rec.validate().map_err(inconsistent)?;
+                write_model(file, &rec)?;
+                let parts: [fn(&h5::File, &RunRecord) -> R<()>; 2] = [write_solved, write_finished];
+                for write in parts {
+                    let part = rx
+                        .recv()
+                        .map_err(|_| "the run ended before its results".to_string())?;
+                    part.apply(&mut rec);
+                    rec.validate().map_err(inconsistent)?;
+                    write(file, &rec)?;
+                }
+                Ok(())
+            })
+        });
+        ArchiveWriter {
+            parts: Some(tx),
+            worker: Some(worker),
+        }
+    }
+
+    /// Hands over the next part (a writer that has already failed ignores it; its error
+    /// comes from [`ArchiveWriter::finish`]).
+    pub fn send(&self, part: ArchivePart) {
+        if let Some(tx) = &self.parts {
+            let _ = tx.send(part);
+        }
+    }
+
+    /// Waits until the archive is complete and in place.
+    pub fn finish(mut self) -> Result<()> {
+        self.parts = None;
+        match self.worker.take().map(|w| w.join()) {
+            Some(Ok(result)) => result,
+            Some(Err(panic)) => std::panic::resume_unwind(panic),
+            None => Ok(()),
+        }
+    }
+}
+
+impl Drop for ArchiveWriter {
+    fn drop(&mut self) {
+        self.parts = None;
+        if let Some(w) = self.worker.take() {
+            let _ = w.join();
+        }
+    }
 }
 
 /// Reads an archive written by [`write_archive`].
@@ -327,6 +463,14 @@ fn status_code(s: PairStatus) -> i8 {
 }
 
 fn write_all(file: &h5::File, rec: &RunRecord) -> R<()> {
+    write_model(file, rec)?;
+    write_solved(file, rec)?;
+    write_finished(file, rec)
+}
+
+/// The root attributes known before solving, the mesh, the bodies (with their operators) and
+/// the interfaces.
+fn write_model(file: &h5::File, rec: &RunRecord) -> R<()> {
     let u = U::new(&rec.units);
     let root: &Group = file;
     put_attr_str(root, "format", FORMAT)?;
@@ -341,8 +485,6 @@ fn write_all(file: &h5::File, rec: &RunRecord) -> R<()> {
     put_attr_str(root, "title", &rec.title)?;
     put_attr_str(root, "plane", plane_name(rec.plane))?;
     put_attr(root, "thickness", rec.thickness)?;
-    put_attr_str(root, "status", &rec.status)?;
-    put_attr_str(root, "summary", &rec.summary_json)?;
 
     write_mesh(&group(root, "mesh")?, &rec.mesh, &u)?;
 
@@ -359,7 +501,13 @@ fn write_all(file: &h5::File, rec: &RunRecord) -> R<()> {
     for (i, (it, gname)) in rec.interfaces.iter().zip(&inames).enumerate() {
         write_interface(&group(&ifaces, gname)?, i, it, rec, &u)?;
     }
+    Ok(())
+}
 
+/// The contact operators, the history and every state but the last.
+fn write_solved(file: &h5::File, rec: &RunRecord) -> R<()> {
+    let u = U::new(&rec.units);
+    let root: &Group = file;
     if let Some(ops) = &rec.contact_operators {
         let g = group(&group(root, "contact")?, "operators")?;
         let names: Vec<String> = ops.iter().map(|(n, _)| group_name(n)).collect();
@@ -379,13 +527,24 @@ fn write_all(file: &h5::File, rec: &RunRecord) -> R<()> {
 
     let states = group(root, "states")?;
     put_attr(&states, "count", rec.states.len() as i64)?;
-    let mut last = None;
-    for (k, st) in rec.states.iter().enumerate() {
-        let name = format!("{k:04}");
-        write_state(&group(&states, &name)?, st, rec, &u)?;
-        last = Some(name);
+    let before_last = rec.states.len().saturating_sub(1);
+    for (k, st) in rec.states[..before_last].iter().enumerate() {
+        write_state(&group(&states, &format!("{k:04}"))?, st, rec, &u)?;
     }
-    if let Some(name) = last {
+    Ok(())
+}
+
+/// The last state (with its interior field) and its link `/solution`, the timings, and the
+/// root attributes known at the end (status, summary).
+fn write_finished(file: &h5::File, rec: &RunRecord) -> R<()> {
+    let u = U::new(&rec.units);
+    let root: &Group = file;
+    put_attr_str(root, "status", &rec.status)?;
+    put_attr_str(root, "summary", &rec.summary_json)?;
+    if let Some(st) = rec.states.last() {
+        let states = ctx(root.group("states"), || "group /states".into())?;
+        let name = format!("{:04}", rec.states.len() - 1);
+        write_state(&group(&states, &name)?, st, rec, &u)?;
         ctx(
             root.link_hard(&format!("/states/{name}"), "solution"),
             || "link /solution".into(),

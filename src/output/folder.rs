@@ -1,7 +1,7 @@
 //! The run folder: always exactly one whole run.
 //!
 //! A run writes into a staging folder beside the target (`.NAME.staging-PID`) and, when
-//! every file is complete, swaps it in place of the target (the old folder is renamed
+//! every file is complete, syncs it once (all files at a time) and swaps it in place of the target (the old folder is renamed
 //! aside, then removed), so an interrupted run leaves the previous folder untouched and a
 //! re-run leaves no stale file of an older one. An existing folder holding anything a run
 //! does not write is refused (input error), never replaced. A lock file beside the target
@@ -224,8 +224,16 @@ impl RunFolder {
         &self.target
     }
 
-    /// Swaps the complete staging folder in place of the target.
+    /// Syncs the complete staging folder (every file and folder, many at a time:
+    /// [`super::sync_tree`]) and swaps it in place of the target, then syncs the parent
+    /// folder so that the swap itself is durable.
     pub fn commit(mut self) -> Result<()> {
+        super::sync_tree(&self.staging).map_err(|(p, e)| {
+            Error::io(
+                &p,
+                format!("cannot write the run to the device: {e}; check the disk"),
+            )
+        })?;
         let old = beside(&self.target, &format!("old-{}", std::process::id()));
         let had_old = self.target.exists();
         if had_old {
@@ -247,6 +255,16 @@ impl RunFolder {
             ));
         }
         self.committed = true;
+        // The new folder is in place; syncing its parent makes the rename durable. A failure
+        // here leaves a complete run whose swap a crash might undo: not worth an error.
+        if let Some(parent) = self.target.parent() {
+            let parent = if parent.as_os_str().is_empty() {
+                Path::new(".")
+            } else {
+                parent
+            };
+            let _ = super::sync_paths(&[parent.to_path_buf()]);
+        }
         if had_old {
             remove_path(&old);
         }

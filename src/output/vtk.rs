@@ -41,7 +41,7 @@ use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
 use super::record::RunRecord;
-use super::write_atomic;
+use super::write_files;
 use crate::error::{Error, Result};
 use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
 use crate::solution::PairStatus;
@@ -75,9 +75,26 @@ pub fn state_times(rec: &RunRecord) -> Vec<f64> {
     times
 }
 
-/// Writes every VTK file of `rec` into `dir` (created if needed); returns the paths written,
-/// `history.pvd` last.
+/// Writes every VTK file of `rec` into `dir` (created if needed), synced before they are
+/// renamed into place; returns the paths written, `history.pvd` last.
 pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
+    write_vtk_with(dir, rec, true)
+}
+
+/// [`write_vtk`] into a run's staging folder: not synced (the folder's commit syncs it).
+pub fn write_vtk_staged(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
+    write_vtk_with(dir, rec, false)
+}
+
+/// One file of [`write_vtk`].
+#[derive(Clone, Copy)]
+enum File {
+    Boundary(usize),
+    Field(usize),
+    Pvd,
+}
+
+fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<PathBuf>> {
     rec.validate().map_err(|m| {
         Error::io(
             dir,
@@ -85,23 +102,40 @@ pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
         )
     })?;
     let times = state_times(rec);
-    let mut written = Vec::new();
+    let mut files = Vec::new();
     let mut field_of = Vec::with_capacity(rec.states.len());
     for (k, st) in rec.states.iter().enumerate() {
-        let meta = |rec: &RunRecord| state_meta(rec, k, times[k]);
-        let path = dir.join(boundary_name(k));
-        write_atomic(&path, &grid_xml(&boundary_grid(rec, k), &meta(rec)))?;
-        written.push(path);
+        files.push(File::Boundary(k));
         if !st.interior.is_empty() {
-            let path = dir.join(field_name(k));
-            write_atomic(&path, &grid_xml(&field_grid(rec, k), &meta(rec)))?;
-            written.push(path);
+            files.push(File::Field(k));
             field_of.push(Some(k));
         } else {
             field_of.push(None);
         }
     }
-    // The field part at each time: the latest field at or before it, else the first one.
+    files.push(File::Pvd);
+    let paths: Vec<PathBuf> = files
+        .iter()
+        .map(|f| match *f {
+            File::Boundary(k) => dir.join(boundary_name(k)),
+            File::Field(k) => dir.join(field_name(k)),
+            File::Pvd => dir.join("history.pvd"),
+        })
+        .collect();
+    // The files are made and written in parallel; history.pvd is renamed into place last.
+    write_files(&paths, durable, |i| {
+        Ok(match files[i] {
+            File::Boundary(k) => grid_xml(&boundary_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::Field(k) => grid_xml(&field_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::Pvd => pvd(&times, &field_of).into_bytes(),
+        })
+    })?;
+    Ok(paths)
+}
+
+/// `history.pvd`: at each time the boundary file of the state and the latest field at or
+/// before it, else the first one.
+fn pvd(times: &[f64], field_of: &[Option<usize>]) -> String {
     let first_field = field_of.iter().flatten().next().copied();
     let mut pvd = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
@@ -126,10 +160,7 @@ pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
         }
     }
     pvd.push_str("  </Collection>\n</VTKFile>\n");
-    let path = dir.join("history.pvd");
-    write_atomic(&path, pvd.as_bytes())?;
-    written.push(path);
-    Ok(written)
+    pvd
 }
 
 /// `sgbem export`: reads an archive and writes its VTK files into `dir`.

@@ -47,7 +47,7 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 
 use crate::bem::assembly::scaling;
-use crate::bem::galerkin::{point_displacement_integrals, point_stress_integrals, Segment};
+use crate::bem::galerkin::{point_integrals, PointDisplacement, PointStress, Segment};
 use crate::bem::kernels::{body_force_fields, boundary_area, Mat2, Material, Vec2};
 use crate::bem::quadrature::QuadratureSettings;
 use crate::input::model::Body;
@@ -373,34 +373,68 @@ fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> [f64; 3] {
 // ---------------------------------------------------------------------------------------
 // Interior points.
 
-/// One body prepared for point evaluation: scaled geometry and recovered boundary stresses,
-/// computed once and shared by all points.
-struct Prepared<'a> {
+/// One body prepared for point evaluation, apart from any boundary solution: scaled
+/// geometry, computed once and shared by all points and all states.
+struct Geometry<'a> {
     body: &'a Body,
     material: Material,
-    field: &'a BodyField,
-    body_force: Option<Vec2>,
     centre: Vec2,
     length: f64,
     /// Physical segments (for distances) and scaled segments (for the integrals).
     segments: Vec<Segment>,
     scaled: Vec<Segment>,
     scaled_area: f64,
-    /// [`smoothed_boundary_stress`] and [`nodal_boundary_stress`].
-    ends: Vec<[Mat2; 2]>,
-    nodal: Vec<Mat2>,
     /// For corner nodes, the shorter length of the two elements meeting there.
     corner_layer: Vec<Option<f64>>,
 }
 
-impl<'a> Prepared<'a> {
-    fn new(
-        body: &'a Body,
-        material: &Material,
-        field: &'a BodyField,
-        (centre, length): (Vec2, f64),
-        body_force: Option<Vec2>,
-    ) -> Self {
+/// The boundary solution of one state on a [`Geometry`]: the field, the body force (times
+/// the load factor) and the recovered boundary stresses.
+struct Values<'a> {
+    field: &'a BodyField,
+    body_force: Option<Vec2>,
+    /// [`smoothed_boundary_stress`] and [`nodal_boundary_stress`].
+    ends: Vec<[Mat2; 2]>,
+    nodal: Vec<Mat2>,
+}
+
+/// A geometry with the values of one state.
+struct Prepared<'a> {
+    geometry: Geometry<'a>,
+    values: Values<'a>,
+}
+
+/// Where a boundary-layer ray starts ([`interior`]).
+#[derive(Debug, Clone, Copy)]
+enum Base {
+    /// The point at parameter ξ of an element.
+    Element(usize, f64),
+    /// A corner node.
+    Node(usize),
+}
+
+/// How [`interior`] obtains the value at a point: decided by the geometry alone, so that
+/// one plan serves every state of a run.
+#[derive(Debug, Clone, Copy)]
+enum Plan {
+    /// The boundary value at parameter ξ of an element.
+    Boundary(usize, f64),
+    /// The Somigliana identities at the point.
+    Identities(Vec2),
+    /// Linear interpolation with weight `w` between the boundary value at `base` and the
+    /// identities at `far`.
+    Ray { base: Base, w: f64, far: Vec2 },
+}
+
+/// The kernel integrals of the identities at one point (scaled coordinates `xs`), per
+/// element: they depend on the geometry alone.
+struct Integrals {
+    xs: Vec2,
+    per_element: Vec<(PointDisplacement, PointStress)>,
+}
+
+impl<'a> Geometry<'a> {
+    fn new(body: &'a Body, material: &Material, (centre, length): (Vec2, f64)) -> Self {
         assert!(
             length > 0.0,
             "body \"{}\" has a degenerate scaling length {length}",
@@ -415,18 +449,14 @@ impl<'a> Prepared<'a> {
             .map(|s| Segment::new(sc(s.p), sc(s.q)))
             .collect();
         let scaled_area = boundary_area(&scaled);
-        Prepared {
+        Geometry {
             body,
             material: *material,
-            field,
-            body_force: body_force.filter(|b| *b != [0.0, 0.0]),
             centre,
             length,
             segments,
             scaled,
             scaled_area,
-            ends: smoothed_boundary_stress(body, material, field),
-            nodal: nodal_boundary_stress(body, material, field),
             corner_layer: node_kinds(body)
                 .into_iter()
                 .map(|k| match k {
@@ -439,20 +469,53 @@ impl<'a> Prepared<'a> {
         }
     }
 
-    /// The Somigliana identities at x (no near-boundary switch).
-    fn somigliana(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+    /// The values of a boundary solution on this geometry.
+    fn values<'f>(&self, field: &'f BodyField, body_force: Option<Vec2>) -> Values<'f> {
+        let (body, material) = (self.body, &self.material);
+        Values {
+            field,
+            body_force: body_force.filter(|b| *b != [0.0, 0.0]),
+            ends: smoothed_boundary_stress(body, material, field),
+            nodal: nodal_boundary_stress(body, material, field),
+        }
+    }
+
+    /// `x` in the scaled coordinates of the integrals.
+    fn scaled_point(&self, x: Vec2) -> Vec2 {
+        let l = self.length;
+        [(x[0] - self.centre[0]) / l, (x[1] - self.centre[1]) / l]
+    }
+
+    /// The kernel integrals of every element at x (see [`Integrals`]).
+    fn integrals(&self, settings: &QuadratureSettings, x: Vec2) -> Integrals {
+        let xs = self.scaled_point(x);
+        Integrals {
+            xs,
+            per_element: self
+                .scaled
+                .iter()
+                .map(|seg| point_integrals(&self.material, xs, seg, settings))
+                .collect(),
+        }
+    }
+
+    /// The Somigliana identities at the scaled point `xs` from the kernel integrals of the
+    /// elements in order, with the boundary data of `v` (no near-boundary switch).
+    fn identities(
+        &self,
+        v: &Values,
+        xs: Vec2,
+        integrals: impl Iterator<Item = (PointDisplacement, PointStress)>,
+    ) -> (Vec2, Mat2) {
         let m = &self.material;
         let l = self.length;
-        let xs = [(x[0] - self.centre[0]) / l, (x[1] - self.centre[1]) / l];
         let (mut u_single, mut u_double) = ([0.0; 2], [0.0; 2]);
         let (mut s_single, mut s_double) = ([[0.0; 2]; 2], [[0.0; 2]; 2]);
-        for (ei, seg) in self.scaled.iter().enumerate() {
-            let pd = point_displacement_integrals(m, xs, seg, settings);
-            let ps = point_stress_integrals(m, xs, seg, settings);
+        for (ei, (pd, ps)) in integrals.enumerate() {
             let nodes = self.body.elements[ei].nodes;
             for b in 0..2 {
-                let ub = self.field.u[nodes[b]];
-                let tb = self.field.t[ei][b];
+                let ub = v.field.u[nodes[b]];
+                let tb = v.field.t[ei][b];
                 for i in 0..2 {
                     for k in 0..2 {
                         u_single[i] += pd.single[b][i][k] * tb[k];
@@ -473,7 +536,7 @@ impl<'a> Prepared<'a> {
                 s[i][j] = s_single[i][j] - s_double[i][j] / l;
             }
         }
-        if let Some(b) = self.body_force {
+        if let Some(b) = v.body_force {
             let (ub, g) = body_force_fields(m, xs, &self.scaled, b, self.scaled_area);
             let sb = m.stress_from_gradient(g);
             for i in 0..2 {
@@ -484,6 +547,17 @@ impl<'a> Prepared<'a> {
             }
         }
         (u, s)
+    }
+
+    /// The Somigliana identities at x, integrating as it goes.
+    fn somigliana(&self, v: &Values, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+        let xs = self.scaled_point(x);
+        let m = &self.material;
+        let integrals = self
+            .scaled
+            .iter()
+            .map(|seg| point_integrals(m, xs, seg, settings));
+        self.identities(v, xs, integrals)
     }
 
     /// Nearest element to x: (element, distance, parameter ξ).
@@ -500,45 +574,44 @@ impl<'a> Prepared<'a> {
 
     /// Boundary values at parameter ξ of element `ei`: linear displacement, smoothed
     /// recovered stress interpolated between the element ends.
-    fn boundary_value(&self, ei: usize, xi: f64) -> (Vec2, Mat2) {
+    fn boundary_value(&self, v: &Values, ei: usize, xi: f64) -> (Vec2, Mat2) {
         let nodes = self.body.elements[ei].nodes;
-        let u = lerp2(self.field.u[nodes[0]], self.field.u[nodes[1]], xi);
+        let u = lerp2(v.field.u[nodes[0]], v.field.u[nodes[1]], xi);
         // At a node the two elements meeting there are equally near: take the node's own
         // value, so that the result does not depend on which element was found first.
         let s = if xi <= 1e-12 {
-            self.nodal[nodes[0]]
+            v.nodal[nodes[0]]
         } else if xi >= 1.0 - 1e-12 {
-            self.nodal[nodes[1]]
+            v.nodal[nodes[1]]
         } else {
-            lerp_mat(&self.ends[ei][0], &self.ends[ei][1], xi)
+            lerp_mat(&v.ends[ei][0], &v.ends[ei][1], xi)
         };
         (u, s)
     }
 
-    /// See [`interior`].
-    fn interior(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+    /// How [`interior`] evaluates x (see there).
+    fn plan(&self, x: Vec2) -> Plan {
         let (ei, d, xi) = self.nearest(x);
         let le = self.body.elements[ei].length;
         let layer = BOUNDARY_LAYER;
         let rho = layer * le;
         if d >= rho {
-            return self.somigliana(settings, x);
+            return Plan::Identities(x);
         }
         if d == 0.0 {
-            return self.boundary_value(ei, xi);
+            return Plan::Boundary(ei, xi);
         }
-        // Rays from the boundary through x: (value at the base point, distance r of x from
-        // it, layer thickness ρ, base point). The far point of a ray is at distance ρ.
+        // Rays from the boundary through x: (base, distance r of x from it, layer
+        // thickness ρ, base point). The far point of a ray is at distance ρ.
         let foot = self.segments[ei].point(xi);
-        let mut rays = vec![(self.boundary_value(ei, xi), d, rho, foot)];
+        let mut rays = vec![(Base::Element(ei, xi), d, rho, foot)];
         for a in 0..2 {
             let node = self.body.elements[ei].nodes[a];
             if let Some(rho_v) = self.corner_layer[node] {
                 let v = self.body.nodes[node];
                 let r = (x[0] - v[0]).hypot(x[1] - v[1]);
                 if r < layer * rho_v && r > 0.0 {
-                    let base = (self.field.u[node], self.nodal[node]);
-                    rays.push((base, r, layer * rho_v, v));
+                    rays.push((Base::Node(node), r, layer * rho_v, v));
                 }
             }
         }
@@ -555,18 +628,47 @@ impl<'a> Prepared<'a> {
         }
         if let Some((c, k, x1)) = best {
             if c > d {
-                let ((u0, s0), r, rho_k, _) = rays[k];
-                let w = r / rho_k;
-                let (u1, s1) = self.somigliana(settings, x1);
-                return (lerp2(u0, u1, w), lerp_mat(&s0, &s1, w));
+                let (base, r, rho_k, _) = rays[k];
+                return Plan::Ray {
+                    base,
+                    w: r / rho_k,
+                    far: x1,
+                };
             }
         }
         let snap = (NEAR_BOUNDARY_FRACTION * le).max(ON_BOUNDARY_TOLERANCE * self.length);
         if d < snap {
-            self.boundary_value(ei, xi)
+            Plan::Boundary(ei, xi)
         } else {
-            self.somigliana(settings, x)
+            Plan::Identities(x)
         }
+    }
+
+    /// The value of a plan for the state `v`; `identities` evaluates the Somigliana
+    /// identities at a point of the plan.
+    fn value(
+        &self,
+        v: &Values,
+        plan: Plan,
+        identities: impl FnOnce(Vec2) -> (Vec2, Mat2),
+    ) -> (Vec2, Mat2) {
+        match plan {
+            Plan::Boundary(ei, xi) => self.boundary_value(v, ei, xi),
+            Plan::Identities(x) => identities(x),
+            Plan::Ray { base, w, far } => {
+                let (u0, s0) = match base {
+                    Base::Element(ei, xi) => self.boundary_value(v, ei, xi),
+                    Base::Node(node) => (v.field.u[node], v.nodal[node]),
+                };
+                let (u1, s1) = identities(far);
+                (lerp2(u0, u1, w), lerp_mat(&s0, &s1, w))
+            }
+        }
+    }
+
+    /// [`contains`] for this body.
+    fn contains(&self, x: Vec2) -> bool {
+        contains(self.body, (self.centre, self.length), x)
     }
 
     /// Distance from x to the boundary if x is inside the body, else 0.
@@ -578,6 +680,31 @@ impl<'a> Prepared<'a> {
             .iter()
             .map(|seg| seg.distance_to_point(x))
             .fold(f64::INFINITY, f64::min)
+    }
+}
+
+impl<'a> Prepared<'a> {
+    fn new(
+        body: &'a Body,
+        material: &Material,
+        field: &'a BodyField,
+        scaling: (Vec2, f64),
+        body_force: Option<Vec2>,
+    ) -> Self {
+        let geometry = Geometry::new(body, material, scaling);
+        let values = geometry.values(field, body_force);
+        Prepared { geometry, values }
+    }
+
+    /// The Somigliana identities at x (no near-boundary switch).
+    fn somigliana(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+        self.geometry.somigliana(&self.values, settings, x)
+    }
+
+    /// See [`interior`].
+    fn interior(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
+        let (g, v) = (&self.geometry, &self.values);
+        g.value(v, g.plan(x), |y| g.somigliana(v, settings, y))
     }
 }
 
@@ -708,13 +835,120 @@ pub fn evaluate_points(
     points
         .par_iter()
         .map(|&x| {
-            let bi = prepared
-                .iter()
-                .position(|p| contains(p.body, (p.centre, p.length), x))?;
+            let bi = prepared.iter().position(|p| p.geometry.contains(x))?;
             let (u, sigma) = prepared[bi].interior(settings, x);
             Some(PointValue { body: bi, u, sigma })
         })
         .collect()
+}
+
+/// Memory that the cached kernel integrals of one [`PointSampler`] may take: 256 MB (about
+/// 700 000 point–element pairs). Points beyond it are integrated again for every state:
+/// the same values, in more time.
+pub const SAMPLER_CACHE_BYTES: usize = 256 << 20;
+
+/// Fixed points evaluated for many states of the same bodies, e.g. a section at every
+/// contact iteration.
+///
+/// Which body holds a point, how [`interior`] obtains its value (boundary value, identities,
+/// or a ray between them) and the kernel integrals of its identities depend on the geometry
+/// alone: they are computed once, here, and each state then costs one pass over the cached
+/// integrals with its boundary data. The values are those of [`evaluate_points`] bit for
+/// bit (the same products summed in the same order).
+pub struct PointSampler<'a> {
+    geometries: Vec<Geometry<'a>>,
+    settings: QuadratureSettings,
+    /// Per point: the body holding it, its plan and the slot of its cached integrals
+    /// (`None`: over [`SAMPLER_CACHE_BYTES`], or no identities needed); `None` outside.
+    points: Vec<Option<(usize, Plan, Option<usize>)>>,
+    cached: Vec<Integrals>,
+}
+
+impl<'a> PointSampler<'a> {
+    /// Locates and plans `points` in the bodies of `bodies` (their fields are not used) and
+    /// integrates the kernels at each identities point, in parallel.
+    pub fn new(bodies: &[BodyInput<'a>], settings: &QuadratureSettings, points: &[Vec2]) -> Self {
+        let geometries: Vec<Geometry> = bodies
+            .iter()
+            .map(|b| Geometry::new(b.body, &b.material, scaling(b.body)))
+            .collect();
+        let located: Vec<Option<(usize, Plan)>> = points
+            .par_iter()
+            .map(|&x| {
+                let bi = geometries.iter().position(|g| g.contains(x))?;
+                Some((bi, geometries[bi].plan(x)))
+            })
+            .collect();
+        let pair = std::mem::size_of::<(PointDisplacement, PointStress)>();
+        let mut budget = SAMPLER_CACHE_BYTES;
+        let mut todo: Vec<(usize, Vec2)> = Vec::new();
+        let points = located
+            .into_iter()
+            .map(|p| {
+                p.map(|(bi, plan)| {
+                    let y = match plan {
+                        Plan::Identities(x) => Some(x),
+                        Plan::Ray { far, .. } => Some(far),
+                        Plan::Boundary(..) => None,
+                    };
+                    let bytes = geometries[bi].scaled.len() * pair;
+                    let slot = y.filter(|_| bytes <= budget).map(|y| {
+                        budget -= bytes;
+                        todo.push((bi, y));
+                        todo.len() - 1
+                    });
+                    (bi, plan, slot)
+                })
+            })
+            .collect();
+        let cached = todo
+            .par_iter()
+            .map(|&(bi, y)| geometries[bi].integrals(settings, y))
+            .collect();
+        PointSampler {
+            geometries,
+            settings: settings.clone(),
+            points,
+            cached,
+        }
+    }
+
+    /// The value at every point for the boundary solution of `bodies` (the same bodies, in
+    /// the same order, as [`PointSampler::new`] was given), in parallel.
+    pub fn evaluate(&self, bodies: &[BodyInput]) -> Vec<Option<PointValue>> {
+        assert_eq!(
+            bodies.len(),
+            self.geometries.len(),
+            "a point sampler evaluates the bodies it was built for"
+        );
+        let values: Vec<Values> = self
+            .geometries
+            .iter()
+            .zip(bodies)
+            .map(|(g, b)| {
+                assert!(
+                    std::ptr::eq(g.body, b.body) && g.material == b.material,
+                    "a point sampler evaluates the bodies it was built for"
+                );
+                g.values(b.field, b.body_force)
+            })
+            .collect();
+        self.points
+            .par_iter()
+            .map(|p| {
+                let (bi, plan, slot) = (*p)?;
+                let (g, v) = (&self.geometries[bi], &values[bi]);
+                let (u, sigma) = g.value(v, plan, |y| match slot {
+                    Some(k) => {
+                        let c = &self.cached[k];
+                        g.identities(v, c.xs, c.per_element.iter().copied())
+                    }
+                    None => g.somigliana(v, &self.settings, y),
+                });
+                Some(PointValue { body: bi, u, sigma })
+            })
+            .collect()
+    }
 }
 
 /// The field at one node of the body's triangle mesh.
@@ -756,7 +990,7 @@ pub fn field_at_nodes_with(
     done: &(dyn Fn(u64) + Sync),
 ) -> Vec<NodeValue> {
     let prepared = input.prepare();
-    let nodal = &prepared.nodal;
+    let nodal = &prepared.values.nodal;
     let mut on_boundary: HashMap<usize, usize> = HashMap::new();
     for (n, &mn) in input.body.mesh_nodes.iter().enumerate() {
         on_boundary.entry(mn).or_insert(n);
