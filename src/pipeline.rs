@@ -646,6 +646,9 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "notes": notes,
         "overrides": scene.overrides,
     });
+    if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
+        summary["interface_curves"] = curves;
+    }
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
     }
