@@ -646,6 +646,14 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "notes": notes,
         "overrides": scene.overrides,
     });
+    let balances = crate::post::equilibrium::balances(
+        model,
+        &result.fields,
+        &result.interfaces,
+        factor,
+        scene.thickness,
+    );
+    summary["equilibrium"] = crate::post::equilibrium::summary(&balances);
     if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
         summary["interface_curves"] = curves;
     }
