@@ -80,6 +80,31 @@ fn arch_voussoirs_balance_to_round_off_and_abutments_converge() {
         // The crown joint of a symmetric arch carries a horizontal thrust only.
         assert!(on5[0].abs() > 1e3 * on5[1].abs(), "{on5:?}");
         abutment.push(relative(&s, "abutment_L").max(relative(&s, "abutment_R")));
+        // The "joints" curve, split into 11 interfaces: its combined figures are the sums
+        // (and extremes) of its parts'.
+        let curve = &s["interface_curves"]["joints"];
+        let parts = curve["parts"].as_array().expect("parts");
+        assert_eq!(parts.len(), 11);
+        let part = |p: &Value, k: &str| s["interfaces"][p.as_str().unwrap_or_default()][k].clone();
+        let sum = |k: &str| {
+            parts
+                .iter()
+                .map(|p| part(p, k).as_f64().unwrap_or(f64::NAN))
+                .sum::<f64>()
+        };
+        assert_eq!(curve["pairs"].as_u64(), Some(11 * (nj as u64 + 1)));
+        for k in ["detached_length", "normal_resultant"] {
+            let (got, want) = (curve[k].as_f64().unwrap_or(f64::NAN), sum(k));
+            assert!(
+                (got - want).abs() <= 1e-12 * want.abs().max(1.0),
+                "{k}: {got} {want}"
+            );
+        }
+        let lowest = parts
+            .iter()
+            .map(|p| part(p, "min_normal_traction").as_f64().unwrap_or(f64::NAN))
+            .fold(f64::INFINITY, f64::min);
+        assert_eq!(curve["min_normal_traction"].as_f64(), Some(lowest));
     }
     // First order: each halving of the elements halves the abutments' imbalance (±30 %).
     for k in 1..abutment.len() {

@@ -352,8 +352,16 @@ fn set_path(
         }
         if table.is_empty() {
             return Err(format!(
-                "--set {set}: `{}` has no entries for `*` to match",
-                path[..i].join(".")
+                "--set {set}: `{}` has no entries for `*` to match{}",
+                path[..i].join("."),
+                if i == 1 && matches!(path[0].as_str(), "body" | "interface") {
+                    format!(
+                        " (a [defaults.{0}] table is set with --set defaults.{0}.KEY=VALUE)",
+                        path[0]
+                    )
+                } else {
+                    String::new()
+                }
             ));
         }
         for (name, v) in table.iter_mut() {
