@@ -487,6 +487,16 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let factor = result.load_factor;
     let mut notes = plan.advice.clone();
     notes.extend(result.notes.iter().cloned());
+    let balances = crate::post::equilibrium::balances(
+        model,
+        &result.fields,
+        &result.interfaces,
+        factor,
+        scene.thickness,
+    );
+    if result.failure.is_none() {
+        notes.extend(crate::post::equilibrium::unbalanced_note(model, &balances));
+    }
 
     // Post-processing.
     let t2 = Instant::now();
@@ -646,13 +656,6 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "notes": notes,
         "overrides": scene.overrides,
     });
-    let balances = crate::post::equilibrium::balances(
-        model,
-        &result.fields,
-        &result.interfaces,
-        factor,
-        scene.thickness,
-    );
     summary["equilibrium"] = crate::post::equilibrium::summary(&balances);
     if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
         summary["interface_curves"] = curves;

@@ -195,6 +195,47 @@ pub fn balances(
     out
 }
 
+/// Relative imbalance above which a body that no displacement condition holds is reported:
+/// such bodies balance to round-off in a solved discrete problem.
+pub const UNBALANCED: f64 = 1e-6;
+
+/// A note naming the bodies held by interfaces and tractions only whose loads do not
+/// balance (a contact solution that is no equilibrium, e.g. past the collapse load); `None`
+/// when every such body balances. Bodies with displacement conditions are left out: their
+/// reactions balance only up to the discretisation error (module doc).
+pub fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
+    let held = |body: &Body| {
+        body.elements.iter().any(|e| match e.role {
+            Role::Boundary(pi) => model.parts[pi]
+                .spec
+                .components
+                .iter()
+                .any(|c| c.is_displacement()),
+            Role::Interface(_) => false,
+        })
+    };
+    let bad: Vec<String> = model
+        .bodies
+        .iter()
+        .zip(balances)
+        .filter(|(body, b)| !held(body) && (b.relative > UNBALANCED || b.relative.is_nan()))
+        .map(|(_, b)| format!("{} {:.1e}", b.body, b.relative))
+        .collect();
+    if bad.is_empty() {
+        return None;
+    }
+    let shown = bad.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+    Some(format!(
+        "equilibrium: {} bod{} held only by interfaces and tractions do not balance (relative \
+         imbalance above {UNBALANCED:e}: {shown}{}): the contact solution is no equilibrium; \
+         the loads may exceed what the joints can carry (a mechanism): reduce the loads or \
+         check the supports",
+        bad.len(),
+        if bad.len() == 1 { "y" } else { "ies" },
+        if bad.len() > 5 { ", ..." } else { "" }
+    ))
+}
+
 fn diagonal(body: &Body) -> f64 {
     let mut lo = [f64::INFINITY; 2];
     let mut hi = [f64::NEG_INFINITY; 2];
