@@ -291,3 +291,99 @@ fn a_curve_joining_many_pairs_is_split_per_pair() {
         "{line}"
     );
 }
+
+/// Loads `pipelines/wall.toml` on `geo/wall.geo` meshed with `opts`.
+fn wall(name: &str, opts: &[&str]) -> Loaded {
+    let dir = tmpdir(name);
+    let msh = gmsh(&root().join("geo/wall.geo"), &dir, "wall.msh", false, opts);
+    load(&root().join("pipelines/wall.toml"), Some(&msh)).unwrap_or_else(|e| panic!("{e}"))
+}
+
+#[test]
+fn the_wall_generator_cuts_bed_joints_at_every_head_joint() {
+    // Running bond, 3 courses of 2 bricks: 2 + 3 + 2 bricks; head joints 1 + 2 + 1; each bed
+    // line between courses cut at 0, 0.2, 0.4, 0.6, 0.8 into 4 pieces, one per pair of
+    // bricks (half a brick long).
+    let l = wall(
+        "wall-running",
+        &["-setnumber", "courses", "3", "-setnumber", "bricks", "2"],
+    );
+    let m = &l.model;
+    assert_eq!(m.bodies.len(), 7);
+    assert_eq!(m.interfaces.len(), 12);
+    let (mut heads, mut beds) = (0, 0);
+    for i in &m.interfaces {
+        let horizontal = i
+            .pairs
+            .iter()
+            .all(|p| (p.x[1] - i.pairs[0].x[1]).abs() < 1e-12);
+        // Head joints a brick high, bed pieces half a brick wide: 0.2 m, 4 elements each.
+        assert!(
+            (i.length - 0.2).abs() < 1e-12,
+            "{}: {}",
+            i.spec.name,
+            i.length
+        );
+        assert_eq!(i.pairs.len(), 5, "{}", i.spec.name);
+        if horizontal {
+            beds += 1;
+        } else {
+            heads += 1;
+        }
+    }
+    assert_eq!((heads, beds), (4, 8));
+    // brick_3 (the half brick starting course 2) sits on brick_1 and holds up brick_6.
+    let names: Vec<&str> = m.interfaces.iter().map(|i| i.spec.name.as_str()).collect();
+    for n in [
+        "joints[brick_1|brick_3]",
+        "joints[brick_3|brick_4]",
+        "joints[brick_3|brick_6]",
+    ] {
+        assert!(names.contains(&n), "{n} not in {names:?}");
+    }
+    let base: f64 = m
+        .parts
+        .iter()
+        .filter(|p| p.spec.name == "base")
+        .map(|p| p.length)
+        .sum();
+    assert!((base - 0.8).abs() < 1e-12, "{base}");
+
+    // Stack bond, bricks 2..3 of courses 2..3 left out: 4 × 3 − 4 bricks; the opening (a
+    // notch, open at the wall's right end) has its own free Physical Curve: 0.8 below, 0.8
+    // above, 0.4 on the left.
+    let l = wall(
+        "wall-opening",
+        &[
+            "-setnumber",
+            "courses",
+            "4",
+            "-setnumber",
+            "bricks",
+            "3",
+            "-setnumber",
+            "bond",
+            "0",
+            "-setnumber",
+            "open_from",
+            "2",
+            "-setnumber",
+            "open_to",
+            "3",
+            "-setnumber",
+            "open_col",
+            "2",
+            "-setnumber",
+            "open_w",
+            "2",
+        ],
+    );
+    assert_eq!(l.model.bodies.len(), 8);
+    let opening = l
+        .model
+        .parts
+        .iter()
+        .find(|p| p.spec.name == "opening")
+        .expect("an opening curve");
+    assert!((opening.length - 2.0).abs() < 1e-12, "{}", opening.length);
+}
