@@ -119,6 +119,7 @@ vault: build out/mesh/vault.msh
 bench:
 	$(CARGO) bench --bench stages
 	$(CARGO) bench --bench contact
+	$(CARGO) bench --bench masonry
 
 # Refinement levels x quadrature presets of the closed-form benchmarks and of the paper's
 # examples 1 and 2: error (or detached length) against run time, in out/accuracy/

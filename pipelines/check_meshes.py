@@ -5,9 +5,14 @@ compare its counts with what meshio reads from the same file:
   boundary elements = line elements of the bodies + those of interface curves once more
                       (an interface node pair is duplicated per body);
   interface pairs   = interface line elements + 1 per interface (one open chain each).
+Interface curves are those the scene's [interface] tables name or match (fnmatch on glob
+tables such as "joint*"), and, with [defaults.interface], every other Physical Curve not in
+[boundary] whose line elements are edges of triangles of two Physical Surfaces. A curve that
+joins several pairs of bodies counts one interface per pair (sgbem splits it).
 Usage: check_meshes.py SGBEM MESH...
 """
 import pathlib
+import fnmatch
 import re
 import subprocess
 import sys
@@ -15,6 +20,18 @@ import tomllib
 
 import meshio
 import numpy as np
+
+
+def edge_owners(m):
+    """Mesh edge (two node ids) -> the Physical Surfaces of the triangles that have it."""
+    owners = {}
+    for block, phys in zip(m.cells, m.cell_data["gmsh:physical"]):
+        if block.type != "triangle":
+            continue
+        for tri, tag in zip(block.data, phys):
+            for a, b in ((tri[0], tri[1]), (tri[1], tri[2]), (tri[2], tri[0])):
+                owners.setdefault(frozenset((a, b)), set()).add(int(tag))
+    return {e: frozenset(s) for e, s in owners.items()}
 
 
 def main():
@@ -27,15 +44,23 @@ def main():
         m = meshio.read(path)
         spec = tomllib.loads(scene.read_text())
         names = {name: tag for name, (tag, dim) in m.field_data.items() if dim == 1}
-        interfaces = [names[n] for n in spec.get("interface", {})]
+        owners = edge_owners(m)
+        tables = spec.get("interface", {})
+        listed = [n for n in names if any(fnmatch.fnmatchcase(n, t) for t in tables)]
         lines = 0
-        iface_lines = {tag: 0 for tag in interfaces}
+        iface_lines = {}  # (curve tag, the two surfaces' tags) -> line elements
         for block, phys in zip(m.cells, m.cell_data["gmsh:physical"]):
             if block.type != "line":
                 continue
             lines += len(block.data)
-            for tag in interfaces:
-                iface_lines[tag] += int(np.sum(phys == tag))
+            for edge, tag in zip(block.data, phys):
+                surfaces = owners.get(frozenset(edge), frozenset())
+                name = next(n for n, t in names.items() if t == tag)
+                default = ("interface" in spec.get("defaults", {})
+                           and name not in spec.get("boundary", {}) and len(surfaces) == 2)
+                if name in listed or default:
+                    key = (int(tag), surfaces)
+                    iface_lines[key] = iface_lines.get(key, 0) + 1
         expect_elements = lines + sum(iface_lines.values())
         expect_pairs = sum(n + 1 for n in iface_lines.values())
         triangles = sum(len(b.data) for b in m.cells if b.type == "triangle")

@@ -901,6 +901,17 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let factor = result.load_factor;
     let mut notes = plan.advice.clone();
     notes.extend(result.notes.iter().cloned());
+    let balances = crate::post::equilibrium::balances(
+        model,
+        &result.fields,
+        &result.interfaces,
+        &result.body_force,
+        factor,
+        scene.thickness,
+    );
+    if result.failure.is_none() {
+        notes.extend(crate::post::equilibrium::unbalanced_note(model, &balances));
+    }
 
     // Post-processing.
     let t2 = Instant::now();
@@ -1082,6 +1093,10 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         "notes": notes,
         "overrides": scene.overrides,
     });
+    summary["equilibrium"] = crate::post::equilibrium::summary(&balances);
+    if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
+        summary["interface_curves"] = curves;
+    }
     if let Some(qp) = &result.qp {
         summary["qp"] = qp.clone();
     }

@@ -73,11 +73,27 @@ impl Plan {
 /// The prescribed values that depend on the pseudo-time `t`, as key paths.
 pub fn time_dependent(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
-    for b in &scene.bodies {
+    // Exact tables, glob tables and defaults (named as in the scene).
+    let t = &scene.tables;
+    let bodies = scene
+        .bodies
+        .iter()
+        .map(|b| (format!("body.{}", b.name), b))
+        .chain(
+            t.bodies
+                .iter()
+                .map(|p| (format!("body.\"{}\"", p.spec.name), &p.spec)),
+        )
+        .chain(
+            t.default_body
+                .iter()
+                .map(|b| ("defaults.body".to_string(), b)),
+        );
+    for (key, b) in bodies {
         if let Some(f) = &b.body_force {
             for (c, v) in f.iter().enumerate() {
                 if v.uses_time() {
-                    out.push(format!("body.{}.body_force[{c}]", b.name));
+                    out.push(format!("{key}.body_force[{c}]"));
                 }
             }
         }
@@ -100,14 +116,28 @@ pub fn time_dependent(scene: &Scene) -> Vec<String> {
             }
         }
     }
-    for i in &scene.interfaces {
+    let interfaces = scene
+        .interfaces
+        .iter()
+        .map(|i| (format!("interface.{}", i.name), i))
+        .chain(
+            t.interfaces
+                .iter()
+                .map(|p| (format!("interface.\"{}\"", p.spec.name), &p.spec)),
+        )
+        .chain(
+            t.default_interface
+                .iter()
+                .map(|i| ("defaults.interface".to_string(), i)),
+        );
+    for (key, i) in interfaces {
         for (what, v) in [
             ("gap", &i.gap),
             ("cohesion", &i.cohesion),
             ("friction", &i.friction),
         ] {
             if v.uses_time() {
-                out.push(format!("interface.{}.{what}", i.name));
+                out.push(format!("{key}.{what}"));
             }
         }
     }

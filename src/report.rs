@@ -171,6 +171,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
         );
     }
 
+    if !scene.tables.is_empty() {
+        write_tables(&mut o, model);
+    }
+
     let _ = writeln!(o, "\ninterfaces ({})", model.interfaces.len());
     for i in &model.interfaces {
         let sp = &i.spec;
@@ -247,4 +251,23 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
         }
     }
     o
+}
+
+/// Which table applies to each body and interface group, one line per table (scenes with
+/// glob or default tables).
+fn write_tables(o: &mut String, model: &Model) {
+    let mut by_table: Vec<(&str, Vec<&str>)> = Vec::new();
+    for r in &model.tables {
+        match by_table.iter_mut().find(|(t, _)| *t == r.table) {
+            Some((_, groups)) => groups.push(&r.group),
+            None => by_table.push((&r.table, vec![&r.group])),
+        }
+    }
+    let _ = writeln!(
+        o,
+        "\ntables (exact name > most specific pattern > defaults)"
+    );
+    for (table, groups) in by_table {
+        let _ = writeln!(o, "  {table:<24} {} ({})", groups.join(", "), groups.len());
+    }
 }

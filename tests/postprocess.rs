@@ -64,6 +64,7 @@ fn polygon_body(loops: &[&[Vec2]], n: usize, young: f64, poisson: f64) -> Body {
         young,
         poisson,
         body_force: None,
+        body_force_spec: None,
         surfaces: vec![1],
         mesh_nodes: (0..nn).collect(),
         nodes,

@@ -5,3 +5,4 @@ pub mod gmsh;
 pub mod mesh;
 pub mod model;
 pub mod scene;
+pub mod tables;

@@ -35,6 +35,7 @@ use crate::input::mesh::Mesh;
 use crate::input::scene::{
     BoundarySpec, Condition, Frame, InitialState, InterfaceSpec, Scene, Tangential,
 };
+use crate::input::tables::{self, Resolved};
 
 /// Turning angle above which two elements meet at a corner, within one gmsh curve.
 const CORNER_ANGLE_IN_CURVE: f64 = 10.0 * std::f64::consts::PI / 180.0;
@@ -109,6 +110,9 @@ pub struct Body {
     pub young: f64,
     pub poisson: f64,
     pub body_force: Option<[f64; 2]>,
+    /// The scene's body force (numbers or expressions in t), evaluated into `body_force` at
+    /// the model's pseudo-time.
+    pub body_force_spec: Option<[crate::input::expr::Scalar; 2]>,
     /// gmsh surface entities of the body.
     pub surfaces: Vec<i32>,
     /// Boundary node coordinates (body-local numbering).
@@ -200,7 +204,11 @@ pub struct InterfaceElement {
 /// A Physical Curve shared by two bodies.
 #[derive(Debug, Clone)]
 pub struct Interface {
+    /// Its table; `spec.name` is the Physical Curve's name, or `CURVE[A|B]` for the part
+    /// between bodies A and B of a curve that joins several pairs of bodies.
     pub spec: InterfaceSpec,
+    /// The Physical Curve.
+    pub group: String,
     /// Body indices; A comes first in the scene.
     pub body_a: usize,
     pub body_b: usize,
@@ -236,6 +244,8 @@ pub struct Model {
     /// The pseudo-time at which the prescribed values (gaps, cohesions, friction
     /// coefficients, body forces, boundary values) are evaluated.
     pub time: f64,
+    /// Which scene table applies to each body and interface group (exact, glob, default).
+    pub tables: Vec<Resolved>,
 }
 
 impl Model {
@@ -253,8 +263,11 @@ impl Model {
     pub fn at_time(&self, scene: &Scene, t: f64) -> Result<Model> {
         let mut m = self.clone();
         m.time = t;
-        for (body, spec) in m.bodies.iter_mut().zip(&scene.bodies) {
-            body.body_force = spec.body_force_at(t);
+        for body in m.bodies.iter_mut() {
+            body.body_force = body
+                .body_force_spec
+                .as_ref()
+                .map(|b| [b[0].eval([0.0, 0.0], t), b[1].eval([0.0, 0.0], t)]);
             if let Some(b) = body.body_force {
                 if !b.iter().all(|c| c.is_finite()) {
                     return Err(Error::input(
@@ -384,11 +397,15 @@ once any physical group exists: add every boundary curve to a named Physical Cur
 enum CurveUse {
     Boundary(usize),
     Interface(usize),
+    /// A Physical Curve joining several pairs of bodies: the interface of each pair.
+    Split(BTreeMap<(usize, usize), usize>),
 }
 
 /// Builds and validates the model of a scene on a mesh.
 pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     let t0 = first_time(scene);
+    let (with_bodies, mut resolved) = tables::resolve_bodies(scene, mesh)?;
+    let scene = &with_bodies;
     let mfile = mesh_path;
     let sfile = scene.path.as_path();
     let named = |dim: i32| -> Vec<&str> {
@@ -478,7 +495,8 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                 sfile,
                 format!(
                     "{} has a Physical Surface \"{}\" but the scene has no [body.{}]: add it with \
-                     its young and poisson{}",
+                     its young and poisson (or a [body.\"PATTERN*\"] or [defaults.body] table \
+                     that applies to it){}",
                     mfile.display(),
                     p.name,
                     p.name,
@@ -530,6 +548,23 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
     }
 
+    // --- Interface tables from globs and defaults, now that shared curves are known -------
+    let shared_groups: BTreeSet<&str> = mesh
+        .physical_names
+        .iter()
+        .filter(|p| p.dim == 1)
+        .filter(|p| {
+            mesh.curves.values().any(|c| {
+                c.physical_tags.contains(&p.tag)
+                    && curve_bodies.get(&c.tag).is_some_and(|b| b.len() >= 2)
+            })
+        })
+        .map(|p| p.name.as_str())
+        .collect();
+    let (with_interfaces, from_tables) = tables::resolve_interfaces(scene, mesh, &shared_groups)?;
+    resolved.extend(from_tables);
+    let scene = &with_interfaces;
+
     // --- What each physical curve is -----------------------------------------------------
     for b in &scene.boundaries {
         if group_tag(1, &b.name).is_none() {
@@ -542,7 +577,8 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
     }
     let mut parts: Vec<Part> = Vec::new();
-    let mut interfaces_found: Vec<(usize, i32)> = Vec::new(); // (scene interface index, group tag)
+    // (the interface's table, named after its pair of bodies when the curve is split; its curves)
+    let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
     let mut uses: HashMap<i32, CurveUse> = HashMap::new(); // group tag → use
     let mut unused_curves = Vec::new();
     for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
@@ -578,9 +614,31 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             .copied()
             .filter(|c| curve_bodies.get(c).is_some_and(|b| b.len() >= 2))
             .collect();
-        if let Some(ii) = scene.interfaces.iter().position(|i| i.name == p.name) {
-            uses.insert(p.tag, CurveUse::Interface(interfaces_found.len()));
-            interfaces_found.push((ii, p.tag));
+        if let Some(spec) = scene.interface(&p.name) {
+            let by_pair = pairs_of_bodies(&p.name, &curves, &curve_bodies, scene, sfile)?;
+            if by_pair.len() <= 1 {
+                uses.insert(p.tag, CurveUse::Interface(interfaces_found.len()));
+                interfaces_found.push((
+                    spec.clone(),
+                    p.name.clone(),
+                    curves.iter().copied().collect(),
+                ));
+            } else {
+                let mut split = BTreeMap::new();
+                for ((a, b), set) in by_pair {
+                    split.insert((a, b), interfaces_found.len());
+                    let name = split_name(&p.name, &scene.bodies[a].name, &scene.bodies[b].name);
+                    interfaces_found.push((
+                        InterfaceSpec {
+                            name,
+                            ..spec.clone()
+                        },
+                        p.name.clone(),
+                        set,
+                    ));
+                }
+                uses.insert(p.tag, CurveUse::Split(split));
+            }
         } else {
             if let Some(&c) = shared.first() {
                 let names: Vec<&str> = curve_bodies[&c]
@@ -596,7 +654,8 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                     sfile,
                     format!(
                         "Physical Curve \"{}\" is shared by bodies {} (curve {c}) and {how}: \
-                         declare [interface.{}] with model = \"bonded\" or \"unilateral\"",
+                         declare [interface.{}] with model = \"bonded\" or \"unilateral\" (or \
+                         an [interface.\"PATTERN*\"] or [defaults.interface] table)",
                         p.name,
                         names.join(" and "),
                         p.name
@@ -642,6 +701,11 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                     match uses.get(t)? {
                         CurveUse::Boundary(pi) => Some((Role::Boundary(*pi), name)),
                         CurveUse::Interface(k) => Some((Role::Interface(*k), name)),
+                        CurveUse::Split(by_pair) => {
+                            let on = curve_bodies.get(&c)?;
+                            let k = by_pair.get(&(on[0].min(on[1]), on[0].max(on[1])))?;
+                            Some((Role::Interface(*k), name))
+                        }
                     }
                 })
                 .collect();
@@ -726,6 +790,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.young = spec.young;
         body.poisson = spec.poisson;
         body.body_force = spec.body_force_at(t0);
+        body.body_force_spec = spec.body_force.clone();
         body.surfaces = body_surfaces[bi].clone();
         body.triangles = mesh
             .triangles
@@ -748,11 +813,11 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
 
     // --- Interfaces ---------------------------------------------------------------------------
     let mut interfaces = Vec::new();
-    for (k, &(ii, gtag)) in interfaces_found.iter().enumerate() {
+    for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
         interfaces.push(build_interface(
             k,
-            &scene.interfaces[ii],
-            gtag,
+            (spec, group),
+            curves,
             &bodies,
             mesh,
             &curve_bodies,
@@ -772,6 +837,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     let sizes = size_stats(&bodies);
 
     let model = Model {
+        tables: resolved,
         mesh_path: mesh_path.to_path_buf(),
         bodies,
         parts,
@@ -1022,6 +1088,7 @@ fn build_body(
         young: 0.0,
         poisson: 0.0,
         body_force: None,
+        body_force_spec: None,
         surfaces: Vec::new(),
         nodes,
         mesh_nodes,
@@ -1086,8 +1153,8 @@ fn winding(p: [f64; 2], segments: impl Iterator<Item = ([f64; 2], [f64; 2])>) ->
 #[allow(clippy::too_many_arguments)]
 fn build_interface(
     k: usize,
-    spec: &InterfaceSpec,
-    gtag: i32,
+    (spec, group): (&InterfaceSpec, &str),
+    curves: &BTreeSet<i32>,
     bodies: &[Body],
     mesh: &Mesh,
     curve_bodies: &BTreeMap<i32, Vec<usize>>,
@@ -1097,15 +1164,8 @@ fn build_interface(
     let sfile = scene.path.as_path();
     let name = spec.name.as_str();
     let t0 = first_time(scene);
-    let curves: BTreeSet<i32> = mesh
-        .curves
-        .values()
-        .filter(|c| c.physical_tags.contains(&gtag))
-        .map(|c| c.tag)
-        .collect();
     let mut involved: BTreeSet<usize> = BTreeSet::new();
-    let mut shared_pair: Option<(usize, usize)> = None;
-    for c in &curves {
+    for c in curves {
         let on = curve_bodies.get(c).cloned().unwrap_or_default();
         if on.len() > 2 {
             return Err(Error::input(
@@ -1115,19 +1175,6 @@ fn build_interface(
                     on.len()
                 ),
             ));
-        }
-        if on.len() == 2 {
-            let p = (on[0].min(on[1]), on[0].max(on[1]));
-            if shared_pair.is_some_and(|q| q != p) {
-                return Err(Error::input(
-                    sfile,
-                    format!(
-                        "interface \"{name}\" joins different pairs of bodies on different curves: \
-                         use one Physical Curve per pair of bodies"
-                    ),
-                ));
-            }
-            shared_pair = Some(p);
         }
         involved.extend(on);
     }
@@ -1370,6 +1417,7 @@ fn build_interface(
     let length = elems_a.iter().map(|&e| a.elements[e].length).sum();
     Ok(Interface {
         spec: spec.clone(),
+        group: group.to_string(),
         body_a: ba,
         body_b: bb,
         pairs,
@@ -1377,6 +1425,57 @@ fn build_interface(
         length,
         matched_by_position: by_position,
     })
+}
+
+/// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
+/// the curve joins several pairs of bodies: `joints[brick_1|brick_2]`.
+pub fn split_name(group: &str, a: &str, b: &str) -> String {
+    format!("{group}[{a}|{b}]")
+}
+
+/// The curves of an interface group per pair of bodies that share them (bodies by index,
+/// smaller first). When the group joins two or more pairs, each of its curves must be
+/// shared by exactly two bodies.
+fn pairs_of_bodies(
+    group: &str,
+    curves: &[i32],
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    scene: &Scene,
+    sfile: &Path,
+) -> Result<BTreeMap<(usize, usize), BTreeSet<i32>>> {
+    let mut by_pair: BTreeMap<(usize, usize), BTreeSet<i32>> = BTreeMap::new();
+    for c in curves {
+        if let Some([a, b]) = curve_bodies.get(c).map(Vec::as_slice) {
+            by_pair
+                .entry(((*a).min(*b), (*a).max(*b)))
+                .or_default()
+                .insert(*c);
+        }
+    }
+    if by_pair.len() > 1 {
+        for c in curves {
+            let on = curve_bodies.get(c).map(Vec::as_slice).unwrap_or(&[]);
+            if on.len() != 2 {
+                let names: Vec<&str> = on.iter().map(|&b| scene.bodies[b].name.as_str()).collect();
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{group}\" joins several pairs of bodies, but its curve {c} \
+                         bounds {} bod{} ({}): each curve of an interface is shared by exactly \
+                         two bodies; move curve {c} to another Physical Curve",
+                        on.len(),
+                        if on.len() == 1 { "y" } else { "ies" },
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(by_pair)
 }
 
 /// Elements of different bodies (or non-neighbouring elements of one body) must not cross,

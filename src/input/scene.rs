@@ -16,6 +16,7 @@ use serde::Deserialize;
 
 use crate::error::{did_you_mean, Error, Result};
 use crate::input::expr::{Expr, Scalar};
+use crate::input::tables::{Glob, Pattern, Tables};
 
 /// Plane strain or plane stress (SPEC.md `plane`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -281,6 +282,8 @@ pub struct Scene {
     pub bodies: Vec<BodySpec>,
     pub boundaries: Vec<BoundarySpec>,
     pub interfaces: Vec<InterfaceSpec>,
+    /// Glob tables and `[defaults]`, resolved against the mesh by `model`.
+    pub tables: Tables,
     pub solve: SolveSpec,
     pub output: OutputSpec,
 }
@@ -387,8 +390,16 @@ fn set_path(
         }
         if table.is_empty() {
             return Err(format!(
-                "--set {set}: `{}` has no entries for `*` to match",
-                path[..i].join(".")
+                "--set {set}: `{}` has no entries for `*` to match{}",
+                path[..i].join("."),
+                if i == 1 && matches!(path[0].as_str(), "body" | "interface") {
+                    format!(
+                        " (a [defaults.{0}] table is set with --set defaults.{0}.KEY=VALUE)",
+                        path[0]
+                    )
+                } else {
+                    String::new()
+                }
             ));
         }
         for (name, v) in table.iter_mut() {
@@ -604,7 +615,7 @@ struct RawUnits {
     force: Option<String>,
 }
 
-const TOP_KEYS: [&str; 10] = [
+const TOP_KEYS: [&str; 11] = [
     "title",
     "mesh",
     "plane",
@@ -613,9 +624,11 @@ const TOP_KEYS: [&str; 10] = [
     "body",
     "boundary",
     "interface",
+    "defaults",
     "solve",
     "output",
 ];
+const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
 const UNITS_KEYS: [&str; 2] = ["length", "force"];
 const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
 const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
@@ -712,7 +725,18 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     };
 
     let mut bodies = Vec::new();
+    let mut tables = Tables::default();
     for (name, v) in sub_tables(&doc, "body", path)? {
+        if Glob::is_pattern(name) {
+            let key = pattern_key("body", name, path)?;
+            let spec = body_spec(name, v, &key, plane, path)?;
+            tables.bodies.push(Pattern {
+                glob: Glob::new(name),
+                spec,
+                raw: v.clone(),
+            });
+            continue;
+        }
         let key = format!("body.{name}");
         if let Some(problem) = file_name_problem(name) {
             return Err(err(format!(
@@ -720,63 +744,16 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
                  name the Physical Surface (and this table) with letters, digits, . _ - only"
             )));
         }
-        let raw: RawBody = typed(v, &key, path)?;
-        if !(raw.young.is_finite() && raw.young > 0.0) {
-            return Err(err(format!(
-                "`{key}.young` = {} must be a positive number (Young's modulus)",
-                raw.young
-            )));
-        }
-        if !(YOUNG_RANGE.0..=YOUNG_RANGE.1).contains(&raw.young) {
-            return Err(err(format!(
-                "`{key}.young` = {:e} is an extreme value (outside {:e}..{:e}): products of it \
-                 overflow or underflow double precision; choose units that keep the moduli \
-                 moderate (e.g. MPa and mm, or GPa)",
-                raw.young, YOUNG_RANGE.0, YOUNG_RANGE.1
-            )));
-        }
-        if !(raw.poisson.is_finite() && raw.poisson > -1.0 && raw.poisson < 0.5) {
-            let range = match plane {
-                Plane::Strain => {
-                    "-1 < poisson < 0.5 (0.5, incompressible, is invalid in plane strain)"
-                }
-                // ν = 0.5 is physical in plane stress (ν̄ = ν/(1+ν) = 1/3), but the kernels
-                // take the material's ν in (-1, 0.5).
-                Plane::Stress => {
-                    "-1 < poisson < 0.5 (0.5 is not supported in plane stress either: use \
-                     0.499 for a nearly incompressible sheet)"
-                }
-            };
-            return Err(err(format!(
-                "`{key}.poisson` = {} is outside {range}",
-                raw.poisson
-            )));
-        }
-        let body_force = match raw.body_force {
-            Some([bx, by]) => {
-                let b = [
-                    scalar(bx, &format!("{key}.body_force[0]"), path)?,
-                    scalar(by, &format!("{key}.body_force[1]"), path)?,
-                ];
-                if let Some((c, _)) = b.iter().enumerate().find(|(_, v)| v.uses_space()) {
-                    return Err(err(format!(
-                        "`{key}.body_force[{c}]` depends on x or y: a body force is uniform in                          its body (it may depend on the pseudo-time t); split the body into                          parts with their own body forces"
-                    )));
-                }
-                Some(b)
-            }
-            None => None,
-        };
-        bodies.push(BodySpec {
-            name: name.clone(),
-            young: raw.young,
-            poisson: raw.poisson,
-            body_force,
-        });
+        bodies.push(body_spec(name, v, &key, plane, path)?);
     }
-    if bodies.is_empty() {
+    if let Some(v) = defaults_table(&doc, "body", path)? {
+        tables.default_body = Some(body_spec("", v, "defaults.body", plane, path)?);
+    }
+    if bodies.is_empty() && tables.bodies.is_empty() && tables.default_body.is_none() {
         return Err(err(
-            "no bodies: add a [body.NAME] table (young, poisson) for each Physical Surface".into(),
+            "no bodies: add a [body.NAME] table (young, poisson) for each Physical Surface, \
+             or [body.\"PATTERN*\"] / [defaults.body] tables for many"
+                .into(),
         ));
     }
 
@@ -789,6 +766,16 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
 
     let mut interfaces = Vec::new();
     for (name, v) in sub_tables(&doc, "interface", path)? {
+        if Glob::is_pattern(name) {
+            let key = pattern_key("interface", name, path)?;
+            let raw: RawInterface = typed(v, &key, path)?;
+            tables.interfaces.push(Pattern {
+                glob: Glob::new(name),
+                spec: interface_spec(name, raw, &key, path)?,
+                raw: v.clone(),
+            });
+            continue;
+        }
         let key = format!("interface.{name}");
         if let Some(problem) = file_name_problem(name) {
             return Err(err(format!(
@@ -799,6 +786,10 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         }
         let raw: RawInterface = typed(v, &key, path)?;
         interfaces.push(interface_spec(name, raw, &key, path)?);
+    }
+    if let Some(v) = defaults_table(&doc, "interface", path)? {
+        let raw: RawInterface = typed(v, "defaults.interface", path)?;
+        tables.default_interface = Some(interface_spec("", raw, "defaults.interface", path)?);
     }
     for b in &boundaries {
         if interfaces.iter().any(|i| i.name == b.name) {
@@ -834,8 +825,119 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         bodies,
         boundaries,
         interfaces,
+        tables,
         solve,
         output,
+    })
+}
+
+/// The key of a glob table in messages (`body."brick*"`), after checking that the pattern
+/// is made of the characters of names and the wildcards `*` and `?`.
+fn pattern_key(group: &str, name: &str, path: &Path) -> Result<String> {
+    let key = format!("{group}.\"{name}\"");
+    if let Some(c) = name
+        .chars()
+        .find(|c| !(c.is_ascii_alphanumeric() || matches!(c, '.' | '_' | '-' | '*' | '?')))
+    {
+        return Err(Error::input(
+            path,
+            format!(
+                "[{key}]: the pattern holds `{c}`: a pattern is made of the letters, digits, \
+                 . _ - of group names and the wildcards * (any run of characters) and ? (one)"
+            ),
+        ));
+    }
+    Ok(key)
+}
+
+/// `[defaults.KIND]`, if given.
+fn defaults_table<'a>(
+    doc: &'a toml::Table,
+    kind: &str,
+    path: &Path,
+) -> Result<Option<&'a toml::Value>> {
+    let Some(d) = doc.get("defaults") else {
+        return Ok(None);
+    };
+    let Some(t) = d.as_table() else {
+        return Err(Error::input(
+            path,
+            "`defaults` must hold tables: write [defaults.body] or [defaults.interface]",
+        ));
+    };
+    match t.get(kind) {
+        None => Ok(None),
+        Some(v) if v.is_table() => Ok(Some(v)),
+        Some(_) => Err(Error::input(
+            path,
+            format!(
+                "`defaults.{kind}` must be a table: write [defaults.{kind}] with its keys below"
+            ),
+        )),
+    }
+}
+
+/// A body table (exact, glob or default) validated: `key` names it in messages.
+fn body_spec(
+    name: &str,
+    v: &toml::Value,
+    key: &str,
+    plane: Plane,
+    path: &Path,
+) -> Result<BodySpec> {
+    let err = |msg: String| Error::input(path, msg);
+    let raw: RawBody = typed(v, key, path)?;
+    if !(raw.young.is_finite() && raw.young > 0.0) {
+        return Err(err(format!(
+            "`{key}.young` = {} must be a positive number (Young's modulus)",
+            raw.young
+        )));
+    }
+    if !(YOUNG_RANGE.0..=YOUNG_RANGE.1).contains(&raw.young) {
+        return Err(err(format!(
+            "`{key}.young` = {:e} is an extreme value (outside {:e}..{:e}): products of it \
+                 overflow or underflow double precision; choose units that keep the moduli \
+                 moderate (e.g. MPa and mm, or GPa)",
+            raw.young, YOUNG_RANGE.0, YOUNG_RANGE.1
+        )));
+    }
+    if !(raw.poisson.is_finite() && raw.poisson > -1.0 && raw.poisson < 0.5) {
+        let range = match plane {
+            Plane::Strain => "-1 < poisson < 0.5 (0.5, incompressible, is invalid in plane strain)",
+            // ν = 0.5 is physical in plane stress (ν̄ = ν/(1+ν) = 1/3), but the kernels
+            // take the material's ν in (-1, 0.5).
+            Plane::Stress => {
+                "-1 < poisson < 0.5 (0.5 is not supported in plane stress either: use \
+                     0.499 for a nearly incompressible sheet)"
+            }
+        };
+        return Err(err(format!(
+            "`{key}.poisson` = {} is outside {range}",
+            raw.poisson
+        )));
+    }
+    let body_force = match raw.body_force {
+        Some([bx, by]) => {
+            let b = [
+                scalar(bx, &format!("{key}.body_force[0]"), path)?,
+                scalar(by, &format!("{key}.body_force[1]"), path)?,
+            ];
+            if let Some((c, _)) = b.iter().enumerate().find(|(_, v)| v.uses_space()) {
+                return Err(err(format!(
+                    "`{key}.body_force[{c}]` depends on x or y: a body force is uniform in \
+                     its body (it may depend on the pseudo-time t); split the body into parts \
+                     with their own body forces"
+                )));
+            }
+            Some(b)
+        }
+        None => None,
+    };
+    Ok(BodySpec {
+        name: name.to_string(),
+        young: raw.young,
+        poisson: raw.poisson,
+        body_force,
     })
 }
 
@@ -934,6 +1036,14 @@ fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {
                 if let toml::Value::Table(inner) = v {
                     table_keys(inner, &format!("{group}.{name}"), valid)?;
                 }
+            }
+        }
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("defaults") {
+        table_keys(t, "defaults", &DEFAULTS_KEYS)?;
+        for (group, valid) in [("body", &BODY_KEYS[..]), ("interface", &INTERFACE_KEYS[..])] {
+            if let Some(toml::Value::Table(inner)) = t.get(group) {
+                table_keys(inner, &format!("defaults.{group}"), valid)?;
             }
         }
     }

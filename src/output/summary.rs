@@ -79,3 +79,47 @@ pub fn interfaces(its: &[Interface], results: &[InterfaceResult], thickness: f64
     }
     Value::Object(m)
 }
+
+/// Per Physical Curve that joins several pairs of bodies (split into interfaces
+/// `CURVE[A|B]`): its parts and their figures combined (lengths, pairs and resultants
+/// summed, extreme tractions over all parts). `None` when no curve is split.
+pub fn interface_curves(its: &[Interface], figures: &Value) -> Option<Value> {
+    let mut m = Map::new();
+    for it in its.iter().filter(|it| it.spec.name != it.group) {
+        let fig = &figures[it.spec.name.as_str()];
+        let entry = m.entry(it.group.clone()).or_insert_with(|| {
+            json!({
+                "parts": [], "detached_length": 0.0, "closed_length": 0.0, "open_pairs": 0,
+                "pairs": 0, "normal_resultant": 0.0, "tangential_resultant": 0.0,
+                "max_normal_traction": null, "min_normal_traction": null,
+            })
+        });
+        if let Some(parts) = entry["parts"].as_array_mut() {
+            parts.push(json!(it.spec.name));
+        }
+        for key in [
+            "detached_length",
+            "closed_length",
+            "normal_resultant",
+            "tangential_resultant",
+        ] {
+            let sum = entry[key].as_f64().unwrap_or(0.0) + fig[key].as_f64().unwrap_or(f64::NAN);
+            entry[key] = json!(sum);
+        }
+        for key in ["open_pairs", "pairs"] {
+            let sum = entry[key].as_u64().unwrap_or(0) + fig[key].as_u64().unwrap_or(0);
+            entry[key] = json!(sum);
+        }
+        let hi = fig["max_normal_traction"].as_f64().unwrap_or(f64::NAN);
+        let lo = fig["min_normal_traction"].as_f64().unwrap_or(f64::NAN);
+        entry["max_normal_traction"] =
+            json!(entry["max_normal_traction"].as_f64().unwrap_or(hi).max(hi));
+        entry["min_normal_traction"] =
+            json!(entry["min_normal_traction"].as_f64().unwrap_or(lo).min(lo));
+    }
+    if m.is_empty() {
+        None
+    } else {
+        Some(Value::Object(m))
+    }
+}

@@ -42,6 +42,8 @@
 // Index loops mirror the component formulas (δ_ik, r̂_i r̂_k, …) and read better than iterators.
 #![allow(clippy::needless_range_loop)]
 
+pub mod equilibrium;
+
 use std::collections::HashMap;
 
 use rayon::prelude::*;

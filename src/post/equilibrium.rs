@@ -1,0 +1,298 @@
+//! Equilibrium of each body: the resultant force and moment of every load acting on it and
+//! their imbalance, for `summary.json` (`equilibrium`).
+//!
+//! Place in the flow: reads the model and one solved state (boundary fields, interface
+//! results, load factor); writes plain records. Moments are about the body's centroid (of
+//! its polygonal boundary, the domain the boundary elements integrate over), counter-clockwise
+//! positive; forces and moments are per unit thickness times `thickness`.
+//!
+//! Each load is integrated the way the discretisation holds it, so that a balanced discrete
+//! solution shows an imbalance at round-off level:
+//!
+//! * **Boundary parts** (prescribed tractions and the reactions of displacement conditions):
+//!   the element-end tractions are linear along each element, so for an element from `x0`
+//!   to `x1` of length `L` with end tractions `t0`, `t1` and `r = x − c`:
+//!   `F = L (t0 + t1)/2`, `M = L/6 (2 r0×t0 + r0×t1 + r1×t0 + 2 r1×t1)` (exact).
+//! * **Interfaces**: the nodal forces of the contact problem, `P_j = ∫ψ_j t ds = t_j w_j`
+//!   (the reported pair traction times the tributary length), acting at the pair's node on
+//!   the first body and opposite on the second. `Σ P_j = ∫t ds` and `Σ x_j × P_j = ∫x × t ds`
+//!   hold exactly for the P1 hats, so no quadrature enters.
+//! * **Body force**: `b |Ω|` at the centroid (no moment about it).
+
+use crate::input::model::{Body, Model, Role};
+use crate::solution::{BodyField, InterfaceResult};
+
+/// Force (x, y) and moment of one load.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Wrench {
+    pub fx: f64,
+    pub fy: f64,
+    pub m: f64,
+}
+
+impl Wrench {
+    fn add(&mut self, o: Wrench) {
+        self.fx += o.fx;
+        self.fy += o.fy;
+        self.m += o.m;
+    }
+    fn scaled(self, k: f64) -> Wrench {
+        Wrench {
+            fx: self.fx * k,
+            fy: self.fy * k,
+            m: self.m * k,
+        }
+    }
+    pub fn force(&self) -> f64 {
+        self.fx.hypot(self.fy)
+    }
+}
+
+/// The loads of one body and their imbalance.
+#[derive(Debug, Clone)]
+pub struct BodyBalance {
+    pub body: String,
+    /// The point moments are taken about: the centroid.
+    pub point: [f64; 2],
+    /// (what, wrench): `body_force`, `boundary NAME` (tractions and reactions of a Physical
+    /// Curve), `interface NAME` (the interface's nodal forces on this body).
+    pub loads: Vec<(String, Wrench)>,
+    /// The sum of the loads.
+    pub imbalance: Wrench,
+    /// `max(|ΣF| / S, |ΣM| / (S d))` with `S` the sum of the loads' force magnitudes and
+    /// `d` the diagonal of the body's bounding box; 0 for an unloaded body.
+    pub relative: f64,
+}
+
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// Area and centroid of a body's polygonal boundary (the body is on the left of every
+/// element, so holes subtract), relative to its first node to keep the digits.
+pub fn centroid(body: &Body) -> (f64, [f64; 2]) {
+    let o = body.nodes.first().copied().unwrap_or([0.0; 2]);
+    let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
+    for e in &body.elements {
+        let p = body.nodes[e.nodes[0]];
+        let q = body.nodes[e.nodes[1]];
+        let (p, q) = ([p[0] - o[0], p[1] - o[1]], [q[0] - o[0], q[1] - o[1]]);
+        let w = cross(p, q);
+        a += 0.5 * w;
+        cx += (p[0] + q[0]) * w / 6.0;
+        cy += (p[1] + q[1]) * w / 6.0;
+    }
+    if a == 0.0 {
+        return (0.0, o);
+    }
+    (a, [o[0] + cx / a, o[1] + cy / a])
+}
+
+/// The wrench about `c` of a traction linear along the segment `x0 → x1`.
+fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c: [f64; 2]) -> Wrench {
+    let l = (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
+    let r0 = [x0[0] - c[0], x0[1] - c[1]];
+    let r1 = [x1[0] - c[0], x1[1] - c[1]];
+    Wrench {
+        fx: 0.5 * l * (t0[0] + t1[0]),
+        fy: 0.5 * l * (t0[1] + t1[1]),
+        m: l / 6.0 * (2.0 * cross(r0, t0) + cross(r0, t1) + cross(r1, t0) + 2.0 * cross(r1, t1)),
+    }
+}
+
+/// Every body's loads and imbalance in one solved state, with the state's body forces
+/// `body_force` (before the load factor).
+pub fn balances(
+    model: &Model,
+    fields: &[BodyField],
+    interfaces: &[InterfaceResult],
+    body_force: &[Option<[f64; 2]>],
+    load_factor: f64,
+    thickness: f64,
+) -> Vec<BodyBalance> {
+    let mut out = Vec::with_capacity(model.bodies.len());
+    for (bi, (body, field)) in model.bodies.iter().zip(fields).enumerate() {
+        let (area, c) = centroid(body);
+        let mut loads: Vec<(String, Wrench)> = Vec::new();
+        let mut add = |what: String, w: Wrench| match loads.iter_mut().find(|(n, _)| *n == what) {
+            Some((_, acc)) => acc.add(w),
+            None => loads.push((what, w)),
+        };
+        // The body force of the solved state (its load step's pseudo-time).
+        if let Some(b) = body_force.get(bi).copied().flatten() {
+            add(
+                "body_force".into(),
+                Wrench {
+                    fx: b[0] * load_factor * area,
+                    fy: b[1] * load_factor * area,
+                    m: 0.0,
+                },
+            );
+        }
+        for (e, t) in body.elements.iter().zip(&field.t) {
+            if let Role::Boundary(pi) = e.role {
+                let w = segment_wrench(
+                    body.nodes[e.nodes[0]],
+                    body.nodes[e.nodes[1]],
+                    t[0],
+                    t[1],
+                    c,
+                );
+                add(format!("boundary {}", model.parts[pi].spec.name), w);
+            }
+        }
+        for (it, r) in model.interfaces.iter().zip(interfaces) {
+            let sign = if it.body_a == bi {
+                1.0
+            } else if it.body_b == bi {
+                -1.0
+            } else {
+                continue;
+            };
+            let mut w = vec![0.0; it.pairs.len()];
+            for e in &it.elements {
+                let [j, k] = e.pairs;
+                let l = (it.pairs[k].x[0] - it.pairs[j].x[0])
+                    .hypot(it.pairs[k].x[1] - it.pairs[j].x[1]);
+                w[j] += 0.5 * l;
+                w[k] += 0.5 * l;
+            }
+            let mut total = Wrench::default();
+            for ((p, res), wj) in it.pairs.iter().zip(&r.pairs).zip(&w) {
+                let [ts, tn] = res.traction;
+                let f = [
+                    sign * wj * (ts * p.tangent[0] + tn * p.normal[0]),
+                    sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
+                ];
+                total.add(Wrench {
+                    fx: f[0],
+                    fy: f[1],
+                    m: cross([p.x[0] - c[0], p.x[1] - c[1]], f),
+                });
+            }
+            add(format!("interface {}", it.spec.name), total);
+        }
+        let loads: Vec<(String, Wrench)> = loads
+            .into_iter()
+            .map(|(n, w)| (n, w.scaled(thickness)))
+            .collect();
+        let mut imbalance = Wrench::default();
+        for (_, w) in &loads {
+            imbalance.add(*w);
+        }
+        let scale: f64 = loads.iter().map(|(_, w)| w.force()).sum();
+        let d = diagonal(body);
+        let relative = if scale > 0.0 && d > 0.0 {
+            (imbalance.force() / scale).max(imbalance.m.abs() / (scale * d))
+        } else {
+            0.0
+        };
+        out.push(BodyBalance {
+            body: body.name.clone(),
+            point: c,
+            loads,
+            imbalance,
+            relative,
+        });
+    }
+    out
+}
+
+/// Relative imbalance above which a body that no displacement condition holds is reported:
+/// such bodies balance to round-off in a solved discrete problem.
+pub const UNBALANCED: f64 = 1e-6;
+
+/// A note naming the bodies held by interfaces and tractions only whose loads do not
+/// balance (a contact solution that is no equilibrium, e.g. past the collapse load); `None`
+/// when every such body balances. Bodies with displacement conditions are left out: their
+/// reactions balance only up to the discretisation error (module doc).
+pub fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
+    let held = |body: &Body| {
+        body.elements.iter().any(|e| match e.role {
+            Role::Boundary(pi) => model.parts[pi]
+                .spec
+                .components
+                .iter()
+                .any(|c| c.is_displacement()),
+            Role::Interface(_) => false,
+        })
+    };
+    let bad: Vec<String> = model
+        .bodies
+        .iter()
+        .zip(balances)
+        .filter(|(body, b)| !held(body) && (b.relative > UNBALANCED || b.relative.is_nan()))
+        .map(|(_, b)| format!("{} {:.1e}", b.body, b.relative))
+        .collect();
+    if bad.is_empty() {
+        return None;
+    }
+    let shown = bad.iter().take(5).cloned().collect::<Vec<_>>().join(", ");
+    Some(format!(
+        "equilibrium: {} bod{} held only by interfaces and tractions do not balance (relative \
+         imbalance above {UNBALANCED:e}: {shown}{}): the contact solution is no equilibrium; \
+         the loads may exceed what the joints can carry (a mechanism): reduce the loads or \
+         check the supports",
+        bad.len(),
+        if bad.len() == 1 { "y" } else { "ies" },
+        if bad.len() > 5 { ", ..." } else { "" }
+    ))
+}
+
+fn diagonal(body: &Body) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in &body.nodes {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    (hi[0] - lo[0]).hypot(hi[1] - lo[1])
+}
+
+/// The `equilibrium` object of `summary.json`: per body the point, each load's `fx fy m`,
+/// the imbalance and its relative size.
+pub fn summary(balances: &[BodyBalance]) -> serde_json::Value {
+    let wrench = |w: &Wrench| serde_json::json!({"fx": w.fx, "fy": w.fy, "m": w.m});
+    let mut m = serde_json::Map::new();
+    for b in balances {
+        let loads: serde_json::Map<String, serde_json::Value> = b
+            .loads
+            .iter()
+            .map(|(n, w)| (n.clone(), wrench(w)))
+            .collect();
+        m.insert(
+            b.body.clone(),
+            serde_json::json!({
+                "moments_about": b.point,
+                "loads": loads,
+                "imbalance": wrench(&b.imbalance),
+                "relative_imbalance": b.relative,
+            }),
+        );
+    }
+    serde_json::Value::Object(m)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_traction_on_a_segment_integrates_exactly() {
+        // t = (0, s) along x from 0 to 2 (s = x): F = 2, M about 0 = ∫ x·x dx = 8/3.
+        let w = segment_wrench([0.0, 0.0], [2.0, 0.0], [0.0, 0.0], [0.0, 2.0], [0.0, 0.0]);
+        assert!((w.fy - 2.0).abs() < 1e-15 && w.fx == 0.0);
+        assert!((w.m - 8.0 / 3.0).abs() < 1e-15, "{}", w.m);
+        // About the resultant's line of action x = 4/3 the moment vanishes.
+        let w = segment_wrench(
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [0.0, 0.0],
+            [0.0, 2.0],
+            [4.0 / 3.0, 5.0],
+        );
+        assert!(w.m.abs() < 1e-15, "{}", w.m);
+    }
+}
