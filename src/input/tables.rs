@@ -194,23 +194,74 @@ fn check_used<T>(
     Ok(())
 }
 
+/// The mesh's group names of one dimension, in its order.
+fn group_names(mesh: &Mesh, dim: i32) -> Vec<&str> {
+    mesh.physical_names
+        .iter()
+        .filter(|p| p.dim == dim)
+        .map(|p| p.name.as_str())
+        .collect()
+}
+
+/// One kind of table resolved over the groups: for each group without an exact table (in
+/// the groups' order), the winning glob (`accept` may refuse it for that group) or the
+/// default (`default_for`), renamed after the group by `named`.
+#[allow(clippy::too_many_arguments)]
+fn resolve_kind<'a, T>(
+    (kind, what): (&str, &str),
+    groups: &[&str],
+    has_exact: impl Fn(&str) -> bool,
+    globs: &'a [Pattern<T>],
+    default_for: impl Fn(&str) -> Option<&'a T>,
+    accept: impl Fn(&Pattern<T>, &str) -> Result<()>,
+    named: impl Fn(&T, &str) -> T,
+    sfile: &Path,
+) -> Result<Vec<(T, Resolved)>> {
+    check_used(kind, what, globs, groups, sfile)?;
+    let mut out = Vec::new();
+    let mut seen: BTreeSet<&str> = BTreeSet::new();
+    for &name in groups {
+        if has_exact(name) || !seen.insert(name) {
+            continue;
+        }
+        let Some(source) = pick(kind, what, name, globs, default_for(name), sfile)? else {
+            continue;
+        };
+        let spec = match &source {
+            Source::Glob(g) => {
+                accept(g, name)?;
+                &g.spec
+            }
+            Source::Default(d) => *d,
+        };
+        let table = table_name(kind, &source);
+        out.push((
+            named(spec, name),
+            Resolved {
+                table,
+                group: name.to_string(),
+            },
+        ));
+    }
+    Ok(out)
+}
+
 /// The scene with a concrete `[body]` table for every Physical Surface that has none but
 /// matches a glob or takes `[defaults.body]`: exact tables first in file order, then the
 /// others in the mesh's order. Also says which table applies to each body.
 pub fn resolve_bodies(scene: &Scene, mesh: &Mesh) -> Result<(Scene, Vec<Resolved>)> {
-    let sfile = scene.path.as_path();
-    let surfaces: Vec<&str> = mesh
-        .physical_names
-        .iter()
-        .filter(|p| p.dim == 2)
-        .map(|p| p.name.as_str())
-        .collect();
-    check_used(
-        "body",
-        "Physical Surface",
+    let found = resolve_kind(
+        ("body", "Physical Surface"),
+        &group_names(mesh, 2),
+        |name| scene.body(name).is_some(),
         &scene.tables.bodies,
-        &surfaces,
-        sfile,
+        |_| scene.tables.default_body.as_ref(),
+        |_, _| Ok(()),
+        |spec, name| BodySpec {
+            name: name.to_string(),
+            ..spec.clone()
+        },
+        &scene.path,
     )?;
     let mut out = scene.clone();
     let mut resolved: Vec<Resolved> = scene
@@ -221,32 +272,9 @@ pub fn resolve_bodies(scene: &Scene, mesh: &Mesh) -> Result<(Scene, Vec<Resolved
             group: b.name.clone(),
         })
         .collect();
-    let mut seen: BTreeSet<&str> = BTreeSet::new();
-    for name in surfaces {
-        if scene.body(name).is_some() || !seen.insert(name) {
-            continue;
-        }
-        let source = pick(
-            "body",
-            "Physical Surface",
-            name,
-            &scene.tables.bodies,
-            scene.tables.default_body.as_ref(),
-            sfile,
-        )?;
-        let Some(source) = source else { continue };
-        let spec = match &source {
-            Source::Glob(g) => &g.spec,
-            Source::Default(d) => *d,
-        };
-        out.bodies.push(BodySpec {
-            name: name.to_string(),
-            ..spec.clone()
-        });
-        resolved.push(Resolved {
-            table: table_name("body", &source),
-            group: name.to_string(),
-        });
+    for (spec, r) in found {
+        out.bodies.push(spec);
+        resolved.push(r);
     }
     Ok((out, resolved))
 }
@@ -260,17 +288,36 @@ pub fn resolve_interfaces(
     shared: &BTreeSet<&str>,
 ) -> Result<(Scene, Vec<Resolved>)> {
     let sfile = scene.path.as_path();
-    let curves: Vec<&str> = mesh
-        .physical_names
-        .iter()
-        .filter(|p| p.dim == 1)
-        .map(|p| p.name.as_str())
-        .collect();
-    check_used(
-        "interface",
-        "Physical Curve",
+    let found = resolve_kind(
+        ("interface", "Physical Curve"),
+        &group_names(mesh, 1),
+        |name| scene.interface(name).is_some() || scene.boundary(name).is_some(),
         &scene.tables.interfaces,
-        &curves,
+        |name| {
+            scene
+                .tables
+                .default_interface
+                .as_ref()
+                .filter(|_| shared.contains(name))
+        },
+        |g, name| {
+            if shared.contains(name) {
+                return Ok(());
+            }
+            Err(Error::input(
+                sfile,
+                format!(
+                    "[interface.\"{}\"] matches Physical Curve \"{name}\", which no two bodies \
+                     share: an interface joins two bodies; make the pattern narrower, or give \
+                     \"{name}\" its own [boundary.{name}] table",
+                    g.glob.as_str()
+                ),
+            ))
+        },
+        |spec, name| InterfaceSpec {
+            name: name.to_string(),
+            ..spec.clone()
+        },
         sfile,
     )?;
     let mut out = scene.clone();
@@ -282,50 +329,9 @@ pub fn resolve_interfaces(
             group: i.name.clone(),
         })
         .collect();
-    let mut seen: BTreeSet<&str> = BTreeSet::new();
-    for name in curves {
-        if scene.interface(name).is_some() || scene.boundary(name).is_some() || !seen.insert(name) {
-            continue;
-        }
-        let default = scene
-            .tables
-            .default_interface
-            .as_ref()
-            .filter(|_| shared.contains(name));
-        let source = pick(
-            "interface",
-            "Physical Curve",
-            name,
-            &scene.tables.interfaces,
-            default,
-            sfile,
-        )?;
-        let Some(source) = source else { continue };
-        let spec = match &source {
-            Source::Glob(g) => {
-                if !shared.contains(name) {
-                    return Err(Error::input(
-                        sfile,
-                        format!(
-                            "[interface.\"{}\"] matches Physical Curve \"{name}\", which no two \
-                             bodies share: an interface joins two bodies; make the pattern \
-                             narrower, or give \"{name}\" its own [boundary.{name}] table",
-                            g.glob.as_str()
-                        ),
-                    ));
-                }
-                &g.spec
-            }
-            Source::Default(d) => *d,
-        };
-        out.interfaces.push(InterfaceSpec {
-            name: name.to_string(),
-            ..spec.clone()
-        });
-        resolved.push(Resolved {
-            table: table_name("interface", &source),
-            group: name.to_string(),
-        });
+    for (spec, r) in found {
+        out.interfaces.push(spec);
+        resolved.push(r);
     }
     Ok((out, resolved))
 }
