@@ -576,8 +576,36 @@ pub fn point_integrals(
     f: &Segment,
     settings: &QuadratureSettings,
 ) -> (PointDisplacement, PointStress) {
-    let n = f.normal();
-    let lf = f.length();
+    point_integrals_on(m, x, &ElementFrame::new(*f), settings)
+}
+
+/// A segment with its unit normal and length, computed once for the many field points of
+/// the post-processing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ElementFrame {
+    pub segment: Segment,
+    pub normal: Vec2,
+    pub length: f64,
+}
+
+impl ElementFrame {
+    pub fn new(segment: Segment) -> Self {
+        ElementFrame {
+            segment,
+            normal: segment.normal(),
+            length: segment.length(),
+        }
+    }
+}
+
+/// [`point_integrals`] on an element whose normal and length are known.
+pub fn point_integrals_on(
+    m: &Material,
+    x: Vec2,
+    frame: &ElementFrame,
+    settings: &QuadratureSettings,
+) -> (PointDisplacement, PointStress) {
+    let (f, n, lf) = (&frame.segment, frame.normal, frame.length);
     // r = (x − P) − η(Q − P): the large coordinates cancel once, before the quadrature.
     let xp = [x[0] - f.p[0], x[1] - f.p[1]];
     let c = f.chord();

@@ -38,7 +38,8 @@
 //! `/timings`, `/history/interfaces`) carry an `order` attribute with the child names in
 //! record order; a child's real name is its `name` attribute (group names have `/` replaced).
 //! Every dataset carries `description` and `units` attributes. Datasets of 4096 values or
-//! more are chunked and compressed (shuffle + deflate) when the HDF5 library has deflate.
+//! more are chunked and compressed (shuffle + deflate, level [`DEFLATE_LEVEL`]) when the HDF5
+//! library has deflate.
 //!
 //! The file is written under a temporary name in the same folder (synced, unless it is in a
 //! run's staging folder, which is synced when committed) and renamed when complete: an interrupted run never leaves a file named `archive.h5` that looks finished.
@@ -66,6 +67,10 @@ pub const FORMAT: &str = "sgbem-archive";
 
 /// Datasets with at least this many values are chunked and compressed.
 const COMPRESS_FROM: usize = 4096;
+/// The deflate level: 1. Compressing the archived operators is the largest single piece of
+/// a run's CPU (example 2: 13 MB of dense matrices); level 1 costs about 9 % less CPU per run
+/// than level 4 for 0.7 % more archive (11.64 MB against 11.56 MB).
+const DEFLATE_LEVEL: u8 = 1;
 /// Values per chunk, at most.
 const CHUNK_VALUES: usize = 65_536;
 
@@ -408,7 +413,11 @@ fn put<T: H5Type>(
         let mut chunk = shape.to_vec();
         let rest: usize = shape[1..].iter().product::<usize>().max(1);
         chunk[0] = (CHUNK_VALUES / rest).clamp(1, shape[0]);
-        builder.chunk(chunk).shuffle().deflate(4).create(name)
+        builder
+            .chunk(chunk)
+            .shuffle()
+            .deflate(DEFLATE_LEVEL)
+            .create(name)
     } else {
         builder.create(name)
     };

@@ -49,7 +49,9 @@ use std::collections::HashMap;
 use rayon::prelude::*;
 
 use crate::bem::assembly::scaling;
-use crate::bem::galerkin::{point_integrals, PointDisplacement, PointStress, Segment};
+use crate::bem::galerkin::{
+    point_integrals_on, ElementFrame, PointDisplacement, PointStress, Segment,
+};
 use crate::bem::kernels::{body_force_fields, boundary_area, Mat2, Material, Vec2};
 use crate::bem::quadrature::QuadratureSettings;
 use crate::input::model::Body;
@@ -382,9 +384,11 @@ struct Geometry<'a> {
     material: Material,
     centre: Vec2,
     length: f64,
-    /// Physical segments (for distances) and scaled segments (for the integrals).
+    /// Physical segments (for distances) and scaled segments (for the integrals, with
+    /// their normals and lengths).
     segments: Vec<Segment>,
     scaled: Vec<Segment>,
+    frames: Vec<ElementFrame>,
     scaled_area: f64,
     /// For corner nodes, the shorter length of the two elements meeting there.
     corner_layer: Vec<Option<f64>>,
@@ -457,6 +461,7 @@ impl<'a> Geometry<'a> {
             centre,
             length,
             segments,
+            frames: scaled.iter().map(|s| ElementFrame::new(*s)).collect(),
             scaled,
             scaled_area,
             corner_layer: node_kinds(body)
@@ -494,9 +499,9 @@ impl<'a> Geometry<'a> {
         Integrals {
             xs,
             per_element: self
-                .scaled
+                .frames
                 .iter()
-                .map(|seg| point_integrals(&self.material, xs, seg, settings))
+                .map(|f| point_integrals_on(&self.material, xs, f, settings))
                 .collect(),
         }
     }
@@ -556,9 +561,9 @@ impl<'a> Geometry<'a> {
         let xs = self.scaled_point(x);
         let m = &self.material;
         let integrals = self
-            .scaled
+            .frames
             .iter()
-            .map(|seg| point_integrals(m, xs, seg, settings));
+            .map(|f| point_integrals_on(m, xs, f, settings));
         self.identities(v, xs, integrals)
     }
 
@@ -893,7 +898,7 @@ impl<'a> PointSampler<'a> {
                         Plan::Ray { far, .. } => Some(far),
                         Plan::Boundary(..) => None,
                     };
-                    let bytes = geometries[bi].scaled.len() * pair;
+                    let bytes = geometries[bi].frames.len() * pair;
                     let slot = y.filter(|_| bytes <= budget).map(|y| {
                         budget -= bytes;
                         todo.push((bi, y));
