@@ -700,3 +700,35 @@ fn a_step_that_does_not_converge_is_subdivided_and_reaches_the_same_state() {
         );
     }
 }
+
+#[test]
+fn a_pier_of_blocks_past_overturning_ends_with_the_tipping_mechanism() {
+    // The pier of 8 stacked blocks (pipelines/wall.toml, stick joints) stands under its
+    // wind of 1.5 kN/m²; at 4 kN/m² the resultant on the 1.4 m of blocks above the first
+    // joint falls outside it. Rigid blocks 0.4 wide, about the joint's leeward edge: wind
+    // 1.5 · 1.4² / 2 = 1.47 (stands) and 4 · 1.4² / 2 = 3.92 kNm per m (tips) against the
+    // weight's 0.4 · 1.4 · 20 · 0.2 = 2.24 kNm per m.
+    let dir = support::tmpdir("pier_overturning");
+    let scene = support::root().join("pipelines/wall.toml");
+    for (wind, code) in [("1.5", 0), ("4.0", 3)] {
+        let out = dir.join(format!("w{wind}"));
+        let (c, _, stderr) = support::sgbem(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--set",
+            &format!("boundary.left.tx={wind}"),
+            "--out",
+            out.to_str().unwrap(),
+            "--quiet",
+        ]);
+        assert_eq!(c, code, "wind {wind}: {stderr}");
+        if code == 3 {
+            eprintln!("wind {wind}: {}", stderr.trim());
+            assert!(
+                stderr.contains("no equilibrium exists") && stderr.contains("tipping"),
+                "{stderr}"
+            );
+            assert!(stderr.contains("body \"brick_2\""), "{stderr}");
+        }
+    }
+}
