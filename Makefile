@@ -30,6 +30,7 @@ help:
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
 	@echo "  make vault     the paper's vault (example 3) for five cohesions, tables in out/vault/"
+	@echo "  make arch-min  the minimum thickness of a semicircular arch by bisection (out/arch_min/)"
 	@echo "  make accuracy  refinement studies: error and time"
 	@echo "  make bench     per-stage benchmarks"
 	@echo "  make report    refresh the committed pictures (docs/img) and docs/results.md"
@@ -115,6 +116,12 @@ vault: build out/mesh/vault.msh
 	$(SGBEM) sweep pipelines/vault_c0.toml --set 'interface.*.cohesion=$(VAULT_COHESION)' \
 	  --jobs $(JOBS) --out out/vault/sweep
 	python3 pipelines/vault_table.py out
+
+# The minimum thickness of a semicircular arch (40 voussoirs, friction mu = 1) by bisection
+# on t/R between a ring that stands and one that collapses: out/arch_min/result.md.
+.PHONY: arch-min
+arch-min: setup build
+	$(PY) pipelines/arch_min_thickness.py $(SGBEM) --out out/arch_min
 
 bench:
 	$(CARGO) bench --bench stages
