@@ -228,7 +228,8 @@ fn solve_loaded_then(
     // With `[solve] time` and values that depend on t, every step has its own loads: the
     // model is evaluated and the bodies assembled again at the step's pseudo-time (the
     // operators are the same; the columns of the opening stiffness are kept).
-    let timed = scene.solve.time.is_some() && crate::plan::uses_time(scene);
+    let timed = (scene.solve.time.is_some() || scene.solve.collapse.is_some())
+        && crate::plan::uses_time(scene);
     let method = scene.solve.method;
     let tol = scene.solve.tolerance;
     let maxit = scene.solve.max_iterations;
@@ -289,6 +290,106 @@ fn solve_loaded_then(
         }
     }
     let stage = progress.contact(steps.len());
+    let mut last_prepared = None;
+    let stepper = Stepper {
+        scene,
+        model,
+        settings,
+        timed,
+        cause: &cause,
+    };
+    // The collapse search: the largest multiplier t with an equilibrium, then the run
+    // itself at that t.
+    let mut collapse_info = None;
+    let (steps, last) = match scene.solve.collapse {
+        None => (steps, last),
+        Some(c) => {
+            let trial_ctx = StepContext {
+                scene,
+                model,
+                main,
+                checks: &[],
+                last: 0,
+                steps: 1,
+                tol,
+                maxit,
+                stage: &stage,
+            };
+            let mut trials: Vec<serde_json::Value> = Vec::new();
+            // One trial: a single step from the unloaded state at t; Some(mechanism) when
+            // no equilibrium exists, an error when the solver fails otherwise.
+            let mut trial = |t: f64,
+                             session: &mut crate::contact::Session,
+                             timings: &mut Timings,
+                             last_prepared: &mut Option<crate::contact::solve::Prepared>|
+             -> Result<Option<Error>> {
+                let mut st = session.initial();
+                let mut a = StepAcc::default();
+                let t0 = Instant::now();
+                step_at(
+                    &stepper,
+                    session,
+                    &trial_ctx,
+                    0,
+                    (1.0, t),
+                    &mut st,
+                    &mut a,
+                    timings,
+                    last_prepared,
+                )?;
+                timings.add("collapse_search", t0.elapsed().as_secs_f64());
+                let outcome = match a.failure {
+                    None => None,
+                    Some(e) if a.mechanism => Some(e),
+                    Some(e) => {
+                        return Err(Error::numerical(format!(
+                            "the collapse search failed at t = {}: {}",
+                            crate::input::model::fmt_num(t),
+                            e.message()
+                        )))
+                    }
+                };
+                trials.push(serde_json::json!({
+                    "t": t, "stands": outcome.is_none(),
+                }));
+                Ok(outcome)
+            };
+            if let Some(e) = trial(0.0, &mut session, timings, &mut last_prepared)? {
+                return Err(Error::numerical(format!(
+                    "the collapse search found no equilibrium at t = 0 (before any load \
+                     multiplier): {}",
+                    e.message()
+                )));
+            }
+            let (mut lo, mut hi) = (0.0, c.max);
+            let mut mechanism = trial(c.max, &mut session, timings, &mut last_prepared)?;
+            if mechanism.is_none() {
+                lo = c.max;
+            } else {
+                while hi - lo > c.tolerance {
+                    let mid = 0.5 * (lo + hi);
+                    match trial(mid, &mut session, timings, &mut last_prepared)? {
+                        None => lo = mid,
+                        Some(e) => {
+                            hi = mid;
+                            mechanism = Some(e);
+                        }
+                    }
+                }
+            }
+            let collapses = mechanism.is_some();
+            collapse_info = Some(serde_json::json!({
+                "multiplier": lo,
+                "collapses_at": if collapses { serde_json::json!(hi) } else { serde_json::Value::Null },
+                "tolerance": c.tolerance,
+                "max": c.max,
+                "mechanism": mechanism.map(|e| e.message().to_string()),
+                "trials": trials,
+                "state": "the results are those of the largest multiplier with an equilibrium",
+            }));
+            (vec![(1.0, lo)], 0)
+        }
+    };
     let mut state = session.initial();
     let mut acc = StepAcc::default();
     let ctx = StepContext {
@@ -301,14 +402,6 @@ fn solve_loaded_then(
         tol,
         maxit,
         stage: &stage,
-    };
-    let mut last_prepared = None;
-    let stepper = Stepper {
-        scene,
-        model,
-        settings,
-        timed,
-        cause: &cause,
     };
     for (step, &to) in steps.iter().enumerate() {
         // Where the step starts, for substeps: the previous step, or (timed paths aside)
@@ -357,6 +450,10 @@ fn solve_loaded_then(
         "interface_system_size": session.problem.base_size(),
         "cross_checks": cross,
     });
+    let mut contact = contact;
+    if let Some(c) = collapse_info {
+        contact["collapse"] = c;
+    }
     let Some((load_factor, time, body_force, fields, interfaces, nodal_force)) = final_sol else {
         return Err(Error::numerical("the contact stage produced no state"));
     };

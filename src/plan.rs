@@ -264,6 +264,29 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     } else {
         String::new()
     };
+    if let Some(c) = scene.solve.collapse {
+        let dep = time_dependent(scene);
+        if dep.is_empty() {
+            return Err(Error::input(
+                &scene.path,
+                "`solve.collapse` increases the load multiplier t, but no prescribed value \
+                 depends on t: write the load to increase as an expression in t, e.g. \
+                 tx = \"2.5*t\" or body_force = [\"0.2*t\", -20.0]"
+                    .to_string(),
+            ));
+        }
+        stages.push((
+            "collapse",
+            format!(
+                "bisection on the load multiplier t in [0, {}] to {} (depending on t: {}), \
+                 each trial one step from the unloaded state; the results are those of the \
+                 largest t with an equilibrium",
+                crate::input::model::fmt_num(c.max),
+                crate::input::model::fmt_num(c.tolerance),
+                dep.join(", ")
+            ),
+        ));
+    }
     if let Some(ts) = &scene.solve.time {
         let dep = time_dependent(scene);
         let list: Vec<String> = ts

@@ -214,7 +214,17 @@ pub struct SolveSpec {
     pub load_factors: Vec<f64>,
     /// Pseudo-time steps (`[solve] time`), increasing; `None` with load factors.
     pub time: Option<Vec<f64>>,
+    /// `[solve] collapse`: find the largest pseudo-time t (the load multiplier) at which
+    /// equilibrium exists, by bisection.
+    pub collapse: Option<Collapse>,
     pub quadrature: Quadrature,
+}
+
+/// The collapse search: t in [0, max], bisected to `tolerance` (absolute, in t).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Collapse {
+    pub max: f64,
+    pub tolerance: f64,
 }
 
 impl SolveSpec {
@@ -584,7 +594,15 @@ struct RawSolve {
     max_iterations: Option<i64>,
     load_factors: Option<Vec<f64>>,
     time: Option<Vec<f64>>,
+    collapse: Option<RawCollapse>,
     quadrature: Option<String>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawCollapse {
+    max: f64,
+    tolerance: Option<f64>,
 }
 
 #[derive(Deserialize)]
@@ -640,12 +658,13 @@ const INTERFACE_KEYS: [&str; 6] = [
     "tangential",
     "friction",
 ];
-const SOLVE_KEYS: [&str; 6] = [
+const SOLVE_KEYS: [&str; 7] = [
     "method",
     "tolerance",
     "max_iterations",
     "load_factors",
     "time",
+    "collapse",
     "quadrature",
 ];
 const OUTPUT_KEYS: [&str; 6] = [
@@ -1371,12 +1390,43 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
             Some(ts)
         }
     };
+    let collapse = match raw.collapse {
+        None => None,
+        Some(_) if has_factors || time.is_some() => {
+            return Err(err(
+                "`solve.collapse` searches the load multiplier t itself: remove \
+                 `solve.load_factors` and `solve.time`"
+                    .into(),
+            ))
+        }
+        Some(c) => {
+            if !(c.max.is_finite() && c.max > 0.0) {
+                return Err(err(format!(
+                    "`solve.collapse.max` = {} must be a positive number (the largest load \
+                     multiplier t tried)",
+                    c.max
+                )));
+            }
+            let tol = c.tolerance.unwrap_or(1e-3 * c.max);
+            if !(tol.is_finite() && tol > 0.0 && tol < c.max) {
+                return Err(err(format!(
+                    "`solve.collapse.tolerance` = {tol} must be positive and below max = {}",
+                    c.max
+                )));
+            }
+            Some(Collapse {
+                max: c.max,
+                tolerance: tol,
+            })
+        }
+    };
     Ok(SolveSpec {
         method,
         tolerance,
         max_iterations: max_iterations as usize,
         load_factors,
         time,
+        collapse,
         quadrature,
     })
 }
