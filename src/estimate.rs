@@ -146,7 +146,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     if pairs == 0 {
         return None;
     }
-    let steps = scene.solve.load_factors.len();
+    let steps = scene.solve.steps().len();
     let switches = steps * pairs;
     let (p, s, k) = (pairs as f64, switches as f64 / steps as f64, steps as f64);
     let mut interface_unknowns = 0usize;

@@ -973,9 +973,14 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             ));
         }
     }
+    // The final state belongs to the last step solved (the failing one after a failure).
+    let final_step = result
+        .states
+        .last()
+        .map_or(scene.solve.steps().len() - 1, |s| s.load_step);
     states.push(StateRecord::new(
         states.len(),
-        scene.solve.load_factors.len() - 1,
+        final_step,
         result.load_factor,
         result.fields.clone(),
         result.interfaces.clone(),

@@ -564,6 +564,17 @@ impl<'a> Session<'a> {
             st = next;
         }
         let (final_state, residual) = last.unwrap_or_else(|| (all_closed_state(n), f64::INFINITY));
+        // The last outer iteration may change ties, cohesion or slip bounds without a
+        // switch: then its state is not among the recorded ones, and the history must end
+        // with the state the step gives.
+        if record {
+            if let Some((k, open, s)) = compact.last() {
+                if *open != final_state.open || *s != final_state.s {
+                    let k = k + 1;
+                    compact.push((k, final_state.open.clone(), final_state.s.clone()));
+                }
+            }
+        }
         if slipping > 0 {
             notes.push(format!(
                 "{slipping} stick pair(s) at the contact edge neither stay tied (they open) nor \
