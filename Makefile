@@ -82,6 +82,11 @@ test: setup mesh
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
+	@# A multi-body, multi-step, frictional run: history, VTK and archive agree at every step.
+	$(SGBEM) run pipelines/cattaneo_mindlin.toml --out out/test/cattaneo_mindlin --quiet
+	$(PY) pipelines/check_outputs.py out/test/cattaneo_mindlin
+	$(SGBEM) run pipelines/vault_c0.toml --out out/test/vault_c0 --quiet
+	$(PY) pipelines/check_outputs.py out/test/vault_c0
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
 	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
