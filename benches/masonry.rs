@@ -10,23 +10,6 @@ mod support;
 use sgbem::pipeline::{run, RunOptions};
 use support::*;
 
-/// Peak resident memory (kB) since the last reset.
-fn peak_kb() -> u64 {
-    std::fs::read_to_string("/proc/self/status")
-        .ok()
-        .and_then(|s| {
-            s.lines()
-                .find(|l| l.starts_with("VmHWM:"))
-                .and_then(|l| l.split_whitespace().nth(1))
-                .and_then(|v| v.parse().ok())
-        })
-        .unwrap_or(0)
-}
-
-fn reset_peak() {
-    let _ = std::fs::write("/proc/self/clear_refs", "5");
-}
-
 fn fit(xs: &[f64], ys: &[f64]) -> f64 {
     let n = xs.len() as f64;
     let (lx, ly): (Vec<f64>, Vec<f64>) = xs

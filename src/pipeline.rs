@@ -251,7 +251,12 @@ fn solve_loaded_then(
             Some((m, p)) => (m, p),
             None => (model, &prepared),
         };
-        let problem = crate::contact::problem::Problem::new(m, p).map_err(cause)?;
+        // The session's factorised system serves unless the loads are those of another t.
+        let other = match &at {
+            Some(_) => Some(crate::contact::problem::Problem::new(m, p).map_err(cause)?),
+            None => None,
+        };
+        let problem = other.as_ref().unwrap_or(&session.problem);
         let n = problem.n_open_rows;
         let start = session.initial();
         let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
@@ -271,7 +276,7 @@ fn solve_loaded_then(
             notes: Vec::new(),
             failure: None,
         };
-        drop(problem);
+        drop(other);
         drop(session);
         return Ok((at.map_or(prepared, |(_, p)| p), result));
     }

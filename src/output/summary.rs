@@ -63,10 +63,9 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
             }
         }
         let max_slip = r.pairs.iter().map(|p| p.slip).fold(0.0, f64::max);
-        let m = out.as_object_mut().expect("an object");
-        m.insert("stick_length".into(), json!(stick));
-        m.insert("slip_length".into(), json!(slip));
-        m.insert("max_accumulated_slip".into(), json!(max_slip));
+        out["stick_length"] = json!(stick);
+        out["slip_length"] = json!(slip);
+        out["max_accumulated_slip"] = json!(max_slip);
     }
     out
 }

@@ -304,3 +304,21 @@ pub fn read_interface_csv(path: &Path) -> Vec<InterfaceRow> {
         })
         .collect()
 }
+
+/// Peak resident memory (kB) of this process since the last [`reset_peak`] (benches).
+pub fn peak_kb() -> u64 {
+    std::fs::read_to_string("/proc/self/status")
+        .ok()
+        .and_then(|s| {
+            s.lines()
+                .find(|l| l.starts_with("VmHWM:"))
+                .and_then(|l| l.split_whitespace().nth(1))
+                .and_then(|v| v.parse().ok())
+        })
+        .unwrap_or(0)
+}
+
+/// Resets the peak resident memory counter of this process.
+pub fn reset_peak() {
+    let _ = std::fs::write("/proc/self/clear_refs", "5");
+}
