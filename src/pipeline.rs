@@ -261,6 +261,11 @@ fn solve_loaded_then(
         let start = session.initial();
         let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
         timings.add("solve", t.elapsed().as_secs_f64());
+        let mut contact = serde_json::json!({"solver": "linear (no unilateral interface)"});
+        let junctions = m.junctions();
+        if !junctions.is_empty() {
+            contact["junctions"] = junctions_json(m, &junctions, &problem.implied);
+        }
         let result = RunResult {
             status: "solved".into(),
             load_factor: f,
@@ -271,7 +276,7 @@ fn solve_loaded_then(
             nodal_force,
             history: crate::solution::History::default(),
             states: Vec::new(),
-            contact: serde_json::json!({"solver": "linear (no unilateral interface)"}),
+            contact,
             qp: None,
             notes: Vec::new(),
             failure: None,
@@ -456,6 +461,10 @@ fn solve_loaded_then(
         "cross_checks": cross,
     });
     let mut contact = contact;
+    let junctions = session.model.junctions();
+    if !junctions.is_empty() {
+        contact["junctions"] = junctions_json(session.model, &junctions, &session.problem.implied);
+    }
     if let Some(c) = collapse_info {
         contact["collapse"] = c;
     }
@@ -496,6 +505,36 @@ struct StepContext<'a> {
     tol: f64,
     maxit: usize,
     stage: &'a crate::output::progress::Stage,
+}
+
+/// The `contact.junctions` block: how many points join three or more bodies, and the pair
+/// components there that the kept rows imply (no row of their own; see
+/// `contact::problem::Problem::new`), by interface.
+fn junctions_json(
+    model: &Model,
+    junctions: &[([f64; 2], Vec<usize>)],
+    implied: &[crate::contact::problem::Implied],
+) -> serde_json::Value {
+    let mut by_iface: std::collections::BTreeMap<String, Vec<serde_json::Value>> =
+        std::collections::BTreeMap::new();
+    for i in implied {
+        let it = &model.interfaces[i.iface];
+        by_iface
+            .entry(it.spec.name.clone())
+            .or_default()
+            .push(serde_json::json!({
+                "x": it.pairs[i.pair].x,
+                "component": if i.comp == 1 { "normal" } else { "tangential" },
+            }));
+    }
+    let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
+    serde_json::json!({
+        "points": junctions.len(),
+        "most_bodies_at_a_point": most,
+        "rule": "at a point where bodies meet in a cycle of pairs, rows are kept bonded first (normal components first), then unilateral normal, then tangential, while independent; the others are implied by the kept rows while these are closed, and carry no force of their own",
+        "implied_components": implied.len(),
+        "implied": by_iface,
+    })
 }
 
 /// The final boundary solution of a step: load factor, time, body forces, fields,
@@ -737,7 +776,7 @@ fn contact_step(
     acc: &mut StepAcc,
     timings: &mut Timings,
 ) {
-    use crate::contact::{differing_pairs, Method as Solver};
+    use crate::contact::Method as Solver;
     use std::time::Instant;
     let (scene, model, main) = (ctx.scene, ctx.model, ctx.main);
     let (tol, maxit) = (ctx.tol, ctx.maxit);
@@ -767,11 +806,13 @@ fn contact_step(
             },
             t.elapsed().as_secs_f64(),
         );
-        let differing = differing_pairs(&x.interfaces, &r.interfaces);
+        let (all, degenerate) =
+            crate::contact::status_differences(&x.interfaces, &r.interfaces, model.scale);
+        let differing = all - degenerate;
         acc.cross.push(serde_json::json!({
             "solver": c.name(), "load_step": step, "iterations": x.iterations,
             "outer_iterations": x.outer_iterations, "converged": x.converged,
-            "differing_pairs": differing, "info": x.info,
+            "differing_pairs": differing, "degenerate_pairs": degenerate, "info": x.info,
             "failure": x.failure.as_ref().map(|e| e.message()),
         }));
         if c == Solver::Qp && step == ctx.last {
@@ -948,7 +989,8 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // the history and the states.
     let t1 = Instant::now();
     let mut contact_operators = None;
-    if scene.output.operators {
+    // Junctions have no place in the paper's mixed layout (one displacement per pair).
+    if scene.output.operators && model.junctions().is_empty() {
         let final_status = final_status(model, &result);
         let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
         if layout.n <= 3000 {

@@ -254,8 +254,12 @@ pub fn assemble_body_scaled(
     let ne = body.elements.len();
     let nn = body.nodes.len();
 
-    // --- Interface membership of nodes: (iface, pair) ------------------------------------
-    let mut node_pair: Vec<Option<(usize, usize)>> = vec![None; nn];
+    // --- Interface membership of nodes: (iface, pair), several at a junction ---------------
+    // A node where this body meets two or more other bodies (a junction: the corner of a
+    // brick at a T-junction of head and bed joints) belongs to a pair of each interface. Its
+    // displacement is one unknown vector (in the frame of its first pair); its traction has
+    // one set of hats per interface, on that interface's elements.
+    let mut node_pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nn];
     for (k, it) in model.interfaces.iter().enumerate() {
         let side_a = it.body_a == bi;
         if !side_a && it.body_b != bi {
@@ -263,20 +267,7 @@ pub fn assemble_body_scaled(
         }
         for (j, p) in it.pairs.iter().enumerate() {
             let n = if side_a { p.node_a } else { p.node_b };
-            if let Some((k0, _)) = node_pair[n] {
-                return Err(Error::input(
-                    scene_file,
-                    format!(
-                        "node {} of body \"{}\" belongs to interfaces \"{}\" and \"{}\": a point \
-                         where three bodies meet is not supported; separate the joints",
-                        fmt_point(body.nodes[n]),
-                        body.name,
-                        model.interfaces[k0].spec.name,
-                        it.spec.name
-                    ),
-                ));
-            }
-            node_pair[n] = Some((k, j));
+            node_pairs[n].push((k, j));
         }
     }
 
@@ -330,7 +321,7 @@ pub fn assemble_body_scaled(
                     on: None,
                 }),
                 DofClass::Interface => {
-                    let Some((iface, pair)) = node_pair[n] else {
+                    let Some(&(iface, pair)) = node_pairs[n].first() else {
                         return Err(Error::input(
                             scene_file,
                             format!(
@@ -341,31 +332,36 @@ pub fn assemble_body_scaled(
                             ),
                         ));
                     };
-                    let p = &model.interfaces[iface].pairs[pair];
-                    let frame = [p.tangent, p.normal];
-                    // The unknown direction must be one of the pair's local directions.
-                    let comp = if d.class == [DofClass::Interface; 2] {
-                        k
+                    // The unknown direction must be one of a pair's local directions (at a
+                    // junction, of any of its pairs; the contact problem projects it onto
+                    // the frames of the others).
+                    let found = if d.class == [DofClass::Interface; 2] {
+                        let p = &model.interfaces[iface].pairs[pair];
+                        Some((iface, pair, k, [p.tangent, p.normal][k]))
                     } else {
-                        match (0..2).find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9) {
-                            Some(c) => c,
-                            None => {
-                                return Err(Error::input(
-                                    scene_file,
-                                    format!(
-                                        "interface \"{}\" at {}: a displacement condition there \
-                                         prescribes a direction oblique to the interface; \
-                                         prescribe it along the interface or its normal",
-                                        model.interfaces[iface].spec.name,
-                                        fmt_point(body.nodes[n])
-                                    ),
-                                ))
-                            }
-                        }
+                        node_pairs[n].iter().find_map(|&(kk, jj)| {
+                            let p = &model.interfaces[kk].pairs[jj];
+                            let frame = [p.tangent, p.normal];
+                            (0..2)
+                                .find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9)
+                                .map(|c| (kk, jj, c, frame[c]))
+                        })
+                    };
+                    let Some((iface, pair, comp, dir)) = found else {
+                        return Err(Error::input(
+                            scene_file,
+                            format!(
+                                "interface \"{}\" at {}: a displacement condition there \
+                                 prescribes a direction oblique to the interface; prescribe it \
+                                 along the interface or its normal",
+                                model.interfaces[iface].spec.name,
+                                fmt_point(body.nodes[n])
+                            ),
+                        ));
                     };
                     u0.push(Unknown::Displacement {
                         node: n,
-                        dir: frame[comp],
+                        dir,
                         on: Some((iface, pair, comp)),
                     });
                 }
@@ -375,10 +371,10 @@ pub fn assemble_body_scaled(
     unknowns.extend(loop_modes(body));
     let n_x = unknowns.len();
     // F0: interface traction hats, both local components at every pair node of this body.
-    let mut pairs_here: Vec<(usize, usize, usize)> = node_pair
+    let mut pairs_here: Vec<(usize, usize, usize)> = node_pairs
         .iter()
         .enumerate()
-        .filter_map(|(n, p)| p.map(|(k, j)| (k, j, n)))
+        .flat_map(|(n, list)| list.iter().map(move |&(k, j)| (k, j, n)))
         .collect();
     pairs_here.sort_unstable();
     for &(k, j, _) in &pairs_here {

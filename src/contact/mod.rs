@@ -893,16 +893,50 @@ pub fn detached_length(model: &Model, k: usize, r: &InterfaceResult) -> f64 {
 /// Number of unilateral pairs whose statuses (open/closed, and stick/slip with friction)
 /// differ between two results.
 pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
-    a.iter()
-        .zip(b)
-        .map(|(x, y)| {
-            x.pairs
-                .iter()
-                .zip(&y.pairs)
-                .filter(|(p, q)| {
-                    p.status != q.status || p.tangential_status() != q.tangential_status()
-                })
-                .count()
-        })
-        .sum()
+    compare_pairs(a, b, 0.0).0
+}
+
+/// (pairs whose statuses differ, of which degenerate) between two results of a model of
+/// size `length`. A degenerate pair is closed with no normal force (below 1e-8 of the
+/// largest) in one result and open with no opening (below 1e-12 of `length`) in the
+/// other: touching without pressing, like the head joints of a wall under vertical load.
+/// Both statuses solve the LCP there, with the same forces and gaps.
+pub fn status_differences(
+    a: &[InterfaceResult],
+    b: &[InterfaceResult],
+    length: f64,
+) -> (usize, usize) {
+    compare_pairs(a, b, 1e-12 * length)
+}
+
+/// (pairs with different statuses, of which degenerate).
+fn compare_pairs(a: &[InterfaceResult], b: &[InterfaceResult], u_tol: f64) -> (usize, usize) {
+    let t_tol = 1e-8
+        * a.iter()
+            .chain(b)
+            .flat_map(|r| r.pairs.iter())
+            .map(|p| p.traction[1].abs())
+            .fold(0.0, f64::max);
+    let (mut all, mut degenerate) = (0, 0);
+    for (x, y) in a.iter().zip(b) {
+        for (p, q) in x.pairs.iter().zip(&y.pairs) {
+            if p.status == q.status && p.tangential_status() == q.tangential_status() {
+                continue;
+            }
+            all += 1;
+            let (closed, open) = match (p.status, q.status) {
+                (PairStatus::Closed, PairStatus::Open) => (p, q),
+                (PairStatus::Open, PairStatus::Closed) => (q, p),
+                _ => continue,
+            };
+            if u_tol > 0.0
+                && closed.traction[1].abs() <= t_tol
+                && (open.jump[1] - closed.jump[1]).abs() <= u_tol
+                && (open.traction[0] - closed.traction[0]).abs() <= t_tol
+            {
+                degenerate += 1;
+            }
+        }
+    }
+    (all, degenerate)
 }

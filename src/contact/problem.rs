@@ -124,6 +124,41 @@ pub struct Row {
     pub weight: f64,
 }
 
+/// A body's interface nodes → their displacement dofs (global index, direction).
+type NodeDofMap = std::collections::HashMap<usize, Vec<(usize, [f64; 2])>>;
+
+/// A pair component at a junction left without a row (see [`Problem::new`]).
+#[derive(Debug, Clone, Copy)]
+pub struct Implied {
+    pub iface: usize,
+    pub pair: usize,
+    pub comp: usize,
+    pub kind: RowKind,
+}
+
+/// A candidate row before the junction cycles are cut: its coefficients over the dofs.
+struct Candidate {
+    row: Row,
+    /// `[u]_r = Σ coef·U_d` (B's dofs positive, A's negative).
+    coefs: Vec<(usize, f64)>,
+    /// How many of `coefs` are B's (they come first).
+    n_b: usize,
+}
+
+/// One eliminated dof: `U_d = Σ m·U_master + Σ r·(s_q − h_q)` over candidate rows q.
+#[derive(Debug, Clone, Default)]
+struct Expr {
+    m: Vec<(usize, f64)>,
+    r: Vec<(usize, f64)>,
+}
+
+fn add_to(list: &mut Vec<(usize, f64)>, k: usize, x: f64) {
+    match list.iter_mut().find(|(q, _)| *q == k) {
+        Some(e) => e.1 += x,
+        None => list.push((k, x)),
+    }
+}
+
 /// The contact problem of a model: per-body operators, rows, and the glued base factor.
 pub struct Problem {
     pub ops: Vec<BodyOp>,
@@ -136,8 +171,18 @@ pub struct Problem {
     pub n_open_rows: usize,
     /// `row_of[k][j][c]`: the row of a pair component, if any.
     pub row_of: Vec<Vec<[Option<usize>; 2]>>,
-    /// Glued index of each global dof (shared by the two sides of a base-closed row).
-    glued: Vec<usize>,
+    /// Each global dof in the glued unknowns v and the row openings:
+    /// `U_d = Σ tmap[d]·v + Σ offs[d]·(s_r − h_r)` (a single `(g, 1)` for a dof that is not
+    /// eliminated; the two sides of a closed row share their glued unknowns).
+    tmap: Vec<Vec<(usize, f64)>>,
+    offs: Vec<Vec<(usize, f64)>>,
+    /// `t_r = ∂U/∂s_r` of each row (the dofs its opening moves with every other row held):
+    /// the row's force is `λ_r = t_rᵀ P`.
+    row_t: Vec<Vec<(usize, f64)>>,
+    /// Pair components at junctions whose relative displacement the kept rows already
+    /// fix while they are closed (a cycle of pairs around the point): no row of their own.
+    pub implied: Vec<Implied>,
+    implied_at: std::collections::HashSet<(usize, usize, usize)>,
     n_glued: usize,
     factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
 }
@@ -237,49 +282,83 @@ fn weights(model: &Model, k: usize) -> Vec<f64> {
 
 impl Problem {
     /// Builds the problem from the prepared bodies and factorises the glued base.
+    ///
+    /// **Rows and junctions.** Every pair component with a displacement unknown on both
+    /// sides is a candidate row `[u]_r = e_r·(u_B − u_A)` over the dofs of the two nodes
+    /// (at a junction node, whose unknowns are in the frame of its first pair, projected onto
+    /// the pair's direction e_r). The closed rows are eliminated one by one: each expresses
+    /// one still-free dof (B's, or the largest coefficient) through the others and its
+    /// opening. Where three or more bodies meet, the pairs around the point form a cycle
+    /// and their rows are linearly dependent (at a T-junction, bed joint A–B, bed joint A–C
+    /// and head joint B–C: the vertical relative displacements satisfy
+    /// `[u]_AB − [u]_AC + [u]_BC = 0`): a row whose coefficients vanish after elimination
+    /// is *implied* by the rows kept before it while they are closed, and gets no row of its
+    /// own. Rows are taken bonded first (normal components before tangential ones), then
+    /// normal, then tangential, so that a cycle is cut at a tangential component of a head
+    /// joint rather than at a normal one, and a component that bonded rows imply stays
+    /// implied (bonded rows never open); a tangential row whose pair lost its normal row goes
+    /// too. The kept rows are
+    /// independent, so their forces (Lagrange multipliers) are unique and the opening
+    /// stiffness A stays symmetric positive (semi)definite: the LCP of the module doc
+    /// holds unchanged. The nodal force of the junction node is carried by the kept rows;
+    /// implied components report zero force (each body's balance stays exact).
     pub fn new(model: &Model, prepared: &Prepared) -> Result<Problem> {
         let mut ops = Vec::with_capacity(model.bodies.len());
         let mut dof_start = Vec::with_capacity(model.bodies.len());
         let mut n_dofs = 0;
-        // (k, j, c) → global dof, per body.
-        let mut dof_at: Vec<std::collections::HashMap<(usize, usize, usize), usize>> = Vec::new();
+        // Per body: node → [(global dof, direction)].
+        let mut node_dofs: Vec<NodeDofMap> = Vec::new();
         for (b, sys) in prepared.systems.iter().enumerate() {
             let c = &prepared.condensed[b];
             let op = body_op(sys, &c.d00, &c.z0, &model.bodies[b].name)?;
-            let (_, _, on) = x0_maps(sys);
             dof_start.push(n_dofs);
-            dof_at.push(
-                on.iter()
-                    .enumerate()
-                    .map(|(l, &o)| (o, n_dofs + l))
-                    .collect(),
-            );
+            let mut map = NodeDofMap::new();
+            for (l, &i) in op.u_idx.iter().enumerate() {
+                if let Unknown::Displacement { node, dir, .. } = sys.unknowns[sys.n_x + i] {
+                    map.entry(node).or_default().push((n_dofs + l, dir));
+                }
+            }
+            node_dofs.push(map);
             n_dofs += op.u_idx.len();
             ops.push(op);
         }
-        let mut open_rows = Vec::new();
-        let mut bonded_rows = Vec::new();
+        let mut cands: Vec<Candidate> = Vec::new();
         for (k, it) in model.interfaces.iter().enumerate() {
             let w = weights(model, k);
-            for j in 0..it.pairs.len() {
+            for (j, pr) in it.pairs.iter().enumerate() {
                 for c in 0..2 {
-                    let da = dof_at[it.body_a].get(&(k, j, c)).copied();
-                    let db = dof_at[it.body_b].get(&(k, j, c)).copied();
-                    let (dof_a, dof_b) = match (da, db) {
-                        (Some(a), Some(b)) => (a, b),
-                        (None, None) => continue,
-                        _ => {
-                            return Err(Error::input(
-                                &model.mesh_path,
-                                format!(
-                                    "interface \"{}\" at {:?}: a displacement component is \
-                                     prescribed on one side only; prescribe it on both bodies \
-                                     or on neither",
-                                    it.spec.name, it.pairs[j].x
-                                ),
-                            ))
+                    let e = if c == 1 { pr.normal } else { pr.tangent };
+                    let side = |b: usize, node: usize| -> (Vec<(usize, f64)>, f64) {
+                        let list = node_dofs[b].get(&node).map_or(&[][..], |v| &v[..]);
+                        let mut coefs = Vec::new();
+                        let mut free = 0.0;
+                        for &(d, dir) in list {
+                            let x = e[0] * dir[0] + e[1] * dir[1];
+                            free += x * x;
+                            if x.abs() > 1e-12 {
+                                coefs.push((d, x));
+                            }
                         }
+                        (coefs, free)
                     };
+                    let (cb, fb) = side(it.body_b, pr.node_b);
+                    let (ca, fa) = side(it.body_a, pr.node_a);
+                    let none = |f: f64| f < 1e-9;
+                    let full = |f: f64| f > 1.0 - 1e-9;
+                    if none(fa) && none(fb) {
+                        continue;
+                    }
+                    if none(fa) != none(fb) || !full(fa) || !full(fb) {
+                        return Err(Error::input(
+                            &model.mesh_path,
+                            format!(
+                                "interface \"{}\" at {:?}: a displacement component is \
+                                 prescribed on one side only; prescribe it on both bodies \
+                                 or on neither",
+                                it.spec.name, pr.x
+                            ),
+                        ));
+                    }
                     let kind = match (it.spec.model, c, it.spec.tangential) {
                         (InterfaceModel::Bonded, _, _) => RowKind::Bonded,
                         (InterfaceModel::Unilateral, 1, _) => RowKind::Normal,
@@ -287,26 +366,156 @@ impl Problem {
                         (InterfaceModel::Unilateral, _, Tangential::Friction) => RowKind::Friction,
                         (InterfaceModel::Unilateral, _, Tangential::Stick) => RowKind::Stick,
                     };
+                    let main = |l: &[(usize, f64)]| {
+                        l.iter()
+                            .max_by(|x, y| x.1.abs().total_cmp(&y.1.abs()))
+                            .map_or(0, |x| x.0)
+                    };
                     let row = Row {
                         iface: k,
                         pair: j,
                         comp: c,
                         kind,
-                        dof_a,
-                        dof_b,
-                        gap: if c == 1 { it.pairs[j].gap } else { 0.0 },
+                        dof_a: main(&ca),
+                        dof_b: main(&cb),
+                        gap: if c == 1 { pr.gap } else { 0.0 },
                         weight: w[j],
                     };
-                    if kind == RowKind::Bonded {
-                        bonded_rows.push(row);
-                    } else {
-                        open_rows.push(row);
-                    }
+                    let n_b = cb.len();
+                    let coefs = cb
+                        .into_iter()
+                        .chain(ca.into_iter().map(|(d, x)| (d, -x)))
+                        .collect();
+                    cands.push(Candidate { row, coefs, n_b });
                 }
             }
         }
-        let n_open_rows = open_rows.len();
-        let rows: Vec<Row> = open_rows.into_iter().chain(bonded_rows).collect();
+
+        // Eliminate the closed rows: bonded (normal components first), then normal, then
+        // tangential.
+        let class = |r: &Row| match (r.kind, r.comp) {
+            (RowKind::Bonded, 1) => 0,
+            (RowKind::Bonded, _) => 1,
+            (RowKind::Normal, _) => 2,
+            (RowKind::Stick | RowKind::Friction, _) => 3,
+        };
+        let mut order: Vec<usize> = (0..cands.len()).collect();
+        order.sort_by_key(|&q| class(&cands[q].row));
+        let mut expr: Vec<Option<Expr>> = vec![None; n_dofs];
+        let mut refs: Vec<Vec<usize>> = vec![Vec::new(); n_dofs];
+        let mut kept = vec![false; cands.len()];
+        let mut normal_dropped = std::collections::HashSet::new();
+        for &q in &order {
+            let cand = &cands[q];
+            let row = cand.row;
+            if class(&row) == 3 && normal_dropped.contains(&(row.iface, row.pair)) {
+                continue;
+            }
+            let mut am: Vec<(usize, f64)> = Vec::new();
+            let mut ar: Vec<(usize, f64)> = Vec::new();
+            for &(d, a) in &cand.coefs {
+                match &expr[d] {
+                    Some(e) => {
+                        for &(m, x) in &e.m {
+                            add_to(&mut am, m, a * x);
+                        }
+                        for &(r, x) in &e.r {
+                            add_to(&mut ar, r, a * x);
+                        }
+                    }
+                    None => add_to(&mut am, d, a),
+                }
+            }
+            let scale = cand.coefs.iter().map(|c| c.1.abs()).fold(0.0, f64::max);
+            let big = am.iter().map(|c| c.1.abs()).fold(0.0, f64::max);
+            if big <= 1e-9 * scale {
+                if row.kind == RowKind::Normal {
+                    normal_dropped.insert((row.iface, row.pair));
+                }
+                continue;
+            }
+            kept[q] = true;
+            // Pivot: B's dof where it is free and as large as any, else the largest.
+            let b_dofs: Vec<usize> = cand.coefs[..cand.n_b].iter().map(|c| c.0).collect();
+            let pivot = am
+                .iter()
+                .copied()
+                .filter(|(_, x)| x.abs() >= big * (1.0 - 1e-9))
+                .max_by_key(|(m, _)| b_dofs.contains(m))
+                .unwrap_or(am[0]);
+            let (p, alpha) = pivot;
+            let mut new = Expr::default();
+            for &(m, x) in &am {
+                if m != p {
+                    new.m.push((m, -x / alpha));
+                }
+            }
+            new.r.push((q, 1.0 / alpha));
+            for &(r, x) in &ar {
+                add_to(&mut new.r, r, -x / alpha);
+            }
+            // Substitute the pivot in every expression that uses it.
+            for d in std::mem::take(&mut refs[p]) {
+                let Some(mut e) = expr[d].take() else {
+                    continue;
+                };
+                if let Some(pos) = e.m.iter().position(|&(m, _)| m == p) {
+                    let (_, x) = e.m.remove(pos);
+                    for &(m, y) in &new.m {
+                        add_to(&mut e.m, m, x * y);
+                        if !refs[m].contains(&d) {
+                            refs[m].push(d);
+                        }
+                    }
+                    for &(r, y) in &new.r {
+                        add_to(&mut e.r, r, x * y);
+                    }
+                }
+                expr[d] = Some(e);
+            }
+            for &(m, _) in &new.m {
+                refs[m].push(p);
+            }
+            expr[p] = Some(new);
+        }
+
+        // Final rows: those kept, the rows that can open first (in interface order), then
+        // the bonded ones; the others are implied.
+        let mut index_of = vec![usize::MAX; cands.len()];
+        let mut rows: Vec<Row> = Vec::new();
+        let mut implied = Vec::new();
+        for bonded in [false, true] {
+            for (q, cand) in cands.iter().enumerate() {
+                if (cand.row.kind == RowKind::Bonded) != bonded {
+                    continue;
+                }
+                if kept[q] {
+                    index_of[q] = rows.len();
+                    rows.push(cand.row);
+                } else if !bonded {
+                    implied.push(Implied {
+                        iface: cand.row.iface,
+                        pair: cand.row.pair,
+                        comp: cand.row.comp,
+                        kind: cand.row.kind,
+                    });
+                }
+            }
+        }
+        for (q, cand) in cands.iter().enumerate() {
+            if cand.row.kind == RowKind::Bonded && !kept[q] {
+                implied.push(Implied {
+                    iface: cand.row.iface,
+                    pair: cand.row.pair,
+                    comp: cand.row.comp,
+                    kind: cand.row.kind,
+                });
+            }
+        }
+        let n_open_rows = rows
+            .iter()
+            .take_while(|r| r.kind != RowKind::Bonded)
+            .count();
         let mut row_of: Vec<Vec<[Option<usize>; 2]>> = model
             .interfaces
             .iter()
@@ -315,30 +524,56 @@ impl Problem {
         for (r, row) in rows.iter().enumerate() {
             row_of[row.iface][row.pair][row.comp] = Some(r);
         }
-        // Glue B's dof onto A's for every row (all closed).
-        let mut glued: Vec<usize> = (0..n_dofs).collect();
-        for row in &rows {
-            glued[row.dof_b] = glued[row.dof_a];
-        }
-        let mut renumber = vec![usize::MAX; n_dofs];
+        let implied_at = implied.iter().map(|i| (i.iface, i.pair, i.comp)).collect();
+
+        // Glued unknowns: the dofs left free, numbered in dof order.
+        let mut glued_index = vec![usize::MAX; n_dofs];
         let mut n_glued = 0;
         for d in 0..n_dofs {
-            let g = glued[d];
-            if renumber[g] == usize::MAX {
-                renumber[g] = n_glued;
+            if expr[d].is_none() {
+                glued_index[d] = n_glued;
                 n_glued += 1;
             }
-            glued[d] = renumber[g];
+        }
+        let mut tmap: Vec<Vec<(usize, f64)>> = Vec::with_capacity(n_dofs);
+        let mut offs: Vec<Vec<(usize, f64)>> = Vec::with_capacity(n_dofs);
+        let mut row_t: Vec<Vec<(usize, f64)>> = vec![Vec::new(); rows.len()];
+        for d in 0..n_dofs {
+            match &expr[d] {
+                None => {
+                    tmap.push(vec![(glued_index[d], 1.0)]);
+                    offs.push(Vec::new());
+                }
+                Some(e) => {
+                    tmap.push(
+                        e.m.iter()
+                            .filter(|c| c.1 != 0.0)
+                            .map(|&(m, x)| (glued_index[m], x))
+                            .collect(),
+                    );
+                    let o: Vec<(usize, f64)> =
+                        e.r.iter()
+                            .filter(|c| c.1 != 0.0)
+                            .map(|&(q, x)| (index_of[q], x))
+                            .collect();
+                    for &(r, x) in &o {
+                        row_t[r].push((d, x));
+                    }
+                    offs.push(o);
+                }
+            }
         }
         let mut trip = Vec::new();
         for (b, op) in ops.iter().enumerate() {
             let n = op.u_idx.len();
             for i in 0..n {
-                let gi = glued[dof_start[b] + i];
-                for j in 0..n {
-                    let gj = glued[dof_start[b] + j];
-                    if gj >= gi {
-                        trip.push(Triplet::new(gj, gi, op.s[(i, j)]));
+                for &(gi, xi) in &tmap[dof_start[b] + i] {
+                    for j in 0..n {
+                        for &(gj, xj) in &tmap[dof_start[b] + j] {
+                            if gj >= gi {
+                                trip.push(Triplet::new(gj, gi, xi * xj * op.s[(i, j)]));
+                            }
+                        }
                     }
                 }
             }
@@ -358,7 +593,11 @@ impl Problem {
             rows,
             n_open_rows,
             row_of,
-            glued,
+            tmap,
+            offs,
+            row_t,
+            implied,
+            implied_at,
             n_glued,
             factor,
         };
@@ -422,37 +661,69 @@ impl Problem {
     /// Body displacements for glued displacements `v`, openings `s` (over rows that can
     /// open, zero where closed) and the closed initial gaps.
     fn displacements(&self, v: &[f64], s: &[f64]) -> Vec<Vec<f64>> {
-        let mut u: Vec<Vec<f64>> = self
-            .ops
+        self.ops
             .iter()
             .enumerate()
             .map(|(b, op)| {
                 (0..op.u_idx.len())
-                    .map(|l| v[self.glued[self.dof_start[b] + l]])
+                    .map(|l| {
+                        let d = self.dof_start[b] + l;
+                        let mut u: f64 = self.tmap[d].iter().map(|&(g, x)| x * v[g]).sum();
+                        for &(r, x) in &self.offs[d] {
+                            // The row's relative displacement is s − h: the gap h closed
+                            // when s = 0.
+                            let open = if r < self.n_open_rows { s[r] } else { 0.0 };
+                            u += x * (open - self.rows[r].gap);
+                        }
+                        u
+                    })
                     .collect()
             })
-            .collect();
-        for (r, row) in self.rows.iter().enumerate() {
-            // U^B = U^A − h + s: the gap closed when s = 0.
-            let (b, l) = self.body_of(row.dof_b);
-            u[b][l] += -row.gap + if r < self.n_open_rows { s[r] } else { 0.0 };
-        }
-        u
+            .collect()
     }
 
-    /// Right-hand side of the glued system: Σ Pᵀ(S U_fixed + factor p̂), where U_fixed holds
+    /// The force of row r from the nodal forces `p` of every body: `λ_r = t_rᵀ P`.
+    fn row_force(&self, p: &[Vec<f64>], r: usize) -> f64 {
+        self.row_t[r]
+            .iter()
+            .map(|&(d, x)| {
+                let (b, l) = self.body_of(d);
+                x * p[b][l]
+            })
+            .sum()
+    }
+
+    /// `Tᵀ f` for per-body vectors `f` over the dofs: the glued load.
+    fn gather(&self, f: &[Vec<f64>]) -> Vec<f64> {
+        let mut out = vec![0.0; self.n_glued];
+        for (b, fb) in f.iter().enumerate() {
+            for (i, v) in fb.iter().enumerate() {
+                for &(g, x) in &self.tmap[self.dof_start[b] + i] {
+                    out[g] += x * v;
+                }
+            }
+        }
+        out
+    }
+
+    /// Right-hand side of the glued system: Tᵀ(S U_fixed + factor p̂), where U_fixed holds
     /// the parts of U that are not glued unknowns (gap offsets, openings).
     fn glued_load(&self, factor: f64, s: &[f64]) -> Vec<f64> {
         let zero = vec![0.0; self.n_glued];
         let u = self.displacements(&zero, s);
-        let mut f = vec![0.0; self.n_glued];
-        for (b, op) in self.ops.iter().enumerate() {
-            let su = matvec(&op.s, &u[b]);
-            for (i, v) in su.iter().enumerate() {
-                f[self.glued[self.dof_start[b] + i]] += factor * op.p[i] + v;
-            }
-        }
-        f
+        let f: Vec<Vec<f64>> = self
+            .ops
+            .iter()
+            .zip(&u)
+            .map(|(op, ub)| {
+                matvec(&op.s, ub)
+                    .iter()
+                    .zip(&op.p)
+                    .map(|(v, p)| factor * p + v)
+                    .collect()
+            })
+            .collect();
+        self.gather(&f)
     }
 
     fn solve_glued(&self, rhs: &[f64]) -> Vec<f64> {
@@ -496,10 +767,7 @@ impl Problem {
             })
             .collect();
         let lambda0 = (0..self.n_open_rows)
-            .map(|r| {
-                let (b, l) = self.body_of(self.rows[r].dof_b);
-                p[b][l] + coh[r]
-            })
+            .map(|r| self.row_force(&p, r) + coh[r])
             .collect();
         Base {
             factor,
@@ -514,17 +782,32 @@ impl Problem {
     /// every row force per unit opening of row j (one sparse solve and a product with the
     /// operator of each body that is the second side of a row).
     pub fn column(&self, j: usize) -> Vec<f64> {
-        let (bj, lj) = self.body_of(self.rows[j].dof_b);
-        // B_j = Pᵀ S e: the glued load of a unit opening.
-        let mut rhs = vec![0.0; self.n_glued];
-        let op = &self.ops[bj];
-        for i in 0..op.u_idx.len() {
-            rhs[self.glued[self.dof_start[bj] + i]] += op.s[(i, lj)];
+        // t_j = ∂U/∂s_j over the dofs it moves, per body.
+        let mut tj: Vec<Vec<(usize, f64)>> = vec![Vec::new(); self.ops.len()];
+        for &(d, x) in &self.row_t[j] {
+            let (b, l) = self.body_of(d);
+            tj[b].push((l, x));
         }
-        let y = self.solve_glued(&rhs); // = ∂v/∂s_j
+        // Tᵀ S t_j: the glued load of a unit opening.
+        let f: Vec<Vec<f64>> = self
+            .ops
+            .iter()
+            .enumerate()
+            .map(|(b, op)| {
+                if tj[b].is_empty() {
+                    return Vec::new();
+                }
+                (0..op.u_idx.len())
+                    .map(|i| tj[b].iter().map(|&(l, x)| op.s[(i, l)] * x).sum())
+                    .collect()
+            })
+            .collect();
+        let y = self.solve_glued(&self.gather(&f)); // = ∂v/∂s_j
         let mut need = vec![false; self.ops.len()];
-        for r in &self.rows[..self.n_open_rows] {
-            need[self.body_of(r.dof_b).0] = true;
+        for r in 0..self.n_open_rows {
+            for &(d, _) in &self.row_t[r] {
+                need[self.body_of(d).0] = true;
+            }
         }
         let t: Vec<Vec<f64>> = self
             .ops
@@ -536,19 +819,21 @@ impl Problem {
                 }
                 let n = op.u_idx.len();
                 let mut du: Vec<f64> = (0..n)
-                    .map(|l| y[self.glued[self.dof_start[b] + l]])
+                    .map(|l| {
+                        self.tmap[self.dof_start[b] + l]
+                            .iter()
+                            .map(|&(g, x)| x * y[g])
+                            .sum()
+                    })
                     .collect();
-                if b == bj {
-                    du[lj] += 1.0;
+                for &(l, x) in &tj[b] {
+                    du[l] += x;
                 }
                 matvec(&op.s, &du)
             })
             .collect();
         (0..self.n_open_rows)
-            .map(|r| {
-                let (b, l) = self.body_of(self.rows[r].dof_b);
-                t[b][l]
-            })
+            .map(|r| self.row_force(&t, r))
             .collect()
     }
 
@@ -608,10 +893,10 @@ impl Problem {
                                         && open[r]
                                         && self.rows[r].kind != RowKind::Friction => {}
                                 Some(r) => {
-                                    let row = &self.rows[r];
-                                    let (b, l) = self.body_of(row.dof_b);
-                                    *t = -p[b][l] / row.weight;
+                                    *t = -self.row_force(&p, r) / self.rows[r].weight;
                                 }
+                                // Implied at a junction: the kept rows carry its force.
+                                None if self.implied_at.contains(&(k, j, c)) => {}
                                 None => {
                                     // Frictionless tangential component: no row, no force.
                                     let slide = c == 0
@@ -637,14 +922,15 @@ impl Problem {
                         ];
                         let closed = match self.row_of[k][j][1] {
                             Some(r) if r < self.n_open_rows => !open[r],
+                            // Implied at a junction: closed where the kept rows close it.
+                            None if self.implied_at.contains(&(k, j, 1)) => {
+                                pr.gap + jump[1] <= 1e-9 * model.scale
+                            }
                             _ => true,
                         };
                         // Nodal normal force on B (compression positive).
                         nk.push(match self.row_of[k][j][1] {
-                            Some(r) => {
-                                let (b, l) = self.body_of(self.rows[r].dof_b);
-                                p[b][l]
-                            }
+                            Some(r) => self.row_force(&p, r),
                             None => 0.0,
                         });
                         // A friction pair slips where its tangential row is open.

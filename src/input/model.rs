@@ -256,6 +256,35 @@ impl Model {
         self.interfaces.iter().map(|i| i.pairs.len()).sum()
     }
 
+    /// The junctions: points where a body meets two or more others (a node of one body in
+    /// pairs of two or more interfaces), as (point, bodies meeting there), in body order.
+    pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {
+        let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for it in &self.interfaces {
+            for p in &it.pairs {
+                *count.entry((it.body_a, p.node_a)).or_default() += 1;
+                *count.entry((it.body_b, p.node_b)).or_default() += 1;
+            }
+        }
+        // Group the junction nodes by position (the nodes of all bodies there coincide).
+        let mut out: Vec<([f64; 2], Vec<usize>)> = Vec::new();
+        let tol = 1e-9 * self.scale;
+        for (&(b, n), &c) in &count {
+            if c < 2 {
+                continue;
+            }
+            let x = self.bodies[b].nodes[n];
+            match out
+                .iter_mut()
+                .find(|(y, _)| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol)
+            {
+                Some((_, bodies)) => bodies.push(b),
+                None => out.push((x, vec![b])),
+            }
+        }
+        out
+    }
+
     /// The model with its prescribed values evaluated at pseudo-time `t` (a load step of
     /// `[solve] time`): body forces, and the gap, cohesion and friction coefficient of
     /// every pair; boundary values are evaluated at `time` by the assembly. Values that are
