@@ -145,12 +145,24 @@ def check_archive(c, h5, summary):
 def check_solution(c, h5, summary, bodies, ifaces):
     states = h5["states"]
     count = int(states.attrs["count"])
-    c.ok(len(states) == count, f"/states holds {len(states)} groups, its count says {count}")
+    groups = [k for k, v in states.items() if isinstance(v, h5py.Group)]
+    c.ok(len(groups) == count, f"/states holds {len(groups)} groups, its count says {count}")
     if count == 0:
         return count
     sol = h5["solution"]
     last = states[f"{count - 1:04d}"]
     c.ok(sol.attrs["iteration"] == last.attrs["iteration"], "/solution is not the last state")
+    # The compact states: offsets match the bodies and interfaces; the last state holds the
+    # values of /solution.
+    order = [text(n) for n in h5["bodies"].attrs["order"]]
+    no = np.concatenate([[0], np.cumsum([h5["bodies"][n]["nodes"].shape[0] for n in order])])
+    c.ok(np.array_equal(states["node_offset"][()], no), "/states/node_offset does not match /bodies")
+    u = np.vstack([sol["bodies"][n]["u"][()] for n in order])
+    c.close(last["u"][()], u, "/states: the last state's u vs /solution", float(np.abs(u).max()) or 1.0)
+    iorder = [text(n) for n in h5["interfaces"].attrs["order"]]
+    if iorder:
+        st = np.concatenate([sol["interfaces"][n]["status"][()] for n in iorder])
+        c.ok(np.array_equal(last["status"][()], st), "/states: the last state's status vs /solution")
     thickness = float(h5.attrs.get("thickness", 1.0))
     for b in bodies:
         name = text(b.attrs["name"])
@@ -319,6 +331,8 @@ def check_vtk(c, run, h5, bodies, count):
     states = h5["states"]
     for k in range(count):
         st = states[f"{k:04d}"]
+        # The interior field of the final state is in /solution.
+        interior = h5["solution"].get("interior") if k == count - 1 else None
         path = vtk / f"boundary_{k:04d}.vtu"
         if not c.ok(path.exists(), f"{path} is missing"):
             continue
@@ -329,7 +343,7 @@ def check_vtk(c, run, h5, bodies, count):
         lines = sum(len(cb.data) for cb in m.cells if cb.type == "line")
         c.ok(lines == ne, f"{path}: {lines} lines for {ne} boundary elements")
         if len(m.points) == n and "displacement" in m.point_data:
-            u = np.vstack([st["bodies"][b.name.split("/")[-1]]["u"][()] for b in bodies])
+            u = st["u"][()]
             xy = np.vstack([b["nodes"][()] for b in bodies])
             c.close(m.points[:, :2], xy, f"{path}: points vs the archive's body nodes")
             c.close(m.point_data["displacement"][:, :2], u, f"{path}: displacement vs the archive's state {k}")
@@ -339,14 +353,14 @@ def check_vtk(c, run, h5, bodies, count):
             c.ok(set(np.unique(cs)) <= {-1, 0, 1}, f"{path}: contact_status outside -1, 0, 1")
             c.ok(int(np.sum(cs != -1)) <= 2 * pairs, f"{path}: more interface nodes than 2 x pairs")
         fpath = vtk / f"field_{k:04d}.vtu"
-        if "interior" in st:
+        if interior is not None:
             if not c.ok(fpath.exists(), f"{fpath} is missing though state {k} has interior values"):
                 continue
             m = read_vtu(c, fpath, FIELD_DATA)
             tri = sum(len(cb.data) for cb in m.cells if cb.type == "triangle")
             nt = sum(b["triangles"].shape[0] for b in bodies)
             c.ok(tri == nt, f"{fpath}: {tri} triangles for {nt} body triangles")
-            u = np.vstack([g["u"][()] for g in (st["interior"][b.name.split("/")[-1]] for b in bodies)])
+            u = np.vstack([g["u"][()] for g in (interior[b.name.split("/")[-1]] for b in bodies)])
             if c.ok(len(m.points) == len(u), f"{fpath}: {len(m.points)} points for {len(u)} interior values"):
                 c.close(m.point_data["displacement"][:, :2], u, f"{fpath}: displacement vs the archive's")
         else:

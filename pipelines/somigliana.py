@@ -166,15 +166,28 @@ def has_body_force(h5):
         return False
 
 
+def state_fields(h5, state):
+    """{body name: (u (n,2), t (m,2,2))} of archived state `state` (group name NNNN): the
+    compact layout (format_version 2: the bodies concatenated, sliced by /states'
+    node_offset and element_offset in /bodies order) or per body (version 1)."""
+    g = h5["states"][state]
+    names = [_text(n) for n in h5["bodies"].attrs["order"]]
+    if "bodies" in g:
+        return {n: (g["bodies"][n]["u"][()], g["bodies"][n]["t"][()]) for n in names}
+    no, eo = h5["states"]["node_offset"][()], h5["states"]["element_offset"][()]
+    u, t = g["u"][()], g["t"][()]
+    return {n: (u[no[k]:no[k + 1]], t[eo[k]:eo[k + 1]]) for k, n in enumerate(names)}
+
+
 def section_stress(h5, bodies, state, points):
     """sigma (xx, yy, xy) at each point (k,2) for archived state `state` (group name NNNN)."""
-    st = h5["states"][state]["bodies"]
+    fields = state_fields(h5, state)
     out = np.full((len(points), 3), np.nan)
     for k, p in enumerate(points):
         for name, body in bodies.items():
             tol = 1e-9 * float(body.length.sum())
             if body.distance(p)[0].min() <= tol or body.inside(p):
-                u, t = st[name]["u"][()], st[name]["t"][()]
+                u, t = fields[name]
                 s = body.stress(p, u, t)
                 out[k] = s if np.all(np.isnan(out[k])) else 0.5 * (out[k] + s)
                 if body.distance(p)[0].min() > tol:

@@ -307,8 +307,15 @@ fn archive_layout_attributes_and_shapes() {
     assert_eq!(shape("solution/bodies/lower/t"), [4, 2, 2]);
     assert_eq!(shape("solution/interfaces/joint/traction"), [2, 2]);
     assert_eq!(shape("solution/interior/upper_part/sigma"), [5, 3]);
-    assert_eq!(shape("states/0000/bodies/lower/u"), [4, 2]);
+    // States hold each quantity for all bodies (interfaces) in one dataset, in /bodies
+    // (/interfaces) order; the offsets say where each starts.
+    let n_upper = rec.bodies[1].nodes.len();
+    assert_eq!(shape("states/0000/u"), [4 + n_upper, 2]);
+    assert_eq!(shape("states/0000/traction"), [2, 2]);
+    let offsets: Vec<u64> = f.dataset("states/node_offset").unwrap().read_raw().unwrap();
+    assert_eq!(offsets, [0, 4, 4 + n_upper as u64]);
     assert!(!f.link_exists("states/0000/interior"));
+    assert!(!f.link_exists("states/0000/bodies"));
     assert_eq!(shape("timings/assemble"), Vec::<usize>::new());
 
     // /solution is the final state.

@@ -2,7 +2,8 @@
 //! a [`RunRecord`] and read back into one.
 //!
 //! Place in the flow: pipeline → [`RunRecord`] → **`archive`**; `sgbem inspect` and
-//! `sgbem export` read it with [`read_archive`]. Layout (format_version 1):
+//! `sgbem export` read it with [`read_archive`]. Layout (format_version 2; version 1, read
+//! too, held every state in the layout of `/solution`):
 //!
 //! ```text
 //! /                      attributes format = "sgbem-archive", format_version, tool_version,
@@ -24,11 +25,18 @@
 //!                        detached_length (R×interfaces);
 //!                        interfaces/<name>/{status (R×p, 1 closed 0 open),
 //!                        normal_traction, normal_opening (R×p)}
+//! /states/               attribute count; node_offset (B+1), element_offset (B+1),
+//!                        pair_offset (I+1): where each body (interface) starts in the
+//!                        concatenated datasets of a state
 //! /states/NNNN/          every archived state, attributes iteration, load_step,
-//!                        load_factor: bodies/<name>/{u (n×2), t (m×2×2)},
-//!                        interfaces/<name>/{status, traction (p×2: s, n), jump (p×2),
-//!                        normal_opening}, interior/<name>/{mesh_nodes, x, u, sigma (k×3)}
-//! /solution/             the final state (a hard link to the last /states/NNNN)
+//!                        load_factor: u (N×2, the bodies' nodes concatenated), t (M×2×2),
+//!                        status, traction (P×2: s, n), jump (P×2), normal_opening (P), with
+//!                        friction tangential_status and slip (P): the interfaces' pairs
+//!                        concatenated
+//! /solution/             the final state per body and interface: attributes as a state;
+//!                        bodies/<name>/{u (n×2), t (m×2×2)}, interfaces/<name>/{status,
+//!                        traction, jump, normal_opening[, tangential_status, slip]},
+//!                        interior/<name>/{mesh_nodes, x, u, sigma (k×3)}
 //! /timings/              attribute created (UTC date of the run); one scalar dataset per
 //!                        stage (seconds). The date and the timings are the only parts
 //!                        that differ between two runs of the same scene and mesh.
@@ -536,9 +544,151 @@ fn write_solved(file: &h5::File, rec: &RunRecord) -> R<()> {
 
     let states = group(root, "states")?;
     put_attr(&states, "count", rec.states.len() as i64)?;
+    let (nodes, elements, pairs) = offsets(rec);
+    put_idx(
+        &states,
+        "node_offset",
+        &nodes,
+        "first row of each body (in /bodies order) in the states' u; last: the total",
+    )?;
+    put_idx(
+        &states,
+        "element_offset",
+        &elements,
+        "first row of each body (in /bodies order) in the states' t; last: the total",
+    )?;
+    put_idx(
+        &states,
+        "pair_offset",
+        &pairs,
+        "first row of each interface (in /interfaces order) in the states' pair datasets; \
+         last: the total",
+    )?;
     let before_last = rec.states.len().saturating_sub(1);
     for (k, st) in rec.states[..before_last].iter().enumerate() {
-        write_state(&group(&states, &format!("{k:04}"))?, st, rec, &u)?;
+        write_state_compact(&group(&states, &format!("{k:04}"))?, st, rec, &u)?;
+    }
+    Ok(())
+}
+
+/// Where each body's nodes and elements and each interface's pairs start in the
+/// concatenated datasets of a state (one more entry: the totals).
+fn offsets(rec: &RunRecord) -> (Vec<usize>, Vec<usize>, Vec<usize>) {
+    let acc = |lens: Vec<usize>| {
+        let mut out = Vec::with_capacity(lens.len() + 1);
+        let mut k = 0;
+        out.push(0);
+        for l in lens {
+            k += l;
+            out.push(k);
+        }
+        out
+    };
+    (
+        acc(rec.bodies.iter().map(|b| b.nodes.len()).collect()),
+        acc(rec.bodies.iter().map(|b| b.elements.len()).collect()),
+        acc(rec.interfaces.iter().map(|i| i.node_a.len()).collect()),
+    )
+}
+
+/// One state of `/states`: every body's and every interface's values in one dataset per
+/// quantity, concatenated in `/bodies` and `/interfaces` order (see `node_offset`,
+/// `element_offset`, `pair_offset`): a few datasets per state whatever the number of
+/// bodies, so that the full history of a wall of hundreds of bricks stays small and quick.
+fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
+    put_attr(g, "iteration", st.iteration as i64)?;
+    put_attr(g, "load_step", st.load_step as i64)?;
+    put_attr(g, "load_factor", st.load_factor)?;
+    let uu: Vec<[f64; 2]> = st.fields.iter().flat_map(|f| f.u.iter().copied()).collect();
+    put_vec2(
+        g,
+        "u",
+        &uu,
+        "displacement of each boundary node (x, y), bodies concatenated",
+        u.len(),
+    )?;
+    let t: Vec<f64> = st
+        .fields
+        .iter()
+        .flat_map(|f| f.t.iter().flatten().flatten().copied())
+        .collect();
+    put_f64(
+        g,
+        "t",
+        &[t.len() / 4, 2, 2],
+        &t,
+        "traction t = sigma n at the start and end of each element (x, y), bodies \
+         concatenated",
+        &u.stress(),
+    )?;
+    let pairs = || st.interfaces.iter().flat_map(|r| r.pairs.iter());
+    let np = pairs().count();
+    let status: Vec<i8> = pairs().map(|p| status_code(p.status)).collect();
+    put(
+        g,
+        "status",
+        &[np],
+        &status,
+        "pair status: 1 closed, 0 open; interfaces concatenated",
+        "1",
+    )?;
+    let tr: Vec<f64> = pairs().flat_map(|p| p.traction).collect();
+    put_f64(
+        g,
+        "traction",
+        &[np, 2],
+        &tr,
+        "traction on body A in the pair frame: tangential, normal (tension positive)",
+        &u.stress(),
+    )?;
+    let jump: Vec<f64> = pairs().flat_map(|p| p.jump).collect();
+    put_f64(
+        g,
+        "jump",
+        &[np, 2],
+        &jump,
+        "relative displacement u_B - u_A in the pair frame: slip, normal",
+        u.len(),
+    )?;
+    let opening: Vec<f64> = rec
+        .interfaces
+        .iter()
+        .zip(&st.interfaces)
+        .flat_map(|(it, r)| (0..r.pairs.len()).map(move |j| it.opening(r, j)))
+        .collect();
+    put_f64(
+        g,
+        "normal_opening",
+        &[np],
+        &opening,
+        "normal opening: gap + normal jump where open, 0 where closed",
+        u.len(),
+    )?;
+    if pairs().any(|p| p.slipping.is_some()) {
+        let ts: Vec<i8> = pairs()
+            .map(|p| match p.slipping {
+                None => -1,
+                Some(false) => 1,
+                Some(true) => 2,
+            })
+            .collect();
+        put(
+            g,
+            "tangential_status",
+            &[np],
+            &ts,
+            "friction: 1 stick, 2 slip (of a closed pair), -1 no friction or open",
+            "1",
+        )?;
+        let slip: Vec<f64> = pairs().map(|p| p.slip).collect();
+        put_f64(
+            g,
+            "slip",
+            &[np],
+            &slip,
+            "friction: accumulated slip path sum |ds| over the load steps while closed",
+            u.len(),
+        )?;
     }
     Ok(())
 }
@@ -553,11 +703,8 @@ fn write_finished(file: &h5::File, rec: &RunRecord) -> R<()> {
     if let Some(st) = rec.states.last() {
         let states = ctx(root.group("states"), || "group /states".into())?;
         let name = format!("{:04}", rec.states.len() - 1);
-        write_state(&group(&states, &name)?, st, rec, &u)?;
-        ctx(
-            root.link_hard(&format!("/states/{name}"), "solution"),
-            || "link /solution".into(),
-        )?;
+        write_state_compact(&group(&states, &name)?, st, rec, &u)?;
+        write_state(&group(root, "solution")?, st, rec, &u)?;
     }
 
     // The only parts that differ between identical runs: the date and the timings.
@@ -1207,9 +1354,36 @@ fn read_all(file: &h5::File) -> R<RunRecord> {
     rec.history = read_history(&open_group(root, "history")?, &rec)?;
     let states = open_group(root, "states")?;
     let count = attr_usize(&states, "count")?;
-    for k in 0..count {
-        let st = read_state(&open_group(&states, &format!("{k:04}"))?, &rec)?;
-        rec.states.push(st);
+    if attr_i64(root, "format_version")? >= 2 {
+        let (nodes, elements, pairs) = offsets(&rec);
+        for (name, want) in [
+            ("node_offset", &nodes),
+            ("element_offset", &elements),
+            ("pair_offset", &pairs),
+        ] {
+            if get_idx(&states, name, Some(want.len()))? != *want {
+                return Err(format!(
+                    "/states/{name} does not match the bodies and interfaces of the archive"
+                ));
+            }
+        }
+        for k in 0..count {
+            let g = open_group(&states, &format!("{k:04}"))?;
+            rec.states
+                .push(read_state_compact(&g, &rec, (&nodes, &elements, &pairs))?);
+        }
+        // The final state's interior field is in /solution only.
+        if count > 0 {
+            let last = read_state(&open_group(root, "solution")?, &rec)?;
+            if let Some(st) = rec.states.last_mut() {
+                st.interior = last.interior;
+            }
+        }
+    } else {
+        for k in 0..count {
+            let st = read_state(&open_group(&states, &format!("{k:04}"))?, &rec)?;
+            rec.states.push(st);
+        }
     }
     let timings = open_group(root, "timings")?;
     for name in attr_list(&timings, "order")? {
@@ -1359,6 +1533,64 @@ fn read_history(g: &Group, rec: &RunRecord) -> R<History> {
         })
         .collect();
     Ok(History { rows })
+}
+
+/// A state of the compact layout (format_version 2; see [`write_state_compact`]).
+fn read_state_compact(
+    g: &Group,
+    rec: &RunRecord,
+    (nodes, elements, pairs): (&[usize], &[usize], &[usize]),
+) -> R<StateRecord> {
+    let mut st = StateRecord::new(
+        attr_usize(g, "iteration")?,
+        attr_usize(g, "load_step")?,
+        attr_f64(g, "load_factor")?,
+        Vec::new(),
+        Vec::new(),
+    );
+    let (nn, ne, np) = (
+        nodes[nodes.len() - 1],
+        elements[elements.len() - 1],
+        pairs[pairs.len() - 1],
+    );
+    let u = get_vec2(g, "u", Some(nn))?;
+    let (_, t) = get::<f64>(g, "t", &[Some(ne), Some(2), Some(2)])?;
+    for b in 0..rec.bodies.len() {
+        st.fields.push(BodyField {
+            u: u[nodes[b]..nodes[b + 1]].to_vec(),
+            t: t[4 * elements[b]..4 * elements[b + 1]]
+                .chunks_exact(4)
+                .map(|c| [[c[0], c[1]], [c[2], c[3]]])
+                .collect(),
+        });
+    }
+    let (_, status) = get::<i8>(g, "status", &[Some(np)])?;
+    let tr = get_vec2(g, "traction", Some(np))?;
+    let jump = get_vec2(g, "jump", Some(np))?;
+    let friction = if g.link_exists("tangential_status") {
+        let (_, ts) = get::<i8>(g, "tangential_status", &[Some(np)])?;
+        let (_, slip) = get::<f64>(g, "slip", &[Some(np)])?;
+        Some((ts, slip))
+    } else {
+        None
+    };
+    for k in 0..rec.interfaces.len() {
+        let pairs = (pairs[k]..pairs[k + 1])
+            .map(|j| PairResult {
+                status: status_of(status[j]),
+                traction: tr[j],
+                jump: jump[j],
+                slipping: match friction.as_ref().map(|f| f.0[j]) {
+                    Some(1) => Some(false),
+                    Some(2) => Some(true),
+                    _ => None,
+                },
+                slip: friction.as_ref().map_or(0.0, |f| f.1[j]),
+            })
+            .collect();
+        st.interfaces.push(InterfaceResult { pairs });
+    }
+    Ok(st)
 }
 
 fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {

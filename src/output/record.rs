@@ -29,7 +29,7 @@ use crate::post::NodeValue;
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
 
 /// Version of the archive layout written by this build (root attribute `format_version`).
-pub const FORMAT_VERSION: i64 = 1;
+pub const FORMAT_VERSION: i64 = 2;
 
 /// A dense array of `f64` in row-major order: a vector (`shape = [n]`) or a matrix
 /// (`shape = [rows, cols]`).
