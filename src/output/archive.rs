@@ -621,18 +621,29 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
          concatenated",
         &u.stress(),
     )?;
-    let pairs = || st.interfaces.iter().flat_map(|r| r.pairs.iter());
-    let np = pairs().count();
-    let status: Vec<i8> = pairs().map(|p| status_code(p.status)).collect();
+    let pairs: Vec<PairResult> = st.interfaces.iter().flat_map(|r| r.pairs.clone()).collect();
+    let opening: Vec<f64> = rec
+        .interfaces
+        .iter()
+        .zip(&st.interfaces)
+        .flat_map(|(it, r)| (0..r.pairs.len()).map(move |j| it.opening(r, j)))
+        .collect();
+    write_pairs(g, &pairs, &opening, u)
+}
+
+/// The pair values of one interface, or of all interfaces concatenated.
+fn write_pairs(g: &Group, pairs: &[PairResult], opening: &[f64], u: &U) -> R<()> {
+    let np = pairs.len();
+    let status: Vec<i8> = pairs.iter().map(|p| status_code(p.status)).collect();
     put(
         g,
         "status",
         &[np],
         &status,
-        "pair status: 1 closed, 0 open; interfaces concatenated",
+        "pair status: 1 closed, 0 open",
         "1",
     )?;
-    let tr: Vec<f64> = pairs().flat_map(|p| p.traction).collect();
+    let tr: Vec<f64> = pairs.iter().flat_map(|p| p.traction).collect();
     put_f64(
         g,
         "traction",
@@ -641,7 +652,7 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
         "traction on body A in the pair frame: tangential, normal (tension positive)",
         &u.stress(),
     )?;
-    let jump: Vec<f64> = pairs().flat_map(|p| p.jump).collect();
+    let jump: Vec<f64> = pairs.iter().flat_map(|p| p.jump).collect();
     put_f64(
         g,
         "jump",
@@ -650,22 +661,17 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
         "relative displacement u_B - u_A in the pair frame: slip, normal",
         u.len(),
     )?;
-    let opening: Vec<f64> = rec
-        .interfaces
-        .iter()
-        .zip(&st.interfaces)
-        .flat_map(|(it, r)| (0..r.pairs.len()).map(move |j| it.opening(r, j)))
-        .collect();
     put_f64(
         g,
         "normal_opening",
         &[np],
-        &opening,
+        opening,
         "normal opening: gap + normal jump where open, 0 where closed",
         u.len(),
     )?;
-    if pairs().any(|p| p.slipping.is_some()) {
-        let ts: Vec<i8> = pairs()
+    if pairs.iter().any(|p| p.slipping.is_some()) {
+        let ts: Vec<i8> = pairs
+            .iter()
             .map(|p| match p.slipping {
                 None => -1,
                 Some(false) => 1,
@@ -680,7 +686,7 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
             "friction: 1 stick, 2 slip (of a closed pair), -1 no friction or open",
             "1",
         )?;
-        let slip: Vec<f64> = pairs().map(|p| p.slip).collect();
+        let slip: Vec<f64> = pairs.iter().map(|p| p.slip).collect();
         put_f64(
             g,
             "slip",
@@ -1053,71 +1059,8 @@ fn write_state(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
     for (it, r) in rec.interfaces.iter().zip(&st.interfaces) {
         let gg = group(&gi, &group_name(&it.name))?;
         put_attr_str(&gg, "name", &it.name)?;
-        let np = r.pairs.len();
-        let status: Vec<i8> = r.pairs.iter().map(|p| status_code(p.status)).collect();
-        put(
-            &gg,
-            "status",
-            &[np],
-            &status,
-            "pair status: 1 closed, 0 open",
-            "1",
-        )?;
-        let tr: Vec<f64> = r.pairs.iter().flat_map(|p| p.traction).collect();
-        put_f64(
-            &gg,
-            "traction",
-            &[np, 2],
-            &tr,
-            "traction on body A in the pair frame: tangential, normal (tension positive)",
-            &u.stress(),
-        )?;
-        let jump: Vec<f64> = r.pairs.iter().flat_map(|p| p.jump).collect();
-        put_f64(
-            &gg,
-            "jump",
-            &[np, 2],
-            &jump,
-            "relative displacement u_B - u_A in the pair frame: slip, normal",
-            u.len(),
-        )?;
-        let opening: Vec<f64> = (0..np).map(|j| it.opening(r, j)).collect();
-        put_f64(
-            &gg,
-            "normal_opening",
-            &[np],
-            &opening,
-            "normal opening: gap + normal jump where open, 0 where closed",
-            u.len(),
-        )?;
-        if r.pairs.iter().any(|p| p.slipping.is_some()) {
-            let ts: Vec<i8> = r
-                .pairs
-                .iter()
-                .map(|p| match p.slipping {
-                    None => -1,
-                    Some(false) => 1,
-                    Some(true) => 2,
-                })
-                .collect();
-            put(
-                &gg,
-                "tangential_status",
-                &[np],
-                &ts,
-                "friction: 1 stick, 2 slip (of a closed pair; see status for open pairs)",
-                "1",
-            )?;
-            let slip: Vec<f64> = r.pairs.iter().map(|p| p.slip).collect();
-            put_f64(
-                &gg,
-                "slip",
-                &[np],
-                &slip,
-                "friction: accumulated slip path sum |ds| over the load steps while closed",
-                u.len(),
-            )?;
-        }
+        let opening: Vec<f64> = (0..r.pairs.len()).map(|j| it.opening(r, j)).collect();
+        write_pairs(&gg, &r.pairs, &opening, u)?;
     }
     if !st.interior.is_empty() {
         let gf = group(g, "interior")?;
