@@ -1,8 +1,10 @@
-//! `make bench` (third part): whole runs of the arch pipeline (`pipelines/arch.toml` on
-//! `geo/arch.geo`, 6 elements per joint, default outputs) for 6 … 100 voussoirs: seconds per
-//! stage (from the run's `timings.json`), peak memory of the run, fitted exponents against
-//! the number of bodies. Writes out/bench/masonry.csv and prints a table.
-//! `SGBEM_BENCH_VOUSSOIRS=6,12` selects sizes.
+//! `make bench` (third part): whole runs with default outputs of the arch pipeline
+//! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
+//! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
+//! elements per course height) for 7 … 410 bricks: seconds per stage (from the run's
+//! `timings.json`), peak memory of the run, fitted exponents against the number of bodies.
+//! Writes out/bench/masonry.csv and prints a table. `SGBEM_BENCH_VOUSSOIRS=6,12` and
+//! `SGBEM_BENCH_WALLS=2x3,10x10` (courses x bricks) select sizes.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -23,105 +25,160 @@ fn fit(xs: &[f64], ys: &[f64]) -> f64 {
     sxy / sxx
 }
 
-const STAGES: [&str; 7] = [
+const STAGES: [&str; 9] = [
     "read",
     "assemble",
     "condense",
     "interface_system",
     "contact_lcp",
+    "contact_active_set",
+    "contact_record",
     "write",
     "total",
 ];
 
-fn main() {
-    let sizes: Vec<usize> = std::env::var("SGBEM_BENCH_VOUSSOIRS")
+/// One whole run of a masonry series; prints a line and returns the CSV row, the number of
+/// bodies, the total seconds and the peak memory.
+fn one(
+    label: &str,
+    size: &str,
+    scene: &std::path::Path,
+    opts: RunOptions,
+    out: &std::path::Path,
+) -> (String, f64, f64, f64) {
+    reset_peak();
+    let report = run(scene, &opts);
+    let peak = peak_kb() as f64 / 1024.0;
+    let status = match &report {
+        Ok(r) => r.summary["status"].as_str().unwrap_or("?").to_string(),
+        Err(e) => format!("failed: {e}"),
+    };
+    let summary: serde_json::Value = std::fs::read_to_string(out.join("summary.json"))
         .ok()
-        .map(|v| v.split(',').filter_map(|x| x.trim().parse().ok()).collect())
-        .unwrap_or_else(|| vec![6, 12, 25, 50, 100]);
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    let timings: serde_json::Value = std::fs::read_to_string(out.join("timings.json"))
+        .ok()
+        .and_then(|t| serde_json::from_str(&t).ok())
+        .unwrap_or_default();
+    let counts = &summary["counts"];
+    let (bodies, elems, pairs) = (
+        counts["bodies"].as_u64().unwrap_or(0),
+        counts["boundary_elements"].as_u64().unwrap_or(0),
+        counts["interface_pairs"].as_u64().unwrap_or(0),
+    );
+    let t: Vec<f64> = STAGES
+        .iter()
+        .map(|s| timings["stages"][*s].as_f64().unwrap_or(f64::NAN))
+        .collect();
+    let mut line = format!("{label:>5} {size:>6} {bodies:>6} {elems:>6} {pairs:>6}");
+    for v in &t {
+        line += &format!(" {v:>10.3}");
+    }
+    println!("{line} {peak:>8.0} {status}");
+    let row = format!(
+        "{label},{size},{bodies},{elems},{pairs},{},{peak:.1},{status}\n",
+        t.iter()
+            .map(|v| v.to_string())
+            .collect::<Vec<_>>()
+            .join(",")
+    );
+    (row, bodies as f64, t[STAGES.len() - 1], peak)
+}
+
+fn sizes(var: &str, default: &[&str]) -> Vec<String> {
+    std::env::var(var)
+        .ok()
+        .map(|v| v.split(',').map(|x| x.trim().to_string()).collect())
+        .unwrap_or_else(|| default.iter().map(|s| s.to_string()).collect())
+}
+
+fn exponents(label: &str, xs: &[f64], totals: &[f64], peaks: &[f64]) {
+    let ok: Vec<usize> = (0..xs.len())
+        .filter(|&i| totals[i].is_finite() && xs[i] > 0.0)
+        .collect();
+    if ok.len() >= 2 {
+        let pick = |v: &[f64]| ok.iter().map(|&i| v[i]).collect::<Vec<_>>();
+        println!(
+            "{label}: fitted exponents against the number of bodies: total time p = {:.2}, \
+             peak memory p = {:.2}",
+            fit(&pick(xs), &pick(totals)),
+            fit(&pick(xs), &pick(peaks))
+        );
+    }
+}
+
+fn main() {
     let dir = tmpdir("bench-masonry");
-    let scene = root().join("pipelines/arch.toml");
     println!(
-        "sgbem whole runs: semicircular arch (t/R = 0.12, 6 elements per joint, self-weight, \
-         stick), {} threads; seconds per stage, peak memory in MB",
+        "sgbem whole runs with default outputs, {} threads; seconds per stage, peak memory in \
+         MB",
         rayon::current_num_threads()
     );
-    let mut header = format!("{:>4} {:>6} {:>6}", "nv", "elems", "pairs");
+    let mut header = format!(
+        "{:>5} {:>6} {:>6} {:>6} {:>6}",
+        "", "size", "bodies", "elems", "pairs"
+    );
     for s in STAGES {
         header += &format!(" {s:>10}");
     }
     println!("{header} {:>8} status", "peak");
     let mut csv = format!(
-        "voussoirs,bodies,elements,pairs,{},peak_mb,status\n",
+        "series,size,bodies,elements,pairs,{},peak_mb,status\n",
         STAGES.map(|s| format!("{s}_s")).join(",")
     );
+
+    // Arches: pipelines/arch.toml on geo/arch.geo (t/R = 0.12, 6 elements per joint,
+    // self-weight, stick), nv voussoirs and two abutments.
+    let scene = root().join("pipelines/arch.toml");
     let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
-    for nv in sizes {
-        let nvs = nv.to_string();
+    for nv in sizes("SGBEM_BENCH_VOUSSOIRS", &["6", "12", "25", "50", "100"]) {
         let msh = gmsh(
             &root().join("geo/arch.geo"),
             &dir,
             &format!("arch{nv}.msh"),
             false,
-            &["-setnumber", "nv", &nvs],
+            &["-setnumber", "nv", &nv],
         );
         let out = dir.join(format!("arch{nv}"));
-        reset_peak();
-        let report = run(
-            &scene,
-            &RunOptions {
-                mesh: Some(msh),
-                out: Some(out.clone()),
-                quiet: true,
-                ..RunOptions::default()
-            },
-        );
-        let peak = peak_kb() as f64 / 1024.0;
-        let status = match &report {
-            Ok(r) => r.summary["status"].as_str().unwrap_or("?").to_string(),
-            Err(e) => format!("failed: {e}"),
+        let opts = RunOptions {
+            mesh: Some(msh),
+            out: Some(out.clone()),
+            quiet: true,
+            ..RunOptions::default()
         };
-        let summary: serde_json::Value = std::fs::read_to_string(out.join("summary.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str(&t).ok())
-            .unwrap_or_default();
-        let timings: serde_json::Value = std::fs::read_to_string(out.join("timings.json"))
-            .ok()
-            .and_then(|t| serde_json::from_str(&t).ok())
-            .unwrap_or_default();
-        let counts = &summary["counts"];
-        let (elems, pairs) = (
-            counts["boundary_elements"].as_u64().unwrap_or(0),
-            counts["interface_pairs"].as_u64().unwrap_or(0),
-        );
-        let t: Vec<f64> = STAGES
-            .iter()
-            .map(|s| timings["stages"][*s].as_f64().unwrap_or(f64::NAN))
-            .collect();
-        let mut line = format!("{nv:>4} {elems:>6} {pairs:>6}");
-        for v in &t {
-            line += &format!(" {v:>10.3}");
-        }
-        println!("{line} {peak:>8.0} {status}");
-        csv += &format!(
-            "{nv},{},{elems},{pairs},{},{peak:.1},{status}\n",
-            nv + 2,
-            t.iter()
-                .map(|v| v.to_string())
-                .collect::<Vec<_>>()
-                .join(",")
-        );
-        xs.push((nv + 2) as f64);
-        totals.push(t[STAGES.len() - 1]);
-        peaks.push(peak);
+        let (row, b, t, p) = one("arch", &nv, &scene, opts, &out);
+        csv += &row;
+        xs.push(b);
+        totals.push(t);
+        peaks.push(p);
     }
-    if xs.len() >= 2 {
-        println!(
-            "fitted exponents against the number of bodies: total time p = {:.2}, peak memory \
-             p = {:.2}",
-            fit(&xs, &totals),
-            fit(&xs, &peaks)
-        );
+    exponents("arch", &xs, &totals, &peaks);
+
+    // Running-bond walls: pipelines/wall_running_bond.toml (geo/wall.geo, 6 elements per
+    // course height, self-weight and wind, friction 0.7), COURSESxBRICKS.
+    let scene = root().join("pipelines/wall_running_bond.toml");
+    let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
+    for size in sizes(
+        "SGBEM_BENCH_WALLS",
+        &["2x3", "4x5", "6x8", "10x10", "14x14", "20x20"],
+    ) {
+        let (c, b) = size.split_once('x').unwrap_or((&size, "1"));
+        let out = dir.join(format!("wall{size}"));
+        let opts = RunOptions {
+            out: Some(out.clone()),
+            quiet: true,
+            sets: vec![format!("mesh.courses={c}"), format!("mesh.bricks={b}")],
+            ..RunOptions::default()
+        };
+        let (row, n, t, p) = one("wall", &size, &scene, opts, &out);
+        csv += &row;
+        xs.push(n);
+        totals.push(t);
+        peaks.push(p);
     }
+    exponents("wall", &xs, &totals, &peaks);
+
     let out = std::path::Path::new("out/bench");
     std::fs::create_dir_all(out).expect("out/bench");
     std::fs::write(out.join("masonry.csv"), csv).expect("write masonry.csv");

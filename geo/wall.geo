@@ -14,8 +14,8 @@
 //             opening (the faces of the opening, when there is one)
 //
 // Points where three bricks meet (the T-junctions of a running bond, the crosses of a stack
-// bond with two or more bricks per course) are refused by `sgbem run` until junctions are
-// supported; a single column (bricks = 1, bond = 0) has none and runs today:
+// bond with two or more bricks per course) are junctions: sgbem keeps the joint rows there
+// that are independent (README "Junctions"). A single column (bricks = 1, bond = 0) has none:
 //   gmsh -2 -setnumber bricks 1 -setnumber bond 0 -setnumber courses 8 geo/wall.geo
 // Units: any (the shipped scene uses m).
 DefineConstant[

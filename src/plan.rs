@@ -254,9 +254,20 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     if model.interfaces.is_empty() {
         stages.push(("condense", "none (no interface): one solve per body".into()));
     } else {
+        let junctions = model.junctions();
+        let at = if junctions.is_empty() {
+            String::new()
+        } else {
+            let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
+            format!(
+                "; {} junctions (points where up to {most} bodies meet: the dependent joint \
+                 components there are implied by the others, see contact.junctions)",
+                junctions.len()
+            )
+        };
         stages.push((
             "condense",
-            format!("each body onto its interface nodes ({pairs} pairs): D00, Z0"),
+            format!("each body onto its interface nodes ({pairs} pairs): D00, Z0{at}"),
         ));
     }
     let steps_note = if steps > 1 {
