@@ -657,11 +657,20 @@ impl<'a> Session<'a> {
     /// Expands the compact states of an evolutive path into history rows and boundary
     /// solutions of every body (one sparse solve and one recovery per body each).
     pub fn expand(&self, result: &mut ContactResult) {
+        use rayon::prelude::*;
         let (step, factor) = (result.load_step, result.load_factor);
-        for (it, open, s) in std::mem::take(&mut result.recorded) {
-            let (f, mut i, _) = self
-                .problem
-                .state(self.model, self.prepared, factor, &s, &open);
+        // Each state is one sparse solve and a recovery per body: independent, in parallel.
+        let recorded = std::mem::take(&mut result.recorded);
+        let expanded: Vec<_> = recorded
+            .par_iter()
+            .map(|(_, open, s)| {
+                let (f, i, _) = self
+                    .problem
+                    .state(self.model, self.prepared, factor, s, open);
+                (f, i)
+            })
+            .collect();
+        for ((it, open, s), (f, mut i)) in recorded.into_iter().zip(expanded) {
             self.mark_slip(&mut i, &s, &open, &result.start);
             result
                 .rows
@@ -720,21 +729,55 @@ impl<'a> Session<'a> {
                 }
             }
             let mu = if nf > 0.0 { hold / nf } else { 0.0 };
+            let ratio = if nf > 0.0 {
+                t.abs() / nf
+            } else {
+                f64::INFINITY
+            };
             let body = self.free_body(k).map_or("a body".to_string(), |b| {
                 format!("body \"{}\"", self.model.bodies[b].name)
             });
+            if ratio > mu {
+                return format!(
+                    "no equilibrium exists (a sliding mechanism): {body} slides on interface \
+                     \"{}\": the tangential force it needs exceeds what friction holds, \
+                     tangential/normal resultant {ratio:.3} > mu = {mu:.3}; reduce the \
+                     tangential load or raise the friction coefficient",
+                    it.spec.name,
+                );
+            }
+            // The interface as a whole holds: the mechanism slides part of it and opens
+            // other joints (a wedge of blocks, a rocking block that slides at its toe).
+            let pr = &it.pairs[self.problem.rows[r].pair];
+            let open: Vec<usize> = (0..n)
+                .filter(|&q| self.problem.rows[q].kind == RowKind::Normal && st.open[q])
+                .collect();
+            let mut ifaces: Vec<&str> = open
+                .iter()
+                .map(|&q| {
+                    self.model.interfaces[self.problem.rows[q].iface]
+                        .spec
+                        .name
+                        .as_str()
+                })
+                .collect();
+            ifaces.sort_unstable();
+            ifaces.dedup();
+            let shown: Vec<String> = ifaces.iter().take(4).map(|s| format!("\"{s}\"")).collect();
             return format!(
-                "no equilibrium exists (a sliding mechanism): {body} slides on interface \"{}\": \
-                 the tangential force it needs exceeds what friction holds, tangential/normal \
-                 resultant {:.3} > mu = {:.3}; reduce the tangential load or raise the \
-                 friction coefficient",
+                "no equilibrium exists (a mechanism of sliding and opening): interface \"{}\" \
+                 cannot slip at ({}, {}) without leaving {body} free, while {} pairs are open \
+                 on {} interfaces ({}{}); the interface as a whole is below its friction limit \
+                 (tangential/normal resultant {ratio:.3}, mu = {mu:.3}): the blocks move as a \
+                 mechanism that combines sliding with the open joints; reduce the load or raise \
+                 the friction coefficient",
                 it.spec.name,
-                if nf > 0.0 {
-                    t.abs() / nf
-                } else {
-                    f64::INFINITY
-                },
-                mu
+                crate::input::model::fmt_num(pr.x[0]),
+                crate::input::model::fmt_num(pr.x[1]),
+                open.len(),
+                ifaces.len(),
+                shown.join(", "),
+                if ifaces.len() > 4 { ", ..." } else { "" },
             );
         }
         let mut parts = Vec::new();
