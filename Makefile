@@ -87,6 +87,9 @@ test: setup mesh
 	$(PY) pipelines/check_outputs.py out/test/cattaneo_mindlin
 	$(SGBEM) run pipelines/vault_c0.toml --out out/test/vault_c0 --quiet
 	$(PY) pipelines/check_outputs.py out/test/vault_c0
+	@# A running-bond wall: 22 bodies, T-junctions, friction, compact archived states.
+	$(SGBEM) run pipelines/wall_running_bond.toml --set mesh.courses=4 --set mesh.bricks=5 --out out/test/wall_running_bond --quiet
+	$(PY) pipelines/check_outputs.py out/test/wall_running_bond
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
 	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
