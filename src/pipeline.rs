@@ -232,10 +232,13 @@ fn solve_loaded_then(
         && crate::plan::uses_time(scene);
     let method = scene.solve.method;
     let tol = scene.solve.tolerance;
-    let maxit = scene.solve.max_iterations;
 
     let t = Instant::now();
     let mut session = Session::new(model, &prepared).map_err(cause)?;
+    let maxit = scene
+        .solve
+        .max_iterations
+        .unwrap_or_else(|| (4 * session.problem.n_open_rows).max(1000));
     timings.add("interface_system", t.elapsed().as_secs_f64());
     if plan.problem == ContactProblem::None {
         let t = Instant::now();

@@ -71,6 +71,7 @@ pub fn solve(
     while iterations < max_iterations {
         let v = inner.violations(&st);
         if v.is_empty() {
+            cols.keep(&o);
             return Outcome {
                 state: st,
                 iterations,
@@ -104,6 +105,7 @@ pub fn solve(
             blocked.insert(r);
         }
         if !switched {
+            cols.keep(&o);
             let mut rows: Vec<usize> = blocked.iter().copied().collect();
             rows.sort_unstable();
             return Outcome {
@@ -141,6 +143,7 @@ pub fn solve(
             seen.insert(status_key(&st));
         }
     }
+    cols.keep(&o);
     notes.push(format!(
         "the contact iteration did not converge in {max_iterations} iterations \
          (solve.max_iterations)"

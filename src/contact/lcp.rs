@@ -31,9 +31,17 @@ use crate::contact::problem::{Base, Opening, Problem, RowKind};
 #[derive(Default)]
 pub struct Columns {
     cols: HashMap<usize, Vec<f64>>,
+    /// The factor of A_OO of the last status solved: the next solve starts from it and
+    /// removes or appends the rows by which its status differs (the outer iterations of
+    /// the friction fixed point and the active set's iterations change few rows).
+    last: Option<Opening>,
 }
 
 impl Columns {
+    /// Keeps `o` as the factor the next [`Inner::factor`] starts from.
+    pub fn keep(&mut self, o: &Opening) {
+        self.last = Some(o.clone());
+    }
     pub fn get(&mut self, problem: &Problem, j: usize) -> &[f64] {
         self.cols.entry(j).or_insert_with(|| problem.column(j))
     }
@@ -141,12 +149,47 @@ impl<'a> Inner<'a> {
                 .then(a.cmp(&b))
         });
         order.extend(normal);
+        // From the last factor, when few rows differ and none is refused (a refusal depends
+        // on the order of the appends: then the factor is built afresh in `order`).
+        if let Some(mut prev) = cols.last.take() {
+            let want: std::collections::HashSet<usize> = order.iter().copied().collect();
+            let have: std::collections::HashSet<usize> = prev.rows.iter().copied().collect();
+            let remove: Vec<usize> = prev
+                .rows
+                .iter()
+                .copied()
+                .filter(|r| !want.contains(r))
+                .collect();
+            let add: Vec<usize> = order
+                .iter()
+                .copied()
+                .filter(|r| !have.contains(r))
+                .collect();
+            if remove.len() + add.len() < prev.len() / 2 {
+                for r in remove {
+                    prev.remove(r);
+                }
+                let mut ok = true;
+                for r in add {
+                    let col = cols.get(self.problem, r);
+                    if !prev.append(r, col) {
+                        ok = false;
+                        break;
+                    }
+                }
+                if ok {
+                    cols.keep(&prev);
+                    return (prev, refused);
+                }
+            }
+        }
         for r in order {
             let col = cols.get(self.problem, r);
             if !o.append(r, col) {
                 refused.push(r);
             }
         }
+        cols.keep(&o);
         (o, refused)
     }
 

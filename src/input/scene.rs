@@ -210,7 +210,10 @@ impl Quadrature {
 pub struct SolveSpec {
     pub method: Method,
     pub tolerance: f64,
-    pub max_iterations: usize,
+    /// Contact iterations per load step; `None`: automatic, the larger of 1000 and four per
+    /// pair component that can open (a wall of hundreds of bricks needs a switch per head
+    /// joint pair that opens, and more with friction).
+    pub max_iterations: Option<usize>,
     pub load_factors: Vec<f64>,
     /// Pseudo-time steps (`[solve] time`), increasing; `None` with load factors.
     pub time: Option<Vec<f64>>,
@@ -1344,12 +1347,12 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
             "`solve.tolerance` = {tolerance} must be a number between 0 and 1 (e.g. 1e-10)"
         )));
     }
-    let max_iterations = raw.max_iterations.unwrap_or(1000);
-    if max_iterations < 1 {
+    if let Some(m) = raw.max_iterations.filter(|&m| m < 1) {
         return Err(err(format!(
-            "`solve.max_iterations` = {max_iterations} must be at least 1"
+            "`solve.max_iterations` = {m} must be at least 1"
         )));
     }
+    let max_iterations = raw.max_iterations;
     let has_factors = raw.load_factors.is_some();
     let load_factors = raw.load_factors.unwrap_or_else(|| vec![1.0]);
     if load_factors.is_empty() {
@@ -1423,7 +1426,7 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
     Ok(SolveSpec {
         method,
         tolerance,
-        max_iterations: max_iterations as usize,
+        max_iterations: max_iterations.map(|m| m as usize),
         load_factors,
         time,
         collapse,
@@ -1598,7 +1601,7 @@ points = 41
         assert_eq!(s.title, "beam");
         assert_eq!(s.thickness, 1.0);
         assert_eq!(s.solve.tolerance, 1e-10);
-        assert_eq!(s.solve.max_iterations, 1000);
+        assert_eq!(s.solve.max_iterations, None);
         assert_eq!(s.solve.quadrature, Quadrature::Standard);
         assert_eq!(s.output.directory, Path::new("pipelines/out/beam"));
         assert!(!s.output.field);
