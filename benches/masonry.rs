@@ -1,10 +1,11 @@
 //! `make bench` (third part): whole runs with default outputs of the arch pipeline
 //! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
 //! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
-//! elements per course height) for 7 … 410 bricks: seconds per stage (from the run's
-//! `timings.json`), peak memory of the run, fitted exponents against the number of bodies.
-//! Writes out/bench/masonry.csv and prints a table. `SGBEM_BENCH_VOUSSOIRS=6,12` and
-//! `SGBEM_BENCH_WALLS=2x3,10x10` (courses x bricks) select sizes.
+//! elements per course height) for 7 … 410 bricks (the largest with history = "final"):
+//! seconds per stage (from the run's `timings.json`), peak memory of the run, fitted
+//! exponents against the number of bodies. Writes out/bench/masonry.csv and prints a table.
+//! `SGBEM_BENCH_VOUSSOIRS=6,12` and `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` (courses x
+//! bricks, optionally `:final` for history = "final") select sizes.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -159,16 +160,23 @@ fn main() {
     // course height, self-weight and wind, friction 0.7), COURSESxBRICKS.
     let scene = root().join("pipelines/wall_running_bond.toml");
     let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
+    // The largest with history = "final": its full history (1195 states of 410 bodies)
+    // alone takes 5.6 GB and about a minute to expand and write (README, Speed).
     for size in sizes(
         "SGBEM_BENCH_WALLS",
-        &["2x3", "4x5", "6x8", "10x10", "14x14", "20x20"],
+        &["2x3", "4x5", "6x8", "10x10", "14x14", "20x20:final"],
     ) {
-        let (c, b) = size.split_once('x').unwrap_or((&size, "1"));
-        let out = dir.join(format!("wall{size}"));
+        let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
+        let (c, b) = dims.split_once('x').unwrap_or((dims, "1"));
+        let out = dir.join(format!("wall{dims}{history}"));
+        let mut sets = vec![format!("mesh.courses={c}"), format!("mesh.bricks={b}")];
+        if history != "full" {
+            sets.push(format!("output.history=\"{history}\""));
+        }
         let opts = RunOptions {
             out: Some(out.clone()),
             quiet: true,
-            sets: vec![format!("mesh.courses={c}"), format!("mesh.bricks={b}")],
+            sets,
             ..RunOptions::default()
         };
         let (row, n, t, p) = one("wall", &size, &scene, opts, &out);
