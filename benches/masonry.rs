@@ -10,7 +10,8 @@
 #[path = "../tests/support/mod.rs"]
 mod support;
 
-use sgbem::pipeline::{run, RunOptions};
+use std::path::Path;
+
 use support::*;
 
 fn fit(xs: &[f64], ys: &[f64]) -> f64 {
@@ -38,26 +39,55 @@ const STAGES: [&str; 9] = [
     "total",
 ];
 
-/// One whole run of a masonry series; prints a line and returns the CSV row, the number of
-/// bodies, the total seconds and the peak memory.
+/// One whole run of a masonry series, as a process of its own (`sgbem run` under
+/// `/usr/bin/time`, whose maximum resident set is the run's peak memory: measured in this
+/// process, the memory an earlier run left with the allocator would count); prints a line
+/// and returns the CSV row, the number of bodies, the total seconds and the peak memory.
 fn one(
     label: &str,
     size: &str,
-    scene: &std::path::Path,
-    opts: RunOptions,
-    out: &std::path::Path,
+    scene: &Path,
+    args: &[String],
+    out: &Path,
 ) -> (String, f64, f64, f64) {
-    reset_peak();
-    let report = run(scene, &opts);
-    let peak = peak_kb() as f64 / 1024.0;
-    let status = match &report {
-        Ok(r) => r.summary["status"].as_str().unwrap_or("?").to_string(),
-        Err(e) => format!("failed: {e}"),
+    let mut cmd = std::process::Command::new("/usr/bin/time");
+    cmd.arg("-f")
+        .arg("%M")
+        .arg(env!("CARGO_BIN_EXE_sgbem"))
+        .arg("run")
+        .arg(scene)
+        .arg("--quiet")
+        .arg("--out")
+        .arg(out)
+        .args(args);
+    let (status, peak) = match cmd.output() {
+        Ok(o) => {
+            let err = String::from_utf8_lossy(&o.stderr);
+            let peak = err
+                .lines()
+                .last()
+                .and_then(|l| l.trim().parse::<f64>().ok())
+                .map_or(f64::NAN, |kb| kb / 1024.0);
+            let status = match o.status.code() {
+                Some(0) | Some(3) => String::new(),
+                _ => format!(
+                    "failed: {}",
+                    err.lines().find(|l| l.starts_with("sgbem")).unwrap_or("?")
+                ),
+            };
+            (status, peak)
+        }
+        Err(e) => (format!("failed: /usr/bin/time: {e}"), f64::NAN),
     };
     let summary: serde_json::Value = std::fs::read_to_string(out.join("summary.json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
         .unwrap_or_default();
+    let status = if status.is_empty() {
+        summary["status"].as_str().unwrap_or("?").to_string()
+    } else {
+        status
+    };
     let timings: serde_json::Value = std::fs::read_to_string(out.join("timings.json"))
         .ok()
         .and_then(|t| serde_json::from_str(&t).ok())
@@ -72,7 +102,7 @@ fn one(
         .iter()
         .map(|s| timings["stages"][*s].as_f64().unwrap_or(f64::NAN))
         .collect();
-    let mut line = format!("{label:>5} {size:>6} {bodies:>6} {elems:>6} {pairs:>6}");
+    let mut line = format!("{label:>5} {size:>12} {bodies:>6} {elems:>6} {pairs:>6}");
     for v in &t {
         line += &format!(" {v:>10.3}");
     }
@@ -117,7 +147,7 @@ fn main() {
         rayon::current_num_threads()
     );
     let mut header = format!(
-        "{:>5} {:>6} {:>6} {:>6} {:>6}",
+        "{:>5} {:>12} {:>6} {:>6} {:>6}",
         "", "size", "bodies", "elems", "pairs"
     );
     for s in STAGES {
@@ -142,13 +172,8 @@ fn main() {
             &["-setnumber", "nv", &nv],
         );
         let out = dir.join(format!("arch{nv}"));
-        let opts = RunOptions {
-            mesh: Some(msh),
-            out: Some(out.clone()),
-            quiet: true,
-            ..RunOptions::default()
-        };
-        let (row, b, t, p) = one("arch", &nv, &scene, opts, &out);
+        let args = vec!["--mesh".to_string(), msh.display().to_string()];
+        let (row, b, t, p) = one("arch", &nv, &scene, &args, &out);
         csv += &row;
         xs.push(b);
         totals.push(t);
@@ -173,13 +198,11 @@ fn main() {
         if history != "full" {
             sets.push(format!("output.history=\"{history}\""));
         }
-        let opts = RunOptions {
-            out: Some(out.clone()),
-            quiet: true,
-            sets,
-            ..RunOptions::default()
-        };
-        let (row, n, t, p) = one("wall", &size, &scene, opts, &out);
+        let args: Vec<String> = sets
+            .into_iter()
+            .flat_map(|x| ["--set".to_string(), x])
+            .collect();
+        let (row, n, t, p) = one("wall", &size, &scene, &args, &out);
         csv += &row;
         xs.push(n);
         totals.push(t);
