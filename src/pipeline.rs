@@ -1010,24 +1010,42 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             );
         }
     }
-    let mut states: Vec<StateRecord> = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full {
-        let recorded = result.states.len().saturating_sub(1);
-        for st in &result.states[..recorded] {
-            states.push(StateRecord::new(
-                states.len(),
-                st.load_step,
-                st.load_factor,
-                st.fields.clone(),
-                st.interfaces.clone(),
-            ));
-        }
-    }
     // The final state belongs to the last step solved (the failing one after a failure).
     let final_step = result
         .states
         .last()
         .map_or(scene.solve.steps().len() - 1, |s| s.load_step);
+    // What the section paths need of each recorded state besides its fields, which move
+    // into the record (a full history of hundreds of bodies is most of a run's memory).
+    type StateLoads = (usize, usize, f64, Vec<Option<[f64; 2]>>);
+    let recorded_loads: Vec<StateLoads> = result
+        .states
+        .iter()
+        .map(|s| {
+            (
+                s.iteration,
+                s.load_step,
+                s.load_factor,
+                s.body_force.clone(),
+            )
+        })
+        .collect();
+    let mut states: Vec<StateRecord> = Vec::new();
+    if scene.output.history == crate::input::scene::History::Full {
+        let recorded = result.states.len().saturating_sub(1);
+        for st in std::mem::take(&mut result.states)
+            .into_iter()
+            .take(recorded)
+        {
+            states.push(StateRecord::new(
+                states.len(),
+                st.load_step,
+                st.load_factor,
+                st.fields,
+                st.interfaces,
+            ));
+        }
+    }
     states.push(StateRecord::new(
         states.len(),
         final_step,
@@ -1078,7 +1096,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // then evaluated for the final state and, with history = "full", for every recorded
     // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
     let full_path =
-        scene.output.history == crate::input::scene::History::Full && !result.states.is_empty();
+        scene.output.history == crate::input::scene::History::Full && !recorded_loads.is_empty();
     let mut sections = Vec::new();
     let mut section_paths = Vec::new();
     for s in &scene.output.sections {
@@ -1115,18 +1133,16 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         }
         sections.push((s.name.clone(), rows));
         if full_path {
-            let blocks: Vec<String> = result
+            // The recorded states are those of the record, the last being the final one.
+            let blocks: Vec<String> = rec
                 .states
                 .par_iter()
+                .zip(&recorded_loads)
                 .zip(&result.history.rows)
-                .map(|(st, row)| {
-                    let inputs = body_inputs(
-                        model,
-                        scene.plane,
-                        &st.fields,
-                        &st.body_force,
-                        st.load_factor,
-                    );
+                .map(|((record, st), row)| {
+                    let (iteration, load_step, load_factor, body_force) = st;
+                    let inputs =
+                        body_inputs(model, scene.plane, &record.fields, body_force, *load_factor);
                     let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
                     let mut text = String::new();
                     for (x, v) in pts.iter().zip(sampler.evaluate(&inputs)) {
@@ -1140,7 +1156,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
                         let _ = writeln!(
                             text,
                             "{},{},{:e},{:e},{:e},{:e},{vals}",
-                            st.iteration, st.load_step, st.load_factor, detached, x[0], x[1]
+                            iteration, load_step, load_factor, detached, x[0], x[1]
                         );
                     }
                     text
