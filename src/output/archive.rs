@@ -402,20 +402,8 @@ fn put_attr_list(loc: &Location, name: &str, values: &[String]) -> R<()> {
     .map(|_| ())
 }
 
-/// Writes dataset `name` of the given shape, chunked and compressed when large, with its
-/// `description` and `units`.
-fn put<T: H5Type>(
-    g: &Group,
-    name: &str,
-    shape: &[usize],
-    data: &[T],
-    description: &str,
-    units: &str,
-) -> R<()> {
-    put_with(g, name, shape, data, description, units, true)
-}
-
-/// [`put`], compressed only when `compress` (and large).
+/// Writes dataset `name` of the given shape with its `description` and `units`; chunked and
+/// compressed when large and `compress`.
 fn put_with<T: H5Type>(
     g: &Group,
     name: &str,
@@ -445,6 +433,10 @@ fn put_with<T: H5Type>(
     let ds = ctx(ds, where_)?;
     put_attr_str(&ds, "description", description)?;
     put_attr_str(&ds, "units", units)
+}
+
+fn put<T: H5Type>(g: &Group, name: &str, shape: &[usize], data: &[T], d: &str, u: &str) -> R<()> {
+    put_with(g, name, shape, data, d, u, true)
 }
 
 fn put_f64(g: &Group, name: &str, shape: &[usize], data: &[f64], d: &str, u: &str) -> R<()> {
