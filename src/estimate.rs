@@ -21,11 +21,14 @@
 //! ```text
 //! kept(b)  = 8 (n² + n_x n_x0 + n_x0²)
 //! work(b)  = 8 (2 n_x² + 4 n_x (n_x0 + 1) + 2 n_x0²)
-//! peak     = Σ_b kept(b) + max_b work(b) + 8 (2 n_i)² + 64 MB
+//! peak     = Σ_b kept(b) + max_b work(b) + mixed + contact + 64 MB
 //! ```
 //!
-//! where `n_i` = 4 × (interface pairs) is the size of the interface system and 64 MB is the
-//! program itself with its mesh. Time: the Galerkin pair loop costs about
+//! where `mixed` = 32 n_i² bytes for the paper's dense mixed interface operators archived
+//! with `operators = true` (n_i = 4 × pairs ≤ 3000 and no junctions; none otherwise),
+//! `contact` the contact stage's memory below, and 64 MB is the program itself with its
+//! mesh. No dense matrix over all interfaces is counted: the engine forms none (except the
+//! cross-checks' LCP and QP matrices of `both`). Time: the Galerkin pair loop costs about
 //! `c_q` per element pair (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
 //! one core of a 2020s machine), and the LU condensation `(2/3) n_x³ + 2 n_x² n_x0` flops at
 //! about 1 Gflop/s; post-processing about 1 µs per (interior-field node or section point,
@@ -56,8 +59,13 @@
 //! machine) and chosen to meet the two largest cases within about 30 %: system 0.24 / 1.38 s
 //! at 416 / 832, path 0.56 / 7.7 s, record 2.2 / 14.0 s, active set 0.19 / 1.3 s, Lemke 0.36 /
 //! 5.6 s, QP 2.5 / 16.4 s. The small cases run faster than the cubes say (overheads, caches).
-//! Memory: the recorded states, `8 (k s + 1) Σ_b (2 nodes + 4 elements)` bytes with history
-//! = "full", and the dense LCP / QP matrices of the cross-checks, `3 · 8 r²`.
+//! Memory: the recorded states, `2 · 8 (Σ_b (2 nodes + 4 elements) + 7 pairs) + 9 r` bytes
+//! each (k s + 1 of them with history = "full", k otherwise), the sparse glued system
+//! `80 Σ_b n_u(b)²` (values and indices of the blocks, the matrix and its factor with fill),
+//! the columns of the opening stiffness and the factor of A_OO, `8 r m + 4 m²` with m =
+//! min(s, r) rows switched, and the dense LCP / QP matrices of the cross-checks of `both`,
+//! `3 · 8 r²`. Measured against it (peak resident memory of whole runs, `cargo bench --bench
+//! masonry`): see the README, Speed.
 
 use crate::error::{Error, Result};
 use crate::input::model::{DofClass, Model, Role};
@@ -101,8 +109,16 @@ pub struct ContactEstimate {
     pub path: f64,
     pub record: f64,
     pub checks: f64,
-    /// Bytes of the recorded states and the dense matrices of the cross-checks.
+    /// Bytes of the glued system, the opening stiffness's columns and factor, and the dense
+    /// matrices of the cross-checks.
     pub bytes: f64,
+    /// Bytes of the recorded states at most (every pair switching once per load step with
+    /// history = "full"): the only part of a run that grows with its iterations, reported
+    /// beside the peak and not counted for the refusal (a wall of hundreds of bricks switches
+    /// about one pair in seven).
+    pub history_bytes: f64,
+    /// States recorded at most.
+    pub states: usize,
 }
 
 impl ContactEstimate {
@@ -150,7 +166,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     let switches = steps * pairs;
     let (p, s, k) = (pairs as f64, switches as f64 / steps as f64, steps as f64);
     let mut interface_unknowns = 0usize;
-    let (mut cubes, mut expand, mut per_state) = (0.0, 0.0, 0.0);
+    let (mut cubes, mut squares, mut expand, mut per_state) = (0.0, 0.0, 0.0, 0.0);
     for (b, size) in model.bodies.iter().zip(bodies) {
         let n_u = b
             .dofs
@@ -160,9 +176,14 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
             .count();
         interface_unknowns += n_u;
         cubes += (n_u as f64).powi(3);
+        squares += (n_u as f64).powi(2);
         expand += ((size.n_x + size.n_x0) * size.n_x0) as f64;
         per_state += 8.0 * (2 * b.nodes.len() + 4 * b.elements.len()) as f64;
     }
+    // Each recorded state: the boundary solution of every body, its interface results
+    // (about 7 values per pair) and its compact record (a status and an opening per row),
+    // held twice while the archive is written beside the VTK files.
+    per_state = 2.0 * (per_state + 8.0 * 7.0 * model.pair_count() as f64) + 9.0 * rows as f64;
     let recorded = if scene.output.history == History::Full {
         switches as f64 + 1.0
     } else {
@@ -180,6 +201,14 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         Method::Lcp => 0.0,
         _ => 3.0 * 8.0 * (rows as f64).powi(2),
     };
+    // The sparse glued system: each body's dense block (n_u² values) in triplets, the matrix
+    // and its Cholesky factor with fill (about 5 values per block entry, 8 bytes and an
+    // index each). The columns of the opening stiffness computed (one per row that switches,
+    // r values each) and the Cholesky factor of A_OO over the open rows (m²/2, m ≤ the rows
+    // that switch).
+    let glued = 5.0 * 16.0 * squares;
+    let m = (switches as f64 / k).min(rows as f64);
+    let opening = 8.0 * rows as f64 * m + 8.0 * m * m / 2.0;
     Some(ContactEstimate {
         pairs,
         rows,
@@ -189,8 +218,14 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         path,
         record: C_RECORD * recorded * expand,
         checks: per_cube * k * p * p * p,
-        bytes: recorded * per_state + dense,
+        bytes: dense + glued + opening,
+        history_bytes: recorded * per_state,
+        states: recorded as usize,
     })
+}
+
+fn k_steps(scene: &Scene) -> f64 {
+    scene.solve.steps().len() as f64
 }
 
 /// Bytes the program needs besides the dense operators.
@@ -255,7 +290,14 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
         flops += 2.0 / 3.0 * nx * nx * nx + 2.0 * nx * nx * nx0;
         pairs += (s.elements as f64) * (s.elements as f64);
     }
-    let ni = 8.0 * model.pair_count() as f64;
+    // The paper's mixed interface operators of the final status, archived (dense, several
+    // copies) only for scenes of up to 3000 interface unknowns and no junctions.
+    let ni = 4.0 * model.pair_count() as f64;
+    let mixed = if scene.output.operators && ni <= 3000.0 && model.junctions().is_empty() {
+        8.0 * 4.0 * ni * ni
+    } else {
+        0.0
+    };
     let per_pair = match quadrature {
         Quadrature::Fast => 4e-6,
         Quadrature::Standard => 10e-6,
@@ -280,11 +322,15 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
     }
     let contact = contact(model, scene, &bodies);
     let contact_bytes = contact.as_ref().map_or(0.0, |c| c.bytes);
+    // At least the final state of every step is recorded.
+    let history_floor = contact.as_ref().map_or(0.0, |c| {
+        c.history_bytes / c.states.max(1) as f64 * k_steps(scene)
+    });
     Estimate {
         bodies,
-        peak_bytes: kept + work + 8.0 * ni * ni + contact_bytes + BASE_BYTES,
+        peak_bytes: kept + work + mixed + contact_bytes + history_floor + BASE_BYTES,
         seconds: pairs * per_pair + flops / 1e9,
-        post_seconds: evaluations * 1e-6,
+        post_seconds: (evaluations * 1e-6).max(0.0),
         contact,
     }
 }
@@ -387,11 +433,20 @@ impl Estimate {
 
     /// One line for `sgbem check`.
     pub fn line(&self) -> String {
+        let history = match &self.contact {
+            Some(c) if c.states > 1 => format!(
+                " (and up to {} more for a full history of up to {} states)",
+                fmt_bytes(c.history_bytes),
+                c.states
+            ),
+            _ => String::new(),
+        };
         format!(
-            "about {} peak memory, about {} to assemble and condense, {} to post-process",
+            "about {} peak memory{history}, about {} to assemble and condense, {} to \
+             post-process",
             fmt_bytes(self.peak_bytes),
             fmt_seconds(self.seconds),
-            fmt_seconds(self.post_seconds)
+            fmt_seconds(self.post_seconds + 0.0)
         )
     }
 
