@@ -646,6 +646,8 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
     write_pairs(g, &pairs, &opening, u)
 }
 
+/// The pair values of one interface, or of all interfaces concatenated (the floats
+/// unfiltered, as the states' fields).
 /// The pair values of one interface, or of all interfaces concatenated.
 fn write_pairs(g: &Group, pairs: &[PairResult], opening: &[f64], u: &U) -> R<()> {
     let np = pairs.len();
@@ -659,30 +661,33 @@ fn write_pairs(g: &Group, pairs: &[PairResult], opening: &[f64], u: &U) -> R<()>
         "1",
     )?;
     let tr: Vec<f64> = pairs.iter().flat_map(|p| p.traction).collect();
-    put_f64(
+    put_with(
         g,
         "traction",
         &[np, 2],
         &tr,
         "traction on body A in the pair frame: tangential, normal (tension positive)",
         &u.stress(),
+        false,
     )?;
     let jump: Vec<f64> = pairs.iter().flat_map(|p| p.jump).collect();
-    put_f64(
+    put_with(
         g,
         "jump",
         &[np, 2],
         &jump,
         "relative displacement u_B - u_A in the pair frame: slip, normal",
         u.len(),
+        false,
     )?;
-    put_f64(
+    put_with(
         g,
         "normal_opening",
         &[np],
         opening,
         "normal opening: gap + normal jump where open, 0 where closed",
         u.len(),
+        false,
     )?;
     if pairs.iter().any(|p| p.slipping.is_some()) {
         let ts: Vec<i8> = pairs
@@ -702,13 +707,14 @@ fn write_pairs(g: &Group, pairs: &[PairResult], opening: &[f64], u: &U) -> R<()>
             "1",
         )?;
         let slip: Vec<f64> = pairs.iter().map(|p| p.slip).collect();
-        put_f64(
+        put_with(
             g,
             "slip",
             &[np],
             &slip,
             "friction: accumulated slip path sum |ds| over the load steps while closed",
             u.len(),
+            false,
         )?;
     }
     Ok(())
