@@ -366,9 +366,17 @@ fn archive_layout_attributes_and_shapes() {
 
 #[test]
 fn large_datasets_are_chunked_and_compressed() {
+    // Only with output.compress = true; unfiltered by default.
     let dir = tmpdir("outputs-chunks");
+    let plain = dir.join("plain.h5");
+    write_archive(&plain, &fabricated(80)).expect("write");
+    let f = h5::File::open(&plain).unwrap();
+    assert!(!f.dataset("bodies/lower/A00").unwrap().is_chunked());
+    drop(f);
     let path = dir.join("archive.h5");
-    write_archive(&path, &fabricated(80)).expect("write");
+    let mut rec = fabricated(80);
+    rec.compress = true;
+    write_archive(&path, &rec).expect("write");
     let f = h5::File::open(&path).unwrap();
     let big = f.dataset("bodies/lower/A00").unwrap();
     assert_eq!(big.shape(), [80, 80]);

@@ -105,10 +105,18 @@ impl Material {
     }
 }
 
+/// `√(a² + b²)`: the kernels' distances, without `hypot`'s guard against overflow (the
+/// boundary lies within a unit disk during assembly, and within the model's coordinates,
+/// far below 1e150, after it), which costs several times a square root.
+#[inline(always)]
+pub fn norm2(a: f64, b: f64) -> f64 {
+    (a * a + b * b).sqrt()
+}
+
 /// `|r|` and `r̂ = r/|r|`.
 #[inline(always)]
 fn split(r: Vec2) -> (f64, Vec2) {
-    let len = r[0].hypot(r[1]);
+    let len = norm2(r[0], r[1]);
     (len, [r[0] / len, r[1] / len])
 }
 
@@ -295,14 +303,14 @@ impl Segment {
     #[inline]
     pub fn length(&self) -> f64 {
         let c = self.chord();
-        c[0].hypot(c[1])
+        norm2(c[0], c[1])
     }
 
     /// Unit tangent `τ = (Q−P)/L`.
     #[inline]
     pub fn tangent(&self) -> Vec2 {
         let c = self.chord();
-        let l = c[0].hypot(c[1]);
+        let l = norm2(c[0], c[1]);
         [c[0] / l, c[1] / l]
     }
 
@@ -342,7 +350,7 @@ impl Segment {
         } else {
             0.0
         };
-        (w[0] - s * c[0]).hypot(w[1] - s * c[1])
+        norm2(w[0] - s * c[0], w[1] - s * c[1])
     }
 
     /// Distance between two closed segments. Zero if they touch or cross.

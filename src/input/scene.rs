@@ -261,6 +261,9 @@ pub struct OutputSpec {
     pub directory: PathBuf,
     pub history: History,
     pub operators: bool,
+    /// Deflate the archive's large datasets (shuffle + deflate): about a third smaller, for
+    /// about 0.2 s of CPU per 10 MB of operators; off by default.
+    pub compress: bool,
     pub vtk: bool,
     pub field: bool,
     pub sections: Vec<SectionSpec>,
@@ -623,6 +626,7 @@ struct RawOutput {
     directory: Option<String>,
     history: Option<String>,
     operators: Option<bool>,
+    compress: Option<bool>,
     vtk: Option<bool>,
     field: Option<bool>,
     #[serde(default)]
@@ -670,10 +674,11 @@ const SOLVE_KEYS: [&str; 7] = [
     "collapse",
     "quadrature",
 ];
-const OUTPUT_KEYS: [&str; 6] = [
+const OUTPUT_KEYS: [&str; 7] = [
     "directory",
     "history",
     "operators",
+    "compress",
     "vtk",
     "field",
     "section",
@@ -1500,6 +1505,7 @@ fn output_spec(raw: RawOutput, dir: &Path, stem: &str, path: &Path) -> Result<Ou
         directory,
         history,
         operators: raw.operators.unwrap_or(true),
+        compress: raw.compress.unwrap_or(false),
         vtk: raw.vtk.unwrap_or(true),
         field: raw.field.unwrap_or(false),
         sections,

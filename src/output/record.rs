@@ -435,6 +435,8 @@ pub struct RunRecord {
     pub timings: Vec<(String, f64)>,
     /// The text of summary.json.
     pub summary_json: String,
+    /// Deflate the archive's large datasets (`output.compress`).
+    pub compress: bool,
 }
 
 impl RunRecord {
@@ -459,6 +461,7 @@ impl RunRecord {
             status: String::new(),
             timings: Vec::new(),
             summary_json: String::new(),
+            compress: false,
         }
     }
 
@@ -469,6 +472,7 @@ impl RunRecord {
         let mut r = RunRecord::empty(&scene.title, scene.plane);
         r.scene_text = scene.text.clone();
         r.overrides = scene.overrides.clone();
+        r.compress = scene.output.compress;
         r.mesh_sha256 = sha256_file(&model.mesh_path)?;
         r.units = scene.units.clone();
         r.thickness = scene.thickness;

@@ -128,7 +128,10 @@ fn project(seg: &Segment, x: Vec2) -> (f64, f64) {
     } else {
         0.0
     };
-    ((w[0] - xi * c[0]).hypot(w[1] - xi * c[1]), xi)
+    (
+        crate::bem::kernels::norm2(w[0] - xi * c[0], w[1] - xi * c[1]),
+        xi,
+    )
 }
 
 // ---------------------------------------------------------------------------------------
@@ -616,7 +619,7 @@ impl<'a> Geometry<'a> {
             let node = self.body.elements[ei].nodes[a];
             if let Some(rho_v) = self.corner_layer[node] {
                 let v = self.body.nodes[node];
-                let r = (x[0] - v[0]).hypot(x[1] - v[1]);
+                let r = crate::bem::kernels::norm2(x[0] - v[0], x[1] - v[1]);
                 if r < layer * rho_v && r > 0.0 {
                     rays.push((Base::Node(node), r, layer * rho_v, v));
                 }
