@@ -8,6 +8,10 @@ pub struct BodyField {
     pub u: Vec<[f64; 2]>,
     /// Traction `t = σ n` at the two ends of each element (as `Body::elements`).
     pub t: Vec<[[f64; 2]; 2]>,
+    /// The Galerkin-weighted reaction `∫ψ_n t` of each node held by a displacement condition,
+    /// along its known directions (global x, y; zero elsewhere): the nodal force that the
+    /// discrete problem balances exactly. Empty where unknown (read from an archive).
+    pub reaction: Vec<[f64; 2]>,
 }
 
 /// State of one interface pair.

@@ -164,6 +164,7 @@ fn fabricated(big_operator: usize) -> RunRecord {
                         [[val(s), val(s + 1)], [val(s + 2), val(s + 3)]]
                     })
                     .collect(),
+                ..Default::default()
             })
             .collect();
         let pairs = (0..2)
@@ -898,6 +899,7 @@ fn record_from_a_model() {
         .map(|b| BodyField {
             u: vec![[0.0; 2]; b.nodes.len()],
             t: vec![[[0.0; 2]; 2]; b.elements.len()],
+            ..Default::default()
         })
         .collect();
     let pairs = vec![
@@ -985,6 +987,7 @@ fn fabricated_run(dir: &Path) -> PathBuf {
                         [[val(s), val(s + 1)], [val(s + 2), val(s + 3)]]
                     })
                     .collect(),
+                ..Default::default()
             })
             .collect();
         let pairs: Vec<PairResult> = (0..4)

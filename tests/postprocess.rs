@@ -101,6 +101,7 @@ fn exact_field(body: &Body, u: &dyn Fn(Vec2) -> Vec2, s: &dyn Fn(Vec2) -> Mat2) 
                 [end(0), end(1)]
             })
             .collect(),
+        ..Default::default()
     }
 }
 
@@ -229,6 +230,7 @@ fn recovery_uses_the_plane_moduli() {
         let field = BodyField {
             u: body.nodes.iter().map(|p| [eps * p[0], 0.0]).collect(),
             t: vec![[[0.0; 2]; 2]; 4],
+            ..Default::default()
         };
         let s = boundary_stress(&body, &m, &field)[0][0];
         assert!(
@@ -240,6 +242,7 @@ fn recovery_uses_the_plane_moduli() {
         let field = BodyField {
             u: vec![[0.0; 2]; 4],
             t: vec![[[0.0, -1.0]; 2]; 4],
+            ..Default::default()
         };
         let s = boundary_stress(&body, &m, &field)[0][0];
         let nu_prime = if ps {
@@ -557,6 +560,7 @@ fn same_problem_at_another_position_size_and_orientation() {
             })
             .collect(),
         t: field1.t.iter().map(|t| [rot(t[0]), rot(t[1])]).collect(),
+        ..Default::default()
     };
     let b2 = rot([b1[0] / s, b1[1] / s]);
     let (sc1, sc2) = (scaling(&body1), scaling(&body2));

@@ -202,6 +202,15 @@ pub struct BodySystem {
     /// Centre and length of the scaled coordinates used for integration.
     pub centre: [f64; 2],
     pub length: f64,
+    /// The known displacement components (node, global direction): the nodes held by
+    /// displacement conditions.
+    pub held: Vec<(usize, [f64; 2])>,
+    /// Their hypersingular rows, the equations their displacement unknowns would have:
+    /// `R = held_rows · [X; X0] + factor · held_load` is the Galerkin-weighted reaction
+    /// `∫ψ_n t·d` of each held component, the nodal force that the discrete problem balances
+    /// as exactly as the interfaces' nodal forces (`post::equilibrium`).
+    pub held_rows: Mat<f64>,
+    pub held_load: Vec<f64>,
 }
 
 impl BodySystem {
@@ -451,6 +460,26 @@ pub fn assemble_body_scaled(
         }
     }
 
+    // --- Held components: rows only (index n + q), never unknowns ------------------------
+    let n_sys = unknowns.len();
+    let mut held: Vec<(usize, [f64; 2])> = Vec::new();
+    for (node, d) in body.dofs.iter().enumerate() {
+        for k in 0..2 {
+            if d.class[k] == DofClass::Known {
+                let q = n_sys + held.len();
+                held.push((node, d.frame[k]));
+                for &(ei, end) in &node_elems[node] {
+                    entries[ei].push(Entry {
+                        index: q,
+                        end,
+                        dir: d.frame[k],
+                        traction: false,
+                    });
+                }
+            }
+        }
+    }
+
     // --- Scaled geometry ----------------------------------------------------------------------
     let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
     let elems: Vec<ElementRef> = body
@@ -474,7 +503,7 @@ pub fn assemble_body_scaled(
         .map(|b| [load_factor * b[0], load_factor * b[1]]);
 
     // --- Pair loop ------------------------------------------------------------------------------
-    let n = unknowns.len();
+    let n = n_sys + held.len();
     let mut g = Mat::<f64>::zeros(n, n);
     let mut load = vec![0.0; n];
     let l2 = length * length;
@@ -568,8 +597,12 @@ pub fn assemble_body_scaled(
             }
         }
     }
-    // (P, F) = (W, −U)ᵀ.
-    let is_t: Vec<bool> = unknowns.iter().map(|u| u.is_traction()).collect();
+    // (P, F) = (W, −U)ᵀ, the held rows included.
+    let is_t: Vec<bool> = unknowns
+        .iter()
+        .map(|u| u.is_traction())
+        .chain(std::iter::repeat_n(false, held.len()))
+        .collect();
     for p in 0..n {
         if is_t[p] {
             continue;
@@ -580,6 +613,13 @@ pub fn assemble_body_scaled(
             }
         }
     }
+    // The held rows apart; the known displacements are in the loads of every row already,
+    // so their columns are dropped.
+    let nh = held.len();
+    let held_rows = g.as_ref().submatrix(n_sys, 0, nh, n_sys).to_owned();
+    let held_load = load[n_sys..].to_vec();
+    let g = g.as_ref().submatrix(0, 0, n_sys, n_sys).to_owned();
+    load.truncate(n_sys);
     let asymmetry = relative_asymmetry(&g);
 
     Ok(BodySystem {
@@ -593,6 +633,9 @@ pub fn assemble_body_scaled(
         material: mat,
         centre,
         length,
+        held,
+        held_rows,
+        held_load,
     })
 }
 

@@ -162,5 +162,16 @@ pub fn body_field(
             }
         }
     }
-    BodyField { u, t }
+    // Reactions of the held components: their hypersingular rows applied to the unknowns.
+    let mut reaction = vec![[0.0; 2]; body.nodes.len()];
+    if !sys.held.is_empty() {
+        let all: Vec<f64> = (0..sys.n()).map(value).collect();
+        let r = crate::contact::problem::matvec(&sys.held_rows, &all);
+        for ((&(node, dir), rq), lq) in sys.held.iter().zip(&r).zip(&sys.held_load) {
+            let f = rq + factor * lq;
+            reaction[node][0] += f * dir[0];
+            reaction[node][1] += f * dir[1];
+        }
+    }
+    BodyField { u, t, reaction }
 }

@@ -1545,6 +1545,7 @@ fn read_state_compact(
                 .chunks_exact(4)
                 .map(|c| [[c[0], c[1]], [c[2], c[3]]])
                 .collect(),
+            reaction: Vec::new(),
         });
     }
     let (_, status) = get::<i8>(g, "status", &[Some(np)])?;
@@ -1593,7 +1594,11 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
             .chunks_exact(4)
             .map(|c| [[c[0], c[1]], [c[2], c[3]]])
             .collect();
-        st.fields.push(BodyField { u, t });
+        st.fields.push(BodyField {
+            u,
+            t,
+            reaction: Vec::new(),
+        });
     }
     let gi = open_group(g, "interfaces")?;
     for it in &rec.interfaces {
