@@ -1054,10 +1054,11 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         result.interfaces.clone(),
     ));
     rec.states = states;
-    rec.history = result.history.clone();
+    // The archive's thread gets the states' fields shared, not copied (StateRecord); the
+    // history goes there alone (the VTK files do not need it).
     archive.send(ArchivePart::Solved {
         contact_operators,
-        history: rec.history.clone(),
+        history: result.history.clone(),
         states: rec.states.clone(),
     });
     timings.add("write", t1.elapsed().as_secs_f64());

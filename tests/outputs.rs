@@ -496,7 +496,7 @@ fn archive_round_trip_is_exact() {
             (s.iteration, s.load_step, s.load_factor),
             (t.iteration, t.load_step, t.load_factor)
         );
-        for (f, g) in s.fields.iter().zip(&t.fields) {
+        for (f, g) in s.fields.iter().zip(t.fields.iter()) {
             assert_eq!((&f.u, &f.t), (&g.u, &g.t));
         }
         for (p, q) in s.interfaces[0].pairs.iter().zip(&t.interfaces[0].pairs) {

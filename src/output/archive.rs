@@ -659,7 +659,7 @@ fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R
     let opening: Vec<f64> = rec
         .interfaces
         .iter()
-        .zip(&st.interfaces)
+        .zip(st.interfaces.iter())
         .flat_map(|(it, r)| (0..r.pairs.len()).map(move |j| it.opening(r, j)))
         .collect();
     write_pairs(g, &pairs, &opening, u)
@@ -1075,7 +1075,7 @@ fn write_state(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
     put_attr(g, "load_step", st.load_step as i64)?;
     put_attr(g, "load_factor", st.load_factor)?;
     let gb = group(g, "bodies")?;
-    for (b, f) in rec.bodies.iter().zip(&st.fields) {
+    for (b, f) in rec.bodies.iter().zip(st.fields.iter()) {
         let gg = group(&gb, &group_name(&b.name))?;
         put_attr_str(&gg, "name", &b.name)?;
         put_vec2(
@@ -1096,7 +1096,7 @@ fn write_state(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
         )?;
     }
     let gi = group(g, "interfaces")?;
-    for (it, r) in rec.interfaces.iter().zip(&st.interfaces) {
+    for (it, r) in rec.interfaces.iter().zip(st.interfaces.iter()) {
         let gg = group(&gi, &group_name(&it.name))?;
         put_attr_str(&gg, "name", &it.name)?;
         let opening: Vec<f64> = (0..r.pairs.len()).map(|j| it.opening(r, j)).collect();
@@ -1524,13 +1524,7 @@ fn read_state_compact(
     rec: &RunRecord,
     (nodes, elements, pairs): (&[usize], &[usize], &[usize]),
 ) -> R<StateRecord> {
-    let mut st = StateRecord::new(
-        attr_usize(g, "iteration")?,
-        attr_usize(g, "load_step")?,
-        attr_f64(g, "load_factor")?,
-        Vec::new(),
-        Vec::new(),
-    );
+    let (mut fields, mut interfaces) = (Vec::new(), Vec::new());
     let (nn, ne, np) = (
         nodes[nodes.len() - 1],
         elements[elements.len() - 1],
@@ -1539,7 +1533,7 @@ fn read_state_compact(
     let u = get_vec2(g, "u", Some(nn))?;
     let (_, t) = get::<f64>(g, "t", &[Some(ne), Some(2), Some(2)])?;
     for b in 0..rec.bodies.len() {
-        st.fields.push(BodyField {
+        fields.push(BodyField {
             u: u[nodes[b]..nodes[b + 1]].to_vec(),
             t: t[4 * elements[b]..4 * elements[b + 1]]
                 .chunks_exact(4)
@@ -1572,19 +1566,19 @@ fn read_state_compact(
                 slip: friction.as_ref().map_or(0.0, |f| f.1[j]),
             })
             .collect();
-        st.interfaces.push(InterfaceResult { pairs });
+        interfaces.push(InterfaceResult { pairs });
     }
-    Ok(st)
-}
-
-fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
-    let mut st = StateRecord::new(
+    Ok(StateRecord::new(
         attr_usize(g, "iteration")?,
         attr_usize(g, "load_step")?,
         attr_f64(g, "load_factor")?,
-        Vec::new(),
-        Vec::new(),
-    );
+        fields,
+        interfaces,
+    ))
+}
+
+fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
+    let (mut fields, mut interfaces) = (Vec::new(), Vec::new());
     let gb = open_group(g, "bodies")?;
     for b in &rec.bodies {
         let gg = open_group(&gb, &group_name(&b.name))?;
@@ -1594,7 +1588,7 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
             .chunks_exact(4)
             .map(|c| [[c[0], c[1]], [c[2], c[3]]])
             .collect();
-        st.fields.push(BodyField {
+        fields.push(BodyField {
             u,
             t,
             reaction: Vec::new(),
@@ -1630,8 +1624,15 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
                 p.slip = sl;
             }
         }
-        st.interfaces.push(InterfaceResult { pairs });
+        interfaces.push(InterfaceResult { pairs });
     }
+    let mut st = StateRecord::new(
+        attr_usize(g, "iteration")?,
+        attr_usize(g, "load_step")?,
+        attr_f64(g, "load_factor")?,
+        fields,
+        interfaces,
+    );
     if g.link_exists("interior") {
         let gf = open_group(g, "interior")?;
         for b in &rec.bodies {

@@ -16,6 +16,7 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
+use std::sync::Arc;
 
 use faer::Mat;
 
@@ -377,10 +378,12 @@ pub struct StateRecord {
     pub iteration: usize,
     pub load_step: usize,
     pub load_factor: f64,
-    /// One per body, in body order.
-    pub fields: Vec<BodyField>,
-    /// One per interface, in interface order.
-    pub interfaces: Vec<InterfaceResult>,
+    /// One per body, in body order. Shared, not copied, when the record is cloned: the
+    /// archive's thread and the VTK writer hold the same states (a full history of hundreds
+    /// of bodies is most of a run's memory).
+    pub fields: Arc<Vec<BodyField>>,
+    /// One per interface, in interface order (shared as `fields`).
+    pub interfaces: Arc<Vec<InterfaceResult>>,
     /// Interior values, one per body, or empty when no field was evaluated for this state.
     pub interior: Vec<InteriorRecord>,
 }
@@ -397,8 +400,8 @@ impl StateRecord {
             iteration,
             load_step,
             load_factor,
-            fields,
-            interfaces,
+            fields: Arc::new(fields),
+            interfaces: Arc::new(interfaces),
             interior: Vec::new(),
         }
     }
@@ -626,7 +629,7 @@ impl RunRecord {
             }
             last = Some(st.iteration);
             same_len(&w("fields"), st.fields.len(), "bodies", nb)?;
-            for (b, f) in self.bodies.iter().zip(&st.fields) {
+            for (b, f) in self.bodies.iter().zip(st.fields.iter()) {
                 same_len(
                     &w(&format!("u of \"{}\"", b.name)),
                     f.u.len(),
@@ -646,7 +649,7 @@ impl RunRecord {
                 "interfaces",
                 self.interfaces.len(),
             )?;
-            for (it, r) in self.interfaces.iter().zip(&st.interfaces) {
+            for (it, r) in self.interfaces.iter().zip(st.interfaces.iter()) {
                 same_len(
                     &w(&format!("pairs of \"{}\"", it.name)),
                     r.pairs.len(),
@@ -792,7 +795,7 @@ impl RunRecord {
         }
         let _ = writeln!(o, "; interior field in {with_field}");
         if let Some(last) = self.states.last() {
-            for (it, r) in self.interfaces.iter().zip(&last.interfaces) {
+            for (it, r) in self.interfaces.iter().zip(last.interfaces.iter()) {
                 let open = r
                     .pairs
                     .iter()

@@ -406,7 +406,7 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
     let (mut tstatus, mut slip) = (Vec::new(), Vec::new());
     let mut conn = Vec::new();
     let mut offset = 0usize;
-    for (bi, (b, f)) in rec.bodies.iter().zip(&st.fields).enumerate() {
+    for (bi, (b, f)) in rec.bodies.iter().zip(st.fields.iter()).enumerate() {
         let n = b.nodes.len();
         // Per node: sums of end tractions, of element normals, of t·n, and the count.
         let mut t_sum = vec![[0.0; 2]; n];
@@ -433,7 +433,7 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         let mut node_open = vec![0.0; n];
         let mut node_ts = vec![-1i32; n];
         let mut node_slip = vec![0.0; n];
-        for (it, r) in rec.interfaces.iter().zip(&st.interfaces) {
+        for (it, r) in rec.interfaces.iter().zip(st.interfaces.iter()) {
             let side = if it.body_a == bi {
                 &it.node_a
             } else if it.body_b == bi {
