@@ -628,30 +628,30 @@ impl RunRecord {
                 ));
             }
             last = Some(st.iteration);
-            same_len(&w("fields"), st.fields.len(), "bodies", nb)?;
+            len_is(|| w("fields"), st.fields.len(), "bodies", nb)?;
             for (b, f) in self.bodies.iter().zip(st.fields.iter()) {
-                same_len(
-                    &w(&format!("u of \"{}\"", b.name)),
+                len_is(
+                    || w(&format!("u of \"{}\"", b.name)),
                     f.u.len(),
                     "nodes",
                     b.nodes.len(),
                 )?;
-                same_len(
-                    &w(&format!("t of \"{}\"", b.name)),
+                len_is(
+                    || w(&format!("t of \"{}\"", b.name)),
                     f.t.len(),
                     "elements",
                     b.elements.len(),
                 )?;
             }
-            same_len(
-                &w("interface results"),
+            len_is(
+                || w("interface results"),
                 st.interfaces.len(),
                 "interfaces",
                 self.interfaces.len(),
             )?;
             for (it, r) in self.interfaces.iter().zip(st.interfaces.iter()) {
-                same_len(
-                    &w(&format!("pairs of \"{}\"", it.name)),
+                len_is(
+                    || w(&format!("pairs of \"{}\"", it.name)),
                     r.pairs.len(),
                     "pairs",
                     it.node_a.len(),
@@ -689,19 +689,19 @@ impl RunRecord {
                 ("normal_opening", row.normal_opening.len()),
                 ("detached_length", row.detached_length.len()),
             ] {
-                same_len(&w(name), len, "interfaces", ni)?;
+                len_is(|| w(name), len, "interfaces", ni)?;
             }
             for (i, it) in self.interfaces.iter().enumerate() {
                 let np = it.node_a.len();
-                same_len(&w("status"), row.status[i].len(), "pairs", np)?;
-                same_len(
-                    &w("normal_traction"),
+                len_is(|| w("status"), row.status[i].len(), "pairs", np)?;
+                len_is(
+                    || w("normal_traction"),
                     row.normal_traction[i].len(),
                     "pairs",
                     np,
                 )?;
-                same_len(
-                    &w("normal_opening"),
+                len_is(
+                    || w("normal_opening"),
                     row.normal_opening[i].len(),
                     "pairs",
                     np,
@@ -860,6 +860,21 @@ fn same_len(what: &str, len: usize, of: &str, want: usize) -> std::result::Resul
         Ok(())
     } else {
         Err(format!("{what} has {len} entries for {want} {of}"))
+    }
+}
+
+/// [`same_len`] with the name made only on failure (the states and the history of a long
+/// run are checked entry by entry).
+fn len_is(
+    what: impl FnOnce() -> String,
+    len: usize,
+    of: &str,
+    want: usize,
+) -> std::result::Result<(), String> {
+    if len == want {
+        Ok(())
+    } else {
+        same_len(&what(), len, of, want)
     }
 }
 

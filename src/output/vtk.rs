@@ -125,8 +125,8 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
     // The files are made and written in parallel; history.pvd is renamed into place last.
     write_files(&paths, durable, |i| {
         Ok(match files[i] {
-            File::Boundary(k) => grid_xml(&boundary_grid(rec, k), &state_meta(rec, k, times[k])),
-            File::Field(k) => grid_xml(&field_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::Boundary(k) => grid_xml(boundary_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::Field(k) => grid_xml(field_grid(rec, k), &state_meta(rec, k, times[k])),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
         })
     })?;
@@ -188,12 +188,31 @@ impl Values {
             Values::U8(_) => "UInt8",
         }
     }
-    fn bytes(&self) -> Vec<u8> {
+    /// The size of the values in bytes.
+    fn size(&self) -> usize {
         match self {
-            Values::F64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-            Values::I32(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-            Values::U64(v) => v.iter().flat_map(|x| x.to_le_bytes()).collect(),
-            Values::U8(v) => v.clone(),
+            Values::F64(v) => 8 * v.len(),
+            Values::I32(v) => 4 * v.len(),
+            Values::U64(v) => 8 * v.len(),
+            Values::U8(v) => v.len(),
+        }
+    }
+    /// The binary payload of the array: its size in bytes (UInt64), then the values,
+    /// little-endian.
+    fn payload(&self) -> Vec<u8> {
+        fn with_header<const K: usize>(n: usize, bytes: impl Iterator<Item = [u8; K]>) -> Vec<u8> {
+            let mut p = Vec::with_capacity(8 + n * K);
+            p.extend_from_slice(&((n * K) as u64).to_le_bytes());
+            for b in bytes {
+                p.extend_from_slice(&b);
+            }
+            p
+        }
+        match self {
+            Values::F64(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
+            Values::I32(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
+            Values::U64(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
+            Values::U8(v) => with_header(v.len(), v.iter().map(|&x| [x])),
         }
     }
     fn as_f64(&self) -> Vec<f64> {
@@ -261,24 +280,36 @@ fn state_meta(rec: &RunRecord, k: usize, time: f64) -> Vec<(&'static str, FieldV
 
 const B64: &[u8; 64] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
-fn base64(bytes: &[u8]) -> String {
-    let mut out = String::with_capacity(bytes.len().div_ceil(3) * 4);
-    for chunk in bytes.chunks(3) {
-        let b = [
-            chunk[0],
-            chunk.get(1).copied().unwrap_or(0),
-            chunk.get(2).copied().unwrap_or(0),
-        ];
-        let n = (u32::from(b[0]) << 16) | (u32::from(b[1]) << 8) | u32::from(b[2]);
-        for (i, shift) in [18u32, 12, 6, 0].into_iter().enumerate() {
-            if i <= chunk.len() {
-                out.push(B64[((n >> shift) & 63) as usize] as char);
-            } else {
-                out.push('=');
-            }
-        }
+/// Appends the base64 encoding of `bytes` (standard alphabet, `=` padding) to `o`.
+fn base64_into(o: &mut String, bytes: &[u8]) {
+    let mut out = Vec::with_capacity(bytes.len().div_ceil(3) * 4);
+    let mut chunks = bytes.chunks_exact(3);
+    for c in &mut chunks {
+        let n = (u32::from(c[0]) << 16) | (u32::from(c[1]) << 8) | u32::from(c[2]);
+        out.extend_from_slice(&[
+            B64[(n >> 18) as usize & 63],
+            B64[(n >> 12) as usize & 63],
+            B64[(n >> 6) as usize & 63],
+            B64[n as usize & 63],
+        ]);
     }
-    out
+    let rest = chunks.remainder();
+    if !rest.is_empty() {
+        let b1 = rest.get(1).copied().unwrap_or(0);
+        let n = (u32::from(rest[0]) << 16) | (u32::from(b1) << 8);
+        out.extend_from_slice(&[
+            B64[(n >> 18) as usize & 63],
+            B64[(n >> 12) as usize & 63],
+            if rest.len() == 2 {
+                B64[(n >> 6) as usize & 63]
+            } else {
+                b'='
+            },
+            b'=',
+        ]);
+    }
+    // Every byte comes from the ASCII alphabet above: always valid UTF-8.
+    o.push_str(std::str::from_utf8(&out).unwrap_or_default());
 }
 
 fn write_data_array(o: &mut String, a: &DataArray) {
@@ -305,16 +336,20 @@ fn write_data_array(o: &mut String, a: &DataArray) {
             }
         }
     }
-    let body = a.values.bytes();
-    let mut payload = (body.len() as u64).to_le_bytes().to_vec();
-    payload.extend(body);
-    let _ = writeln!(o, ">{}</DataArray>", base64(&payload));
+    o.push('>');
+    base64_into(o, &a.values.payload());
+    o.push_str("</DataArray>\n");
 }
 
-fn grid_xml(g: &Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
+fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
     let n_points = g.points.len() / 3;
     let n_cells = g.connectivity.len().checked_div(g.per_cell).unwrap_or(0);
-    let mut o = String::from(
+    // The file's size, about: its base64 payloads and some text (one allocation).
+    let payload: usize = g.point_data.iter().map(|a| a.values.size()).sum::<usize>()
+        + 8 * (g.points.len() + 2 * g.connectivity.len())
+        + n_cells;
+    let mut o = String::with_capacity(payload / 3 * 4 + 4096);
+    o.push_str(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
          byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n<FieldData>\n",
     );
@@ -360,11 +395,11 @@ fn grid_xml(g: &Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
         write_data_array(&mut o, a);
     }
     o.push_str("</PointData>\n<Points>\n");
-    write_data_array(&mut o, &array("Points", 3, Values::F64(g.points.clone())));
+    write_data_array(&mut o, &array("Points", 3, Values::F64(g.points)));
     o.push_str("</Points>\n<Cells>\n");
     write_data_array(
         &mut o,
-        &array("connectivity", 1, Values::U64(g.connectivity.clone())),
+        &array("connectivity", 1, Values::U64(g.connectivity)),
     );
     let offsets = (1..=n_cells).map(|i| (i * g.per_cell) as u64).collect();
     write_data_array(&mut o, &array("offsets", 1, Values::U64(offsets)));
