@@ -604,3 +604,36 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
         active: ["von_mises", "displacement", "stress"],
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::base64_into;
+
+    #[test]
+    fn base64_matches_rfc_4648_vectors() {
+        // RFC 4648 §10, appended to text already in the buffer.
+        for (input, expected) in [
+            ("", ""),
+            ("f", "Zg=="),
+            ("fo", "Zm8="),
+            ("foo", "Zm9v"),
+            ("foob", "Zm9vYg=="),
+            ("fooba", "Zm9vYmE="),
+            ("foobar", "Zm9vYmFy"),
+        ] {
+            let mut o = String::from(">");
+            base64_into(&mut o, input.as_bytes());
+            assert_eq!(o, format!(">{expected}"), "{input:?}");
+        }
+        // Every byte value, through all three positions of a block.
+        let bytes: Vec<u8> = (0..=255u8).collect();
+        let mut o = String::new();
+        base64_into(&mut o, &bytes);
+        assert_eq!(o.len(), 344);
+        assert!(
+            o.starts_with("AAECAwQFBgcICQoLDA0ODxAREhMUFRYXGBkaGxwdHh8g"),
+            "{o}"
+        );
+        assert!(o.ends_with("+/w=="), "{o}");
+    }
+}
