@@ -4,8 +4,9 @@
 //!
 //! Place in the flow: [`RunRecord`] → **`vtk`**. Everything is computed from the record
 //! alone, so that `sgbem export` rebuilds the same bytes from the archive. Files are XML
-//! unstructured grids (binary, base64, little-endian, UInt64 headers), each written
-//! atomically; the bytes depend on the record alone (no dates, no timings).
+//! unstructured grids (binary, base64, little-endian, UInt64 headers, Int32 point indices
+//! where they fit), each written atomically; the bytes depend on the record alone (no
+//! dates, no timings).
 //!
 //! `history.pvd` lists two parts at every time: part 0 the boundary file of the state,
 //! part 1 the field file of the latest state at or before that time that has one (the
@@ -344,7 +345,7 @@ fn write_data_array(o: &mut String, a: &DataArray) {
 fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
     let n_points = g.points.len() / 3;
     let n_cells = g.connectivity.len().checked_div(g.per_cell).unwrap_or(0);
-    // The file's size, about: its base64 payloads and some text (one allocation).
+    // The file's size, at most: its base64 payloads and some text (one allocation).
     let payload: usize = g.point_data.iter().map(|a| a.values.size()).sum::<usize>()
         + 8 * (g.points.len() + 2 * g.connectivity.len())
         + n_cells;
@@ -397,12 +398,26 @@ fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
     o.push_str("</PointData>\n<Points>\n");
     write_data_array(&mut o, &array("Points", 3, Values::F64(g.points)));
     o.push_str("</Points>\n<Cells>\n");
-    write_data_array(
-        &mut o,
-        &array("connectivity", 1, Values::U64(g.connectivity)),
-    );
-    let offsets = (1..=n_cells).map(|i| (i * g.per_cell) as u64).collect();
-    write_data_array(&mut o, &array("offsets", 1, Values::U64(offsets)));
+    // Point indices as Int32 where they fit (a third of a boundary file's bytes otherwise).
+    let last_offset = n_cells * g.per_cell;
+    let (connectivity, offsets) = match (
+        g.connectivity
+            .iter()
+            .map(|&c| i32::try_from(c))
+            .collect::<std::result::Result<Vec<i32>, _>>(),
+        i32::try_from(last_offset),
+    ) {
+        (Ok(c), Ok(_)) => (
+            Values::I32(c),
+            Values::I32((1..=n_cells).map(|i| (i * g.per_cell) as i32).collect()),
+        ),
+        _ => (
+            Values::U64(g.connectivity),
+            Values::U64((1..=n_cells).map(|i| (i * g.per_cell) as u64).collect()),
+        ),
+    };
+    write_data_array(&mut o, &array("connectivity", 1, connectivity));
+    write_data_array(&mut o, &array("offsets", 1, offsets));
     write_data_array(
         &mut o,
         &array("types", 1, Values::U8(vec![g.cell_type; n_cells])),
