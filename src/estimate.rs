@@ -119,6 +119,8 @@ pub struct ContactEstimate {
     pub history_bytes: f64,
     /// States recorded at most.
     pub states: usize,
+    /// Trial steps of a collapse search before the run (0 without one).
+    pub trials: usize,
 }
 
 impl ContactEstimate {
@@ -194,10 +196,18 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     } else {
         k
     };
-    let path = match scene.solve.method {
-        Method::Qp => C_QP * k * p * p * p,
-        _ => C_PATH * k * s * s * s,
-    };
+    // A collapse search solves one step per trial before the run itself: the two bounds and
+    // the bisection down to the tolerance.
+    let trials = scene
+        .solve
+        .collapse
+        .as_ref()
+        .map_or(0.0, |c| 2.0 + (c.max / c.tolerance).log2().ceil().max(0.0));
+    let path = (1.0 + trials)
+        * match scene.solve.method {
+            Method::Qp => C_QP * k * p * p * p,
+            _ => C_PATH * k * s * s * s,
+        };
     let mut per_cube = C_ACTIVE;
     if scene.solve.method == Method::Both {
         per_cube += C_QP + if rows <= 2000 { C_LEMKE } else { 0.0 };
@@ -226,6 +236,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         bytes: dense + glued + opening,
         history_bytes: recorded * per_state,
         states: recorded as usize,
+        trials: trials as usize,
     })
 }
 
@@ -460,7 +471,7 @@ impl Estimate {
         self.contact.as_ref().map(|c| {
             format!(
                 "about {} for the contact stage ({} unilateral pairs, {} rows, up to {} \
-                 switches; {} interface unknowns: glued system {}, main solver {}, recording \
+                 switches; {} interface unknowns: glued system {}, main solver {}{}, recording \
                  its states {}, cross-checks {})",
                 fmt_seconds(c.seconds()),
                 c.pairs,
@@ -469,6 +480,11 @@ impl Estimate {
                 c.interface_unknowns,
                 fmt_seconds(c.system),
                 fmt_seconds(c.path),
+                if c.trials > 0 {
+                    format!(" (with the collapse search's {} trials)", c.trials)
+                } else {
+                    String::new()
+                },
                 fmt_seconds(c.record),
                 fmt_seconds(c.checks)
             )
