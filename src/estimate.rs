@@ -470,7 +470,7 @@ impl Estimate {
     pub fn contact_line(&self) -> Option<String> {
         self.contact.as_ref().map(|c| {
             format!(
-                "about {} for the contact stage ({} unilateral pairs, {} rows, up to {} \
+                "up to about {} for the contact stage ({} unilateral pairs, {} rows, up to {} \
                  switches; {} interface unknowns: glued system {}, main solver {}{}, recording \
                  its states {}, cross-checks {})",
                 fmt_seconds(c.seconds()),
