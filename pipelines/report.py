@@ -316,6 +316,9 @@ def shape_picture(run, out):
 # --------------------------------------------------------------------------------------
 # detachment along the interfaces
 # --------------------------------------------------------------------------------------
+MAX_DETACHMENT_ROWS = 8
+
+
 def detachment_pictures(run, out):
     made = []
     h5 = run.h5
@@ -332,10 +335,17 @@ def detachment_pictures(run, out):
     names = run.interfaces()
     if not names:
         return made
-    fig, grid = plt.subplots(len(names), 3, figsize=(15, 4.2 * len(names) + 0.6), squeeze=False,
+    # Scenes of many joints (a wall of a hundred bricks has hundreds of interfaces): the
+    # MAX_DETACHMENT_ROWS with the largest final detached length, in interface order.
+    total = len(names)
+    chosen = list(range(total))
+    if total > MAX_DETACHMENT_ROWS:
+        final = dl_all[-1]
+        chosen = sorted(sorted(chosen, key=lambda k: (-final[k], k))[:MAX_DETACHMENT_ROWS])
+    fig, grid = plt.subplots(len(chosen), 3, figsize=(15, 4.2 * len(chosen) + 0.6), squeeze=False,
                              gridspec_kw={"width_ratios": [1.25, 1.0, 1.0]})
-    for k, iname in enumerate(names):
-        axes = grid[k]
+    for axes, k in zip(grid, chosen):
+        iname = names[k]
         g = hist["interfaces"][iname]
         status = g["status"][()]
         opening = g["normal_opening"][()]
@@ -418,7 +428,9 @@ def detachment_pictures(run, out):
                            fontsize=8)
         print(f"report: {run.path}: interface {iname}: {rows} rows, final detached length {dl[-1] + 0.0:.4g}")
     steps = len(np.unique(step))
-    suptitle(fig, f"{run.title}: {len(names)} interface{'s' if len(names) > 1 else ''} over {rows} history rows "
+    shown_note = (f" (the {len(chosen)} of {total} interfaces with the largest final detached length)"
+                  if len(chosen) < total else "")
+    suptitle(fig, f"{run.title}: {total} interface{'s' if total > 1 else ''}{shown_note} over {rows} history rows "
                   f"(iterations {iteration[0]}…{iteration[-1]}{', load steps ' + str(steps) if steps > 1 else ''}); "
                   f"s = arc length from the interface curve's first node; opening = normal jump (positive open)",
              fontsize=9.5)
