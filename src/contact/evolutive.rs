@@ -85,7 +85,7 @@ pub fn solve(
             candidates.sort_unstable_by_key(|x| x.row);
         }
         let mut switched = false;
-        for x in candidates {
+        for (i, x) in candidates.iter().enumerate() {
             let r = x.row;
             if st.open[r] {
                 o.remove(r);
@@ -95,6 +95,24 @@ pub fn solve(
             }
             if blocked.contains(&r) {
                 continue;
+            }
+            // A missing column is computed with the next closed candidates' missing ones
+            // beside it, one per core (the front moves on to them: on the 410-brick wall
+            // every column computed so was used later): a column is a sparse solve, the
+            // largest serial part of a switch on walls of hundreds of bricks.
+            if cols.peek(r).is_none() {
+                let ahead: Vec<usize> = std::iter::once(r)
+                    .chain(
+                        candidates[i + 1..]
+                            .iter()
+                            .map(|y| y.row)
+                            .filter(|&y| {
+                                !st.open[y] && !blocked.contains(&y) && cols.peek(y).is_none()
+                            })
+                            .take(rayon::current_num_threads().saturating_sub(1)),
+                    )
+                    .collect();
+                cols.ensure(inner.problem, &ahead);
             }
             let col = cols.get(inner.problem, r);
             if o.append(r, col) {

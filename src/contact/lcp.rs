@@ -45,6 +45,30 @@ impl Columns {
     pub fn get(&mut self, problem: &Problem, j: usize) -> &[f64] {
         self.cols.entry(j).or_insert_with(|| problem.column(j))
     }
+    /// Computes the columns of `rows` not yet computed, in parallel (each is a sparse solve
+    /// and a product with every body's operator, independent of the others; the values do
+    /// not depend on the order).
+    pub fn ensure(&mut self, problem: &Problem, rows: &[usize]) {
+        use rayon::prelude::*;
+        let mut missing: Vec<usize> = rows
+            .iter()
+            .copied()
+            .filter(|r| !self.cols.contains_key(r))
+            .collect();
+        missing.sort_unstable();
+        missing.dedup();
+        if missing.len() < 2 {
+            for r in missing {
+                self.get(problem, r);
+            }
+            return;
+        }
+        let computed: Vec<(usize, Vec<f64>)> = missing
+            .par_iter()
+            .map(|&r| (r, problem.column(r)))
+            .collect();
+        self.cols.extend(computed);
+    }
     pub fn computed(&self) -> usize {
         self.cols.len()
     }
@@ -173,6 +197,7 @@ impl<'a> Inner<'a> {
                 for r in remove {
                     prev.remove(r);
                 }
+                cols.ensure(self.problem, &add);
                 let mut ok = true;
                 for r in add {
                     let col = cols.get(self.problem, r);
@@ -187,6 +212,7 @@ impl<'a> Inner<'a> {
                 }
             }
         }
+        cols.ensure(self.problem, &order);
         for r in order {
             let col = cols.get(self.problem, r);
             if !o.append(r, col) {
@@ -349,6 +375,10 @@ impl<'a> Inner<'a> {
         // first contact of a body held by friction alone).
         let mut o = Opening::default();
         let mut free = Vec::new();
+        let all: Vec<usize> = (0..self.n())
+            .filter(|&r| self.free[r] || normal.binary_search(&r).is_ok())
+            .collect();
+        cols.ensure(self.problem, &all);
         for r in (0..self.n()).filter(|&r| self.free[r]) {
             let col = cols.get(self.problem, r);
             if o.append(r, col) {
