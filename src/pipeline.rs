@@ -464,16 +464,19 @@ fn solve_loaded_then(
         "cross_checks": cross,
     });
     let mut contact = contact;
-    let junctions = session.model.junctions();
-    if !junctions.is_empty() {
-        contact["junctions"] = junctions_json(session.model, &junctions, &session.problem.implied);
-    }
     if let Some(c) = collapse_info {
         contact["collapse"] = c;
     }
     let Some((load_factor, time, body_force, fields, interfaces, nodal_force)) = final_sol else {
         return Err(Error::numerical("the contact stage produced no state"));
     };
+    let junctions = session.model.junctions();
+    if !junctions.is_empty() {
+        let implied = &session.problem.implied;
+        contact["junctions"] = junctions_json(session.model, &junctions, implied);
+        contact["junctions"]["implied_slipping"] =
+            implied_slipping(session.model, implied, &interfaces);
+    }
     let result = RunResult {
         status: if converged {
             "converged".into()
@@ -537,6 +540,47 @@ fn junctions_json(
         "rule": "at a point where bodies meet in a cycle of pairs, rows are kept bonded first (normal components first), then unilateral normal, then tangential, while independent; the others are implied by the kept rows while these are closed, and carry no force of their own",
         "implied_components": implied.len(),
         "implied": by_iface,
+    })
+}
+
+/// The implied tangential components of closed pairs with friction (`friction` or `stick`)
+/// whose tangential jump is not zero (above 1e-9 of the model's size) in the final state:
+/// there the pair slides at its junction node without a friction force of its own, since an
+/// implied component has no row (it slides by the opening of a joint of its cycle, e.g. a
+/// bed joint beside a head joint that opens). A one-node approximation of each such joint,
+/// counted and located so that it is seen.
+fn implied_slipping(
+    model: &Model,
+    implied: &[crate::contact::problem::Implied],
+    interfaces: &[crate::solution::InterfaceResult],
+) -> serde_json::Value {
+    use crate::input::scene::Tangential;
+    let tol = 1e-9 * model.scale;
+    let mut at = Vec::new();
+    let mut largest = 0.0f64;
+    for i in implied.iter().filter(|i| i.comp == 0) {
+        let it = &model.interfaces[i.iface];
+        if !matches!(it.spec.tangential, Tangential::Friction | Tangential::Stick) {
+            continue;
+        }
+        let Some(p) = interfaces.get(i.iface).and_then(|r| r.pairs.get(i.pair)) else {
+            continue;
+        };
+        let slip = p.jump[0].abs();
+        if p.status == crate::solution::PairStatus::Closed && slip > tol {
+            largest = largest.max(slip);
+            at.push(serde_json::json!({
+                "interface": it.spec.name,
+                "x": it.pairs[i.pair].x,
+                "slip": p.jump[0],
+            }));
+        }
+    }
+    serde_json::json!({
+        "count": at.len(),
+        "largest_slip": largest,
+        "meaning": "closed pairs whose tangential component is implied at a junction and slips there: at that node the pair slides without a friction force of its own",
+        "at": at,
     })
 }
 

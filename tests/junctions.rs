@@ -98,6 +98,14 @@ fn check_patch(name: &str, joints: &str) -> Value {
     let junctions = s["contact"]["junctions"].clone();
     // 4 courses of 3 bricks in running bond: 3 lines between courses, 5 T-junctions each.
     assert_eq!(junctions["points"], 15, "{name}: {junctions}");
+    // Uniform compression: nothing opens, so no implied component slips (bonded joints have
+    // no friction and are not counted at all).
+    if !bonded {
+        assert_eq!(
+            junctions["implied_slipping"]["count"], 0,
+            "{name}: {junctions}"
+        );
+    }
     assert_eq!(junctions["most_bodies_at_a_point"], 3, "{name}");
     let mut beds = 0;
     let mut heads = 0;
@@ -238,7 +246,7 @@ fn fifty_brick_wall_balances_every_brick_and_every_solver_agrees() {
             "lcp",
         ),
     ] {
-        let (code, err, s, _) = run(
+        let (code, err, s, out) = run(
             "junction-wall",
             &wall_scene(&wall_geo(), 10, 5, joints, method),
         );
@@ -253,6 +261,45 @@ fn fifty_brick_wall_balances_every_brick_and_every_solver_agrees() {
             .map(|i| i["open_pairs"].as_u64().unwrap_or(0))
             .sum();
         assert!(open > 0, "{joints}: no joint opens");
+        // Where a head joint opens beside a closed bed joint at a T-junction, the bed
+        // joint's implied tangential component slips by the opening: every pair listed is
+        // closed and slips by more than 1e-9 of the wall's size, and it is one of the
+        // implied components.
+        let junctions = &s["contact"]["junctions"];
+        let slipping = &junctions["implied_slipping"];
+        let at = slipping["at"].as_array().expect("implied_slipping.at");
+        assert_eq!(slipping["count"].as_u64(), Some(at.len() as u64));
+        // The model's size: the diagonal of the wall, 2.0 m wide and 2.0 m high.
+        let scale = 8.0f64.sqrt();
+        let mut largest = 0.0f64;
+        for a in at {
+            let slip = a["slip"].as_f64().expect("slip").abs();
+            assert!(slip > 1e-9 * scale, "{joints}: {a}");
+            largest = largest.max(slip);
+            let iface = a["interface"].as_str().expect("interface");
+            let x = a["x"].as_array().expect("x");
+            let (px, py) = (x[0].as_f64().expect("x"), x[1].as_f64().expect("y"));
+            let rows = read_interface_csv(&out.join("interfaces").join(format!("{iface}.csv")));
+            let row = rows
+                .iter()
+                .find(|r| (r.x - px).abs() < 1e-9 && (r.y - py).abs() < 1e-9)
+                .unwrap_or_else(|| panic!("{joints}: {a} not in {iface}.csv"));
+            assert!(row.closed, "{joints}: {a} is open");
+            let listed = junctions["implied"][iface]
+                .as_array()
+                .expect("implied of the interface")
+                .iter()
+                .any(|i| i["x"] == a["x"] && i["component"] == "tangential");
+            assert!(
+                listed,
+                "{joints}: {a} is not an implied tangential component"
+            );
+        }
+        assert_eq!(slipping["largest_slip"].as_f64(), Some(largest));
+        println!(
+            "{joints}: {} implied components slip, largest {largest:.2e} m",
+            at.len()
+        );
         let checks = s["contact"]["cross_checks"]
             .as_array()
             .expect("cross_checks");
