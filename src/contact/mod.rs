@@ -284,6 +284,7 @@ impl<'a> Session<'a> {
         let mut bound = start.bound.clone();
         let mut bound_changes: Vec<f64> = Vec::new();
         let mut finishing = 0;
+        let mut rescues = 0;
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
@@ -391,6 +392,41 @@ impl<'a> Session<'a> {
                     )));
                     break;
                 }
+            };
+            // The pivoting path stops where the row to switch cannot open without leaving a
+            // body free; for a positive semidefinite opening stiffness that does not prove
+            // that no solution exists (another order of pivots may reach one). The convex QP
+            // of the same inner problem decides it: a bounded minimiser, checked exactly from
+            // its statuses, is the solution, and the iteration goes on from it; an unbounded
+            // QP confirms the mechanism.
+            let outcome = if !outcome.converged
+                && !outcome.blocked.is_empty()
+                && matches!(method, Method::Evolutive | Method::ActiveSet)
+                && n <= RESCUE_ROWS
+            {
+                match qp::solve(&inner, &mut self.cols, tol)
+                    .and_then(|q| exact_state(&inner, &mut self.cols, &q.open, &q.sign))
+                {
+                    Ok((rescued, _)) if rescued.converged => {
+                        let k = it0 + outcome.iterations + 1;
+                        if method == Method::Evolutive && record {
+                            compact.push((k, rescued.state.open.clone(), rescued.state.s.clone()));
+                        }
+                        rescues += 1;
+                        let mut notes = outcome.notes;
+                        notes.extend(rescued.notes);
+                        evolutive::Outcome {
+                            state: rescued.state,
+                            iterations: outcome.iterations + 1,
+                            converged: true,
+                            notes,
+                            blocked: Vec::new(),
+                        }
+                    }
+                    _ => outcome,
+                }
+            } else {
+                outcome
             };
             iterations += outcome.iterations;
             notes.extend(outcome.notes.iter().cloned());
@@ -574,6 +610,14 @@ impl<'a> Session<'a> {
                     compact.push((k, final_state.open.clone(), final_state.s.clone()));
                 }
             }
+        }
+        if rescues > 0 {
+            notes.push(format!(
+                "the pivoting path stopped {rescues} time(s) at a row that could not open \
+                 without leaving a body free, although the problem had a solution: the QP of \
+                 the same problem found it (checked exactly) and the iteration went on from it"
+            ));
+            info["qp_rescues"] = serde_json::json!(rescues);
         }
         if slipping > 0 {
             notes.push(format!(
@@ -817,6 +861,9 @@ impl<'a> Session<'a> {
 const FRICTION_OUTER_LIMIT: usize = 300;
 /// Largest number of rows for the dense coupled LCP (Lemke's tableau is dense).
 const COUPLED_MAX_ROWS: usize = 3000;
+/// At most this many rows that can open for the QP that checks a blocked pivoting path
+/// (a dense QP over them).
+const RESCUE_ROWS: usize = 3000;
 /// Outer iterations of the Tresca fixed point after which the exact coupled problem
 /// (Klarbring's LCP) is solved to restart it.
 const FRICTION_COUPLED_AFTER: usize = 10;
