@@ -13,8 +13,9 @@ mod support;
 
 use std::time::Instant;
 
+use sgbem::bem::prepare;
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::contact::{solve::prepare, Method, Session};
+use sgbem::contact::{Session, Solver};
 use sgbem::pipeline::load;
 use support::*;
 
@@ -104,14 +105,14 @@ fn main() {
         let start = s.initial();
         let f = *l.scene.solve.load_factors.last().expect("a load factor");
         let t = Instant::now();
-        let mut e = s.solve_step(&start, Method::Evolutive, 1e-10, 100000, 0, f, true);
+        let mut e = s.solve_step(&start, Solver::Evolutive, 1e-10, 100000, 0, f, true);
         let t_lcp = t.elapsed().as_secs_f64();
         let t = Instant::now();
         s.expand(&mut e);
         let t_rec = t.elapsed().as_secs_f64();
         let mut times = Vec::new();
         let mut differ = 0;
-        for m in [Method::ActiveSet, Method::Lemke, Method::Qp] {
+        for m in [Solver::ActiveSet, Solver::Lemke, Solver::Qp] {
             let t = Instant::now();
             let r = s.solve_step(&start, m, 1e-10, 100000, 0, f, false);
             times.push(t.elapsed().as_secs_f64());

@@ -7,8 +7,9 @@ mod support;
 
 use std::time::Instant;
 
+use sgbem::bem::prepare;
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::contact::solve::{prepare, solve_all_closed};
+use sgbem::contact::solve_all_closed;
 use sgbem::pipeline::load;
 use support::*;
 

@@ -3,13 +3,30 @@
 //! Place in the flow: the top. `load` reads the scene and the mesh, builds the model and
 //! decides the plan; `check` is `load` plus the report.
 
+use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
+use std::time::Instant;
 
+use rayon::prelude::*;
+
+use crate::bem::quadrature::QuadratureSettings;
+use crate::bem::{prepare, Operators};
+use crate::contact::driver::{self, Case, ContactRun};
+use crate::contact::interface;
 use crate::error::{Error, Result};
 use crate::input::mesh::{self, Mesh};
 use crate::input::model::{self, Model};
+use crate::input::scene::History as HistoryLevel;
 use crate::input::scene::{self, Scene};
+use crate::output::archive::{ArchivePart, ArchiveWriter};
+use crate::output::folder::RunFolder;
+use crate::output::progress::Progress;
+use crate::output::record::{Array, InteriorRecord, RunRecord, StateRecord};
+use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
+use crate::post::{section_points, PointSampler};
+use crate::solution::History;
+use crate::timings::Timings;
 
 /// A scene read and validated against its mesh.
 #[derive(Debug, Clone)]
@@ -106,819 +123,64 @@ pub struct RunReport {
     pub notes: Vec<String>,
 }
 
-/// Seconds per stage, in stage order.
-#[derive(Debug, Clone, Default)]
-pub struct Timings(pub Vec<(&'static str, f64)>);
-
-impl Timings {
-    fn add(&mut self, stage: &'static str, seconds: f64) {
-        match self.0.iter_mut().find(|(s, _)| *s == stage) {
-            Some((_, t)) => *t += seconds,
-            None => self.0.push((stage, seconds)),
-        }
-    }
-    fn json(&self) -> serde_json::Value {
-        let mut m = serde_json::Map::new();
-        let mut total = 0.0;
-        for (s, t) in &self.0 {
-            m.insert((*s).to_string(), serde_json::json!(t));
-            total += t;
-        }
-        m.insert("total".into(), serde_json::json!(total));
-        serde_json::Value::Object(m)
-    }
-}
-
-/// Everything a run computed, for the writers.
-pub struct RunResult {
-    pub status: String,
-    pub load_factor: f64,
-    /// Pseudo-time of the final state (1 without `[solve] time`).
-    pub time: f64,
-    /// Body force of each body at the final state (before the load factor).
-    pub body_force: Vec<Option<[f64; 2]>>,
-    pub fields: Vec<crate::solution::BodyField>,
-    pub interfaces: Vec<crate::solution::InterfaceResult>,
-    /// Nodal normal contact force of each interface pair (on the second body, compression
-    /// positive): the force the complementarity conditions hold.
-    pub nodal_force: Vec<Vec<f64>>,
-    pub history: crate::solution::History,
-    pub states: Vec<crate::contact::RecordedState>,
-    pub contact: serde_json::Value,
-    pub qp: Option<serde_json::Value>,
-    pub notes: Vec<String>,
-    pub failure: Option<Error>,
-}
-
-/// The solve stages: assembly and condensation once, then the contact problem (or one
-/// linear solve) for each load step, each step starting from the previous state.
-pub fn solve_loaded(
+/// Assembles and condenses every body (the bem stage), with a bar per body.
+pub fn prepare_bodies(
     loaded: &Loaded,
-    settings: &crate::bem::quadrature::QuadratureSettings,
+    settings: &QuadratureSettings,
     timings: &mut Timings,
-) -> Result<(crate::contact::solve::Prepared, RunResult)> {
-    solve_loaded_with(
-        loaded,
-        settings,
-        timings,
-        &crate::output::progress::Progress::hidden(),
-    )
-}
-
-/// [`solve_loaded`] showing progress on a terminal.
-pub fn solve_loaded_with(
-    loaded: &Loaded,
-    settings: &crate::bem::quadrature::QuadratureSettings,
-    timings: &mut Timings,
-    progress: &crate::output::progress::Progress,
-) -> Result<(crate::contact::solve::Prepared, RunResult)> {
-    solve_loaded_then(loaded, settings, timings, progress, &mut |_| {})
-}
-
-/// [`solve_loaded_with`] calling `after_prepare` with the body operators as soon as they are
-/// assembled and condensed, before the contact stage (the run starts writing the archive).
-fn solve_loaded_then(
-    loaded: &Loaded,
-    settings: &crate::bem::quadrature::QuadratureSettings,
-    timings: &mut Timings,
-    progress: &crate::output::progress::Progress,
-    after_prepare: &mut dyn FnMut(&crate::contact::solve::Prepared),
-) -> Result<(crate::contact::solve::Prepared, RunResult)> {
-    use crate::contact::solve::prepare;
-    use crate::contact::{Method as Solver, Session};
-    use crate::input::scene::Method;
-    use crate::plan::ContactProblem;
-    use std::time::Instant;
-
+    progress: &Progress,
+) -> Result<Operators> {
     let Loaded {
         scene, model, plan, ..
     } = loaded;
     // Two steps per body (assembly, condensation); each message starts the next.
     let stage = progress.bar("assemble", 2 * model.bodies.len() as u64);
     let started = std::cell::Cell::new(0u64);
-    // A numerical failure of the operators names the stiffness contrast when it is the
-    // likely cause.
-    let cause = |e: Error| -> Error {
-        let (c, iface) = &plan.contrast;
-        if e.exit_code() == 3 && *c >= 1e6 {
-            Error::numerical(format!(
-                "{}; likely cause: the stiffness contrast across interface \"{iface}\" is \
-                 {c:.1e}, which costs about {:.0} of the 16 digits of the boundary systems: \
-                 model the much stiffer body as a rigid support (displacement conditions) or \
-                 keep the contrast below about 1e6",
-                e.message(),
-                c.log10()
-            ))
-        } else {
-            e
-        }
-    };
-    let prepared = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
+    let ops = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
         stage.set_position(started.get());
         started.set(started.get() + 1);
         stage.set_message(m.to_string())
     })
-    .map_err(cause)?;
+    .map_err(|e| plan.explain(e))?;
     stage.finish();
-    timings.add("assemble", prepared.assemble_seconds);
-    timings.add("condense", prepared.condense_seconds);
-    after_prepare(&prepared);
-    let steps = scene.solve.steps();
-    let last = steps.len() - 1;
-    // With `[solve] time` and values that depend on t, every step has its own loads: the
-    // model is evaluated and the bodies assembled again at the step's pseudo-time (the
-    // operators are the same; the columns of the opening stiffness are kept).
-    let timed = (scene.solve.time.is_some() || scene.solve.collapse.is_some())
-        && crate::plan::uses_time(scene);
-    let method = scene.solve.method;
-    let tol = scene.solve.tolerance;
+    timings.add("assemble", ops.assemble_seconds);
+    timings.add("condense", ops.condense_seconds);
+    Ok(ops)
+}
 
-    let t = Instant::now();
-    let mut session = Session::new(model, &prepared).map_err(cause)?;
-    let maxit = scene
-        .solve
-        .max_iterations
-        .unwrap_or_else(|| (4 * session.problem.n_open_rows).max(1000));
-    timings.add("interface_system", t.elapsed().as_secs_f64());
-    if plan.problem == ContactProblem::None {
-        let t = Instant::now();
-        let (f, time) = steps[last];
-        let at = if timed && time != model.time {
-            let m = model.at_time(scene, time)?;
-            let p = prepare(&m, scene.plane, settings, 1.0, &scene.path, &|_| {}).map_err(cause)?;
-            Some((m, p))
-        } else {
-            None
-        };
-        let (m, p) = match &at {
-            Some((m, p)) => (m, p),
-            None => (model, &prepared),
-        };
-        // The session's factorised system serves unless the loads are those of another t.
-        let other = match &at {
-            Some(_) => Some(crate::contact::problem::Problem::new(m, p).map_err(cause)?),
-            None => None,
-        };
-        let problem = other.as_ref().unwrap_or(&session.problem);
-        let n = problem.n_open_rows;
-        let start = session.initial();
-        let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
-        timings.add("solve", t.elapsed().as_secs_f64());
-        let mut contact = serde_json::json!({"solver": "linear (no unilateral interface)"});
-        let junctions = m.junctions();
-        if !junctions.is_empty() {
-            contact["junctions"] = junctions_json(m, &junctions, &problem.implied);
-        }
-        let result = RunResult {
-            status: "solved".into(),
-            load_factor: f,
-            time,
-            body_force: m.bodies.iter().map(|b| b.body_force).collect(),
-            fields,
-            interfaces,
-            nodal_force,
-            history: crate::solution::History::default(),
-            states: Vec::new(),
-            contact,
-            qp: None,
-            notes: Vec::new(),
-            failure: None,
-        };
-        drop(other);
-        drop(session);
-        return Ok((at.map_or(prepared, |(_, p)| p), result));
-    }
-
-    // The main solver gives the answer and the history; the others cross-check it on the
-    // same problem (statuses compared pair by pair).
-    let main = match method {
-        Method::Qp => Solver::Qp,
-        _ => Solver::Evolutive,
-    };
-    let mut checks = vec![Solver::ActiveSet];
-    if method == Method::Both {
-        checks.push(Solver::Qp);
-        if session.problem.n_open_rows <= 2000 {
-            checks.push(Solver::Lemke);
-        }
-    }
-    let stage = progress.contact(steps.len());
-    let mut last_prepared = None;
-    let stepper = Stepper {
-        scene,
-        model,
+/// The contact stage (or one linear solve) on the bodies' operators, for every load step.
+pub fn solve_contact(
+    loaded: &Loaded,
+    settings: &QuadratureSettings,
+    ops: &Operators,
+    timings: &mut Timings,
+    progress: &Progress,
+) -> Result<ContactRun> {
+    let case = Case {
+        scene: &loaded.scene,
+        model: &loaded.model,
+        plan: &loaded.plan,
         settings,
-        timed,
-        cause: &cause,
     };
-    // The collapse search: the largest multiplier t with an equilibrium, then the run
-    // itself at that t.
-    let mut collapse_info = None;
-    let (steps, last) = match scene.solve.collapse {
-        None => (steps, last),
-        Some(c) => {
-            let trial_ctx = StepContext {
-                scene,
-                model,
-                main,
-                checks: &[],
-                last: 0,
-                steps: 1,
-                tol,
-                maxit,
-                stage: &stage,
-            };
-            let mut trials: Vec<serde_json::Value> = Vec::new();
-            // One trial: a single step from the unloaded state at t; Some(mechanism) when
-            // no equilibrium exists, an error when the solver fails otherwise.
-            let mut trial = |t: f64,
-                             session: &mut crate::contact::Session,
-                             timings: &mut Timings,
-                             last_prepared: &mut Option<crate::contact::solve::Prepared>|
-             -> Result<Option<Error>> {
-                let mut st = session.initial();
-                let mut a = StepAcc::default();
-                let t0 = Instant::now();
-                step_at(
-                    &stepper,
-                    session,
-                    &trial_ctx,
-                    0,
-                    (1.0, t),
-                    &mut st,
-                    &mut a,
-                    timings,
-                    last_prepared,
-                )?;
-                timings.add("collapse_search", t0.elapsed().as_secs_f64());
-                let outcome = match a.failure {
-                    None => None,
-                    Some(e) if a.mechanism => Some(e),
-                    Some(e) => {
-                        return Err(Error::numerical(format!(
-                            "the collapse search failed at t = {}: {}",
-                            crate::input::model::fmt_num(t),
-                            e.message()
-                        )))
-                    }
-                };
-                trials.push(serde_json::json!({
-                    "t": t, "stands": outcome.is_none(),
-                }));
-                Ok(outcome)
-            };
-            if let Some(e) = trial(0.0, &mut session, timings, &mut last_prepared)? {
-                return Err(Error::numerical(format!(
-                    "the collapse search found no equilibrium at t = 0 (before any load \
-                     multiplier): {}",
-                    e.message()
-                )));
-            }
-            let (mut lo, mut hi) = (0.0, c.max);
-            let mut mechanism = trial(c.max, &mut session, timings, &mut last_prepared)?;
-            if mechanism.is_none() {
-                lo = c.max;
-            } else {
-                while hi - lo > c.tolerance {
-                    let mid = 0.5 * (lo + hi);
-                    match trial(mid, &mut session, timings, &mut last_prepared)? {
-                        None => lo = mid,
-                        Some(e) => {
-                            hi = mid;
-                            mechanism = Some(e);
-                        }
-                    }
-                }
-            }
-            let collapses = mechanism.is_some();
-            collapse_info = Some(serde_json::json!({
-                "multiplier": lo,
-                "collapses_at": if collapses { serde_json::json!(hi) } else { serde_json::Value::Null },
-                "tolerance": c.tolerance,
-                "max": c.max,
-                "mechanism": mechanism.map(|e| e.message().to_string()),
-                "trials": trials,
-                "state": "the results are those of the largest multiplier with an equilibrium",
-            }));
-            (vec![(1.0, lo)], 0)
-        }
-    };
-    let mut state = session.initial();
-    let mut acc = StepAcc::default();
-    let ctx = StepContext {
-        scene,
-        model,
-        main,
-        checks: &checks,
-        last,
-        steps: steps.len(),
-        tol,
-        maxit,
-        stage: &stage,
-    };
-    for (step, &to) in steps.iter().enumerate() {
-        // Where the step starts, for substeps: the previous step, or (timed paths aside)
-        // the unloaded state.
-        let from = match step {
-            0 if timed => None,
-            0 => Some((0.0, to.1)),
-            _ => Some(steps[step - 1]),
-        };
-        load_step(
-            &stepper,
-            &mut session,
-            &ctx,
-            (step, from, to, 0),
-            &mut state,
-            &mut acc,
-            timings,
-            &mut last_prepared,
-        )?;
-        if acc.failure.is_some() {
-            break;
-        }
-    }
-    stage.finish();
-    let StepAcc {
-        iterations,
-        residual,
-        final_sol,
-        cross,
-        qp_block,
-        notes,
-        history,
-        states,
-        failure,
-        ..
-    } = acc;
-    let converged = failure.is_none();
-    let contact = serde_json::json!({
-        "solver": main.name(),
-        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP; Tresca fixed point for friction)",
-        "iterations": iterations,
-        "converged": converged,
-        "complementarity_residual": residual,
-        "load_steps": steps.len(),
-        "opening_stiffness_columns": session.cols.computed(),
-        "interface_system_size": session.problem.base_size(),
-        "cross_checks": cross,
-    });
-    let mut contact = contact;
-    if let Some(c) = collapse_info {
-        contact["collapse"] = c;
-    }
-    let Some((load_factor, time, body_force, fields, interfaces, nodal_force)) = final_sol else {
-        return Err(Error::numerical("the contact stage produced no state"));
-    };
-    let junctions = session.model.junctions();
-    if !junctions.is_empty() {
-        let implied = &session.problem.implied;
-        contact["junctions"] = junctions_json(session.model, &junctions, implied);
-        contact["junctions"]["implied_slipping"] =
-            implied_slipping(session.model, implied, &interfaces);
-    }
-    let result = RunResult {
-        status: if converged {
-            "converged".into()
-        } else {
-            "not converged".into()
-        },
-        load_factor,
-        time,
-        body_force,
-        fields,
-        interfaces,
-        nodal_force,
-        history,
-        states,
-        contact,
-        qp: qp_block,
-        notes,
-        failure,
-    };
-    drop(session);
-    Ok((last_prepared.unwrap_or(prepared), result))
+    driver::solve(case, ops, timings, progress)
 }
 
-/// What every load step of a contact run shares.
-struct StepContext<'a> {
-    scene: &'a crate::input::scene::Scene,
-    model: &'a Model,
-    main: crate::contact::Method,
-    checks: &'a [crate::contact::Method],
-    last: usize,
-    steps: usize,
-    tol: f64,
-    maxit: usize,
-    stage: &'a crate::output::progress::Stage,
-}
-
-/// The `contact.junctions` block: how many points join three or more bodies, and the pair
-/// components there that the kept rows imply (no row of their own; see
-/// `contact::problem::Problem::new`), by interface.
-fn junctions_json(
-    model: &Model,
-    junctions: &[([f64; 2], Vec<usize>)],
-    implied: &[crate::contact::problem::Implied],
-) -> serde_json::Value {
-    let mut by_iface: std::collections::BTreeMap<String, Vec<serde_json::Value>> =
-        std::collections::BTreeMap::new();
-    for i in implied {
-        let it = &model.interfaces[i.iface];
-        by_iface
-            .entry(it.spec.name.clone())
-            .or_default()
-            .push(serde_json::json!({
-                "x": it.pairs[i.pair].x,
-                "component": if i.comp == 1 { "normal" } else { "tangential" },
-            }));
-    }
-    let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
-    serde_json::json!({
-        "points": junctions.len(),
-        "most_bodies_at_a_point": most,
-        "rule": "at a point where bodies meet in a cycle of pairs, rows are kept bonded first (normal components first), then unilateral normal, then tangential, while independent; the others are implied by the kept rows while these are closed, and carry no force of their own",
-        "implied_components": implied.len(),
-        "implied": by_iface,
-    })
-}
-
-/// The implied tangential components of closed pairs with friction (`friction` or `stick`)
-/// whose tangential jump is not zero (above 1e-9 of the model's size) in the final state:
-/// there the pair slides at its junction node without a friction force of its own, since an
-/// implied component has no row (it slides by the opening of a joint of its cycle, e.g. a
-/// bed joint beside a head joint that opens). A one-node approximation of each such joint,
-/// counted and located so that it is seen.
-fn implied_slipping(
-    model: &Model,
-    implied: &[crate::contact::problem::Implied],
-    interfaces: &[crate::solution::InterfaceResult],
-) -> serde_json::Value {
-    use crate::input::scene::Tangential;
-    let tol = 1e-9 * model.scale;
-    let mut at = Vec::new();
-    let mut largest = 0.0f64;
-    for i in implied.iter().filter(|i| i.comp == 0) {
-        let it = &model.interfaces[i.iface];
-        if !matches!(it.spec.tangential, Tangential::Friction | Tangential::Stick) {
-            continue;
-        }
-        let Some(p) = interfaces.get(i.iface).and_then(|r| r.pairs.get(i.pair)) else {
-            continue;
-        };
-        let slip = p.jump[0].abs();
-        if p.status == crate::solution::PairStatus::Closed && slip > tol {
-            largest = largest.max(slip);
-            at.push(serde_json::json!({
-                "interface": it.spec.name,
-                "x": it.pairs[i.pair].x,
-                "slip": p.jump[0],
-            }));
-        }
-    }
-    serde_json::json!({
-        "count": at.len(),
-        "largest_slip": largest,
-        "meaning": "closed pairs whose tangential component is implied at a junction and slips there: at that node the pair slides without a friction force of its own",
-        "at": at,
-    })
-}
-
-/// The final boundary solution of a step: load factor, time, body forces, fields,
-/// interfaces and nodal forces.
-type FinalSolution = (
-    f64,
-    f64,
-    Vec<Option<[f64; 2]>>,
-    Vec<crate::solution::BodyField>,
-    Vec<crate::solution::InterfaceResult>,
-    Vec<Vec<f64>>,
-);
-
-/// What a load step needs to evaluate the model at another pseudo-time.
-struct Stepper<'a> {
-    scene: &'a crate::input::scene::Scene,
-    model: &'a Model,
-    settings: &'a crate::bem::quadrature::QuadratureSettings,
-    timed: bool,
-    cause: &'a dyn Fn(Error) -> Error,
-}
-
-/// A (sub)step: the load step, where it starts (load factor, time; none for the first step
-/// of a load path), where it ends, and the subdivision level.
-type StepSpan = (usize, Option<(f64, f64)>, (f64, f64), usize);
-
-/// Substep levels of a load step that does not converge (up to 2³ substeps).
-const MAX_SUBDIVISION: usize = 3;
-
-/// One load step from the state `state`, to the load factor and pseudo-time `to`; a step
-/// that does not converge for a reason other than a mechanism is solved again in two halves
-/// from `from` (recursively, up to [`MAX_SUBDIVISION`] levels). `at` = (step, from, to,
-/// level).
-#[allow(clippy::too_many_arguments)]
-fn load_step(
-    stp: &Stepper,
-    session: &mut crate::contact::Session,
-    ctx: &StepContext,
-    at: StepSpan,
-    state: &mut crate::contact::StepState,
-    acc: &mut StepAcc,
+/// The solve stages without output: assembly and condensation once, then the contact
+/// problem (or one linear solve) for each load step, each step starting from the previous
+/// state. Returns the operators of the final state with the solution.
+pub fn solve_loaded(
+    loaded: &Loaded,
+    settings: &QuadratureSettings,
     timings: &mut Timings,
-    last_prepared: &mut Option<crate::contact::solve::Prepared>,
-) -> Result<()> {
-    let (step, from, to, level) = at;
-    if level == 0 {
-        acc.substeps = 0;
-    }
-    let saved = (state.clone(), acc.mark());
-    step_at(
-        stp,
-        session,
-        ctx,
-        step,
-        to,
-        state,
-        acc,
-        timings,
-        last_prepared,
-    )?;
-    let Some(from) = from else { return Ok(()) };
-    if acc.failure.is_none() || acc.mechanism || level >= MAX_SUBDIVISION {
-        acc.substeps += 1;
-        return Ok(());
-    }
-    let why = acc
-        .failure
-        .as_ref()
-        .map(|e| e.message().to_string())
-        .unwrap_or_default();
-    acc.restore(saved.1);
-    *state = saved.0;
-    let mid = (0.5 * (from.0 + to.0), 0.5 * (from.1 + to.1));
-    load_step(
-        stp,
-        session,
-        ctx,
-        (step, Some(from), mid, level + 1),
-        state,
-        acc,
-        timings,
-        last_prepared,
-    )?;
-    if acc.failure.is_none() {
-        load_step(
-            stp,
-            session,
-            ctx,
-            (step, Some(mid), to, level + 1),
-            state,
-            acc,
-            timings,
-            last_prepared,
-        )?;
-    }
-    if level == 0 {
-        acc.notes.push(format!(
-            "load step {} (load factor {}, t = {}) did not converge in one step ({why}); it \
-             was solved again in {} substeps from load factor {}, t = {}{}",
-            step + 1,
-            crate::input::model::fmt_num(to.0),
-            crate::input::model::fmt_num(to.1),
-            acc.substeps,
-            crate::input::model::fmt_num(from.0),
-            crate::input::model::fmt_num(from.1),
-            if acc.failure.is_none() {
-                ", which converged"
-            } else {
-                ", the last of which did not converge either"
-            }
-        ));
-        acc.substeps = 0;
-    }
-    Ok(())
-}
-
-/// Solves one (sub)step at `(f, time)`: on the run's session, or, where the loads depend on
-/// t and the pseudo-time differs from the model's, on the model evaluated and assembled at
-/// `time` (the columns of the opening stiffness move between the sessions).
-#[allow(clippy::too_many_arguments)]
-fn step_at(
-    stp: &Stepper,
-    session: &mut crate::contact::Session,
-    ctx: &StepContext,
-    step: usize,
-    (f, time): (f64, f64),
-    state: &mut crate::contact::StepState,
-    acc: &mut StepAcc,
-    timings: &mut Timings,
-    last_prepared: &mut Option<crate::contact::solve::Prepared>,
-) -> Result<()> {
-    use crate::contact::solve::prepare;
-    use crate::contact::Session;
-    use std::time::Instant;
-    if !stp.timed || time == stp.model.time {
-        contact_step(session, ctx, step, f, state, acc, timings);
-        return Ok(());
-    }
-    let (scene, model) = (stp.scene, stp.model);
-    let model_t = model.at_time(scene, time)?;
-    let prepared_t = prepare(
-        &model_t,
-        scene.plane,
-        stp.settings,
-        1.0,
-        &scene.path,
-        &|_| {},
-    )
-    .map_err(stp.cause)?;
-    timings.add("assemble", prepared_t.assemble_seconds);
-    timings.add("condense", prepared_t.condense_seconds);
-    let t1 = Instant::now();
-    {
-        let mut s = Session::new(&model_t, &prepared_t).map_err(stp.cause)?;
-        s.cols = std::mem::take(&mut session.cols);
-        s.coupled_after = session.coupled_after;
-        timings.add("interface_system", t1.elapsed().as_secs_f64());
-        // Cohesion follows its expression where the pair has never opened.
-        for (k, it) in model_t.interfaces.iter().enumerate() {
-            for (j, p) in it.pairs.iter().enumerate() {
-                if !state.broken[k][j] {
-                    state.cohesion[k][j] = p.cohesion;
-                }
-            }
-        }
-        contact_step(&mut s, ctx, step, f, state, acc, timings);
-        session.cols = std::mem::take(&mut s.cols);
-    }
-    *last_prepared = Some(prepared_t);
-    Ok(())
-}
-
-/// Lengths and values of a [`StepAcc`] to go back to.
-struct AccMark {
-    iterations: usize,
-    residual: f64,
-    final_sol: Option<FinalSolution>,
-    cross: usize,
-    qp_block: Option<serde_json::Value>,
-    notes: usize,
-    rows: usize,
-    states: usize,
-}
-
-impl StepAcc {
-    fn mark(&self) -> AccMark {
-        AccMark {
-            iterations: self.iterations,
-            residual: self.residual,
-            final_sol: self.final_sol.clone(),
-            cross: self.cross.len(),
-            qp_block: self.qp_block.clone(),
-            notes: self.notes.len(),
-            rows: self.history.rows.len(),
-            states: self.states.len(),
-        }
-    }
-
-    /// Forgets what was accumulated since `m` (a failed step solved again in substeps).
-    fn restore(&mut self, m: AccMark) {
-        self.iterations = m.iterations;
-        self.residual = m.residual;
-        self.final_sol = m.final_sol;
-        self.cross.truncate(m.cross);
-        self.qp_block = m.qp_block;
-        self.notes.truncate(m.notes);
-        self.history.rows.truncate(m.rows);
-        self.states.truncate(m.states);
-        self.failure = None;
-        self.mechanism = false;
-    }
-}
-
-/// What the load steps of a contact run accumulate.
-#[derive(Default)]
-struct StepAcc {
-    iterations: usize,
-    residual: f64,
-    final_sol: Option<FinalSolution>,
-    cross: Vec<serde_json::Value>,
-    qp_block: Option<serde_json::Value>,
-    notes: Vec<String>,
-    history: crate::solution::History,
-    states: Vec<crate::contact::RecordedState>,
-    failure: Option<Error>,
-    /// The failure is a mechanism (no equilibrium): no substeps help.
-    mechanism: bool,
-    /// Substeps solved since the last load step that was subdivided.
-    substeps: usize,
-}
-
-/// One load step of a contact run: the main solver, the cross-checks, the history.
-fn contact_step(
-    session: &mut crate::contact::Session,
-    ctx: &StepContext,
-    step: usize,
-    f: f64,
-    state: &mut crate::contact::StepState,
-    acc: &mut StepAcc,
-    timings: &mut Timings,
-) {
-    use crate::contact::Method as Solver;
-    use std::time::Instant;
-    let (scene, model, main) = (ctx.scene, ctx.model, ctx.main);
-    let (tol, maxit) = (ctx.tol, ctx.maxit);
-    let t = Instant::now();
-    let full = scene.output.history == crate::input::scene::History::Full;
-    let mut r = session.solve_step(state, main, tol, maxit, step, f, full);
-    timings.add(
-        if main == Solver::Qp {
-            "contact_qp"
-        } else {
-            "contact_lcp"
-        },
-        t.elapsed().as_secs_f64(),
-    );
-    let t = Instant::now();
-    session.expand(&mut r);
-    timings.add("contact_record", t.elapsed().as_secs_f64());
-    for &c in ctx.checks {
-        let t = Instant::now();
-        let x = session.solve_step(state, c, tol, maxit, step, f, false);
-        timings.add(
-            match c {
-                Solver::ActiveSet => "contact_active_set",
-                Solver::Qp => "contact_qp",
-                Solver::Lemke => "contact_lemke",
-                Solver::Evolutive => "contact_lcp",
-            },
-            t.elapsed().as_secs_f64(),
-        );
-        let (all, degenerate) =
-            crate::contact::status_differences(&x.interfaces, &r.interfaces, model.scale);
-        let differing = all - degenerate;
-        acc.cross.push(serde_json::json!({
-            "solver": c.name(), "load_step": step, "iterations": x.iterations,
-            "outer_iterations": x.outer_iterations, "converged": x.converged,
-            "differing_pairs": differing, "degenerate_pairs": degenerate, "info": x.info,
-            "failure": x.failure.as_ref().map(|e| e.message()),
-        }));
-        if c == Solver::Qp && step == ctx.last {
-            acc.qp_block = Some(serde_json::json!({
-                "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
-                "interfaces": crate::output::summary::interfaces(&model.interfaces, &x.interfaces, scene.thickness),
-                "converged": x.converged,
-                "differing_pairs_from_lcp": differing,
-                "info": x.info,
-            }));
-        }
-    }
-    acc.iterations += r.iterations;
-    acc.residual = acc.residual.max(r.residual);
-    acc.notes.extend(r.notes.iter().cloned());
-    acc.history.rows.extend(r.rows);
-    if let Some(row) = acc.history.rows.last() {
-        let status = row.status.iter().flatten();
-        ctx.stage
-            .contact_tick(&crate::output::progress::ContactTick {
-                load_step: step,
-                load_steps: ctx.steps,
-                iteration: row.iteration,
-                max_iterations: maxit,
-                open_pairs: status
-                    .clone()
-                    .filter(|s| **s == crate::solution::PairStatus::Open)
-                    .count(),
-                pairs: status.count(),
-                detached_length: row.detached_length.iter().sum(),
-                step_done: true,
-            });
-    }
-    acc.states.extend(r.states);
-    if main == Solver::Qp && step == ctx.last {
-        acc.qp_block = Some(serde_json::json!({
-            "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
-            "interfaces": crate::output::summary::interfaces(&model.interfaces, &r.interfaces, scene.thickness),
-            "converged": r.converged,
-            "info": r.info,
-        }));
-    }
-    *state = r.state;
-    acc.final_sol = Some((
-        f,
-        session.model.time,
-        session.body_forces(),
-        r.fields,
-        r.interfaces,
-        r.nodal_force,
-    ));
-    if let Some(e) = r.failure {
-        acc.failure = Some(e);
-        acc.mechanism = r.mechanism;
-    }
+) -> Result<(Operators, ContactRun)> {
+    let progress = Progress::hidden();
+    let ops = prepare_bodies(loaded, settings, timings, &progress)?;
+    let mut solved = solve_contact(loaded, settings, &ops, timings, &progress)?;
+    Ok((solved.operators.take().unwrap_or(ops), solved))
 }
 
 /// The status of the final state (closed where the interface result says so).
-fn final_status(model: &Model, result: &RunResult) -> Vec<Vec<[crate::solution::PairStatus; 2]>> {
+fn final_status(model: &Model, result: &ContactRun) -> Vec<Vec<[crate::solution::PairStatus; 2]>> {
     use crate::solution::PairStatus;
     model
         .interfaces
@@ -965,18 +227,41 @@ fn body_inputs<'a>(
         .collect()
 }
 
-/// Reads, validates, solves and writes every output of a scene.
+/// Reads, validates, solves and writes every output of a scene: the README's pipeline.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
-    use crate::bem::quadrature::QuadratureSettings;
-    use crate::output::archive::{ArchivePart, ArchiveWriter};
-    use crate::output::record::{RunRecord, StateRecord};
-    use crate::output::{csv, summary, write_staged};
-    use crate::post::{section_points, PointSampler};
-    use rayon::prelude::*;
-    use std::fmt::Write as _;
-    use std::time::Instant;
-
     let mut timings = Timings::default();
+    let loaded = load_for_run(scene_path, opts, &mut timings)?;
+    let folder = open_run_folder(&loaded, scene_path)?;
+    let settings = quadrature(&loaded.scene);
+    let progress = Progress::new(opts.quiet);
+    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
+    let ops = prepare_bodies(&loaded, &settings, &mut timings, &progress)?;
+    let archive = start_archive(&folder, &loaded.scene, &rec, &ops);
+    let mut solved = solve_contact(&loaded, &settings, &ops, &mut timings, &progress)?;
+    let ops = solved.operators.take().unwrap_or(ops);
+    let loads = record_solution(&loaded, &ops, &mut solved, &mut rec, &archive, &mut timings)?;
+    let mut post = postprocess(&loaded, &settings, &mut solved, &rec, &loads, &progress);
+    timings.add("postprocess", post.seconds);
+    write_tables(folder.staging(), &loaded, &solved, &post, &mut timings)?;
+    let summary = summary_of(&loaded, &ops, &mut solved, &post);
+    if let Some(last) = rec.states.last_mut() {
+        last.interior = std::mem::take(&mut post.interior);
+    }
+    let out_dir = write_run(
+        folder, archive, rec, &loaded, &solved, &summary, &progress, timings,
+    )?;
+    match solved.failure {
+        Some(f) => Err(f),
+        None => Ok(RunReport {
+            out_dir,
+            summary,
+            notes: post.notes,
+        }),
+    }
+}
+
+/// Reads the scene and the mesh with the command line's overrides.
+fn load_for_run(scene_path: &Path, opts: &RunOptions, timings: &mut Timings) -> Result<Loaded> {
     let t0 = Instant::now();
     let mut loaded = load_with(
         scene_path,
@@ -993,11 +278,16 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         loaded.scene.output.directory = o.clone();
     }
     timings.add("read", t0.elapsed().as_secs_f64());
+    Ok(loaded)
+}
+
+/// Refuses what cannot fit, then takes the run's folder: a staging folder swapped in when
+/// the run is complete (output/folder.rs).
+fn open_run_folder(loaded: &Loaded, scene_path: &Path) -> Result<RunFolder> {
     // Refuse what cannot fit before allocating any of it.
     crate::estimate::estimate(&loaded.model, &loaded.scene)
         .check_fits(&loaded.model, scene_path)?;
-    // The run writes into a staging folder, swapped in when complete (output/folder.rs).
-    let folder = crate::output::folder::RunFolder::acquire(&loaded.scene.output.directory)?;
+    let folder = RunFolder::acquire(&loaded.scene.output.directory)?;
     // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
     let meshed = loaded.scene.output.directory.join("mesh");
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
@@ -1010,59 +300,59 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             let _ = std::fs::copy(entry.path(), dest.join(entry.file_name()));
         }
     }
-    let settings = QuadratureSettings::from_name(loaded.scene.solve.quadrature.name())
-        .unwrap_or_else(QuadratureSettings::standard);
-    let progress = crate::output::progress::Progress::new(opts.quiet);
-    // The archive is written on a thread of its own from the moment the body operators
-    // exist (output::archive::ArchiveWriter): the model now, the contact results before
-    // post-processing, the final state at the end.
-    let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
-    let archive_path = folder.staging().join("archive.h5");
-    let mut archive: Option<ArchiveWriter> = None;
-    let (prepared, mut result) =
-        solve_loaded_then(&loaded, &settings, &mut timings, &progress, &mut |p| {
-            let mut model = rec.clone();
-            if loaded.scene.output.operators {
-                model.set_operators(&p.systems, &p.condensed);
-            }
-            archive = Some(ArchiveWriter::start(&archive_path, model));
-        })?;
-    let archive = archive.unwrap_or_else(|| ArchiveWriter::start(&archive_path, rec.clone()));
-    let Loaded {
-        scene, model, plan, ..
-    } = &loaded;
-    // The contact results of the archive: the paper's mixed interface operators of the final
-    // status (dense over every interface: for scenes of up to 3000 interface unknowns only),
-    // the history and the states.
-    let t1 = Instant::now();
-    let mut contact_operators = None;
-    // Junctions have no place in the paper's mixed layout (one displacement per pair).
-    if scene.output.operators && model.junctions().is_empty() {
-        let final_status = final_status(model, &result);
-        let layout = crate::contact::interface::layout(model, &prepared.maps, &final_status)?;
-        if layout.n <= 3000 {
-            let (k, l) = crate::contact::interface::assemble_scaled(
-                &layout,
-                &prepared.condensed,
-                result.load_factor,
-            );
-            contact_operators = Some(
-                crate::contact::interface::reduced_operators(&layout, &k, &l)
-                    .into_iter()
-                    .map(|(n, m)| (n, crate::output::record::Array::from_mat(&m)))
-                    .collect(),
-            );
-        }
+    Ok(folder)
+}
+
+/// The quadrature of the scene's `[solve] quadrature`.
+fn quadrature(scene: &Scene) -> QuadratureSettings {
+    QuadratureSettings::from_name(scene.solve.quadrature.name())
+        .unwrap_or_else(QuadratureSettings::standard)
+}
+
+/// Starts the archive's thread with the model (and, with `operators = true`, the bodies'
+/// operators), while the contact stage runs.
+fn start_archive(
+    folder: &RunFolder,
+    scene: &Scene,
+    rec: &RunRecord,
+    ops: &Operators,
+) -> ArchiveWriter {
+    let mut model = rec.clone();
+    if scene.output.operators {
+        model.set_operators(&ops.systems, &ops.condensed);
     }
+    ArchiveWriter::start(&folder.staging().join("archive.h5"), model)
+}
+
+/// What the section paths need of each recorded state besides its fields (iteration, load
+/// step, load factor, body forces).
+type StateLoads = (usize, usize, f64, Vec<Option<[f64; 2]>>);
+
+/// The contact results of the archive: the paper's mixed interface operators of the final
+/// status (dense over every interface: for scenes of up to 3000 interface unknowns only), the
+/// history and the recorded states, which move into the record (a full history of hundreds of
+/// bodies is most of a run's memory). Returns what the section paths need of each state.
+fn record_solution(
+    loaded: &Loaded,
+    ops: &Operators,
+    solved: &mut ContactRun,
+    rec: &mut RunRecord,
+    archive: &ArchiveWriter,
+    timings: &mut Timings,
+) -> Result<Vec<StateLoads>> {
+    let Loaded { scene, model, .. } = loaded;
+    let t1 = Instant::now();
+    let contact_operators = if scene.output.operators {
+        mixed_operators(model, ops, solved)?
+    } else {
+        None
+    };
     // The final state belongs to the last step solved (the failing one after a failure).
-    let final_step = result
+    let final_step = solved
         .states
         .last()
         .map_or(scene.solve.steps().len() - 1, |s| s.load_step);
-    // What the section paths need of each recorded state besides its fields, which move
-    // into the record (a full history of hundreds of bodies is most of a run's memory).
-    type StateLoads = (usize, usize, f64, Vec<Option<[f64; 2]>>);
-    let recorded_loads: Vec<StateLoads> = result
+    let loads: Vec<StateLoads> = solved
         .states
         .iter()
         .map(|s| {
@@ -1075,9 +365,9 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         })
         .collect();
     let mut states: Vec<StateRecord> = Vec::new();
-    if scene.output.history == crate::input::scene::History::Full {
-        let recorded = result.states.len().saturating_sub(1);
-        for st in std::mem::take(&mut result.states)
+    if scene.output.history == HistoryLevel::Full {
+        let recorded = solved.states.len().saturating_sub(1);
+        for st in std::mem::take(&mut solved.states)
             .into_iter()
             .take(recorded)
         {
@@ -1093,161 +383,264 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     states.push(StateRecord::new(
         states.len(),
         final_step,
-        result.load_factor,
-        result.fields.clone(),
-        result.interfaces.clone(),
+        solved.load_factor,
+        solved.fields.clone(),
+        solved.interfaces.clone(),
     ));
     rec.states = states;
     // The archive's thread gets the states' fields shared, not copied (StateRecord); the
     // history goes there alone (the VTK files do not need it).
     archive.send(ArchivePart::Solved {
         contact_operators,
-        history: result.history.clone(),
+        history: solved.history.clone(),
         states: rec.states.clone(),
     });
     timings.add("write", t1.elapsed().as_secs_f64());
-    if let Some(where_) = non_finite(model, &result) {
-        result.status = "failed: non-finite results".into();
-        if result.failure.is_none() {
-            result.failure = Some(non_finite_error(&where_, scene));
+    if let Some(where_) = non_finite(model, solved) {
+        solved.status = "failed: non-finite results".into();
+        if solved.failure.is_none() {
+            solved.failure = Some(non_finite_error(&where_, scene));
         }
     }
-    let out_dir = folder.staging().to_path_buf();
-    let factor = result.load_factor;
+    Ok(loads)
+}
+
+/// The paper's mixed interface operators of the final status, where they are archived:
+/// scenes without junctions (no place in the paper's layout, one displacement per pair) of up
+/// to 3000 interface unknowns.
+fn mixed_operators(
+    model: &Model,
+    ops: &Operators,
+    solved: &ContactRun,
+) -> Result<Option<Vec<(String, Array)>>> {
+    if !model.junctions().is_empty() {
+        return Ok(None);
+    }
+    let final_status = final_status(model, solved);
+    let layout = interface::layout(model, &ops.maps, &final_status)?;
+    if layout.n > 3000 {
+        return Ok(None);
+    }
+    let (k, l) = interface::assemble_scaled(&layout, &ops.condensed, solved.load_factor);
+    Ok(Some(
+        interface::reduced_operators(&layout, &k, &l)
+            .into_iter()
+            .map(|(n, m)| (n, Array::from_mat(&m)))
+            .collect(),
+    ))
+}
+
+/// What post-processing computed.
+struct Post {
+    /// Per section: its name and rows.
+    sections: Vec<(String, Vec<csv::SectionRow>)>,
+    /// Per section with a full history: its name and the `_path.csv` text.
+    section_paths: Vec<(String, String)>,
+    interior: Vec<InteriorRecord>,
+    field_nodes: usize,
+    balances: Vec<crate::post::equilibrium::BodyBalance>,
+    notes: Vec<String>,
+    seconds: f64,
+}
+
+/// Equilibrium per body, sections (and their paths over the recorded states) and the interior
+/// field.
+fn postprocess(
+    loaded: &Loaded,
+    settings: &QuadratureSettings,
+    solved: &mut ContactRun,
+    rec: &RunRecord,
+    loads: &[StateLoads],
+    progress: &Progress,
+) -> Post {
+    let Loaded {
+        scene, model, plan, ..
+    } = loaded;
+    let factor = solved.load_factor;
     let mut notes = plan.advice.clone();
-    notes.extend(result.notes.iter().cloned());
+    notes.extend(solved.notes.iter().cloned());
     let balances = crate::post::equilibrium::balances(
         model,
-        &result.fields,
-        &result.interfaces,
-        &result.body_force,
+        &solved.fields,
+        &solved.interfaces,
+        &solved.body_force,
         factor,
         scene.thickness,
     );
-    if result.failure.is_none() {
+    if solved.failure.is_none() {
         notes.extend(crate::post::equilibrium::unbalanced_note(model, &balances));
     }
-
-    // Post-processing.
     let t2 = Instant::now();
+    let mut post = Post {
+        sections: Vec::new(),
+        section_paths: Vec::new(),
+        interior: Vec::new(),
+        field_nodes: 0,
+        balances,
+        notes,
+        seconds: 0.0,
+    };
     let inputs = body_inputs(
         model,
         scene.plane,
-        &result.fields,
-        &result.body_force,
+        &solved.fields,
+        &solved.body_force,
         factor,
     );
     // Each section's points are located, planned and integrated once (post::PointSampler),
     // then evaluated for the final state and, with history = "full", for every recorded
     // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
-    let full_path =
-        scene.output.history == crate::input::scene::History::Full && !recorded_loads.is_empty();
-    let mut sections = Vec::new();
-    let mut section_paths = Vec::new();
+    let full_path = scene.output.history == HistoryLevel::Full && !loads.is_empty();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
-        let sampler = PointSampler::new(&inputs, &settings, &pts);
-        let vals = sampler.evaluate(&inputs);
-        let rows: Vec<csv::SectionRow> = pts
-            .iter()
-            .zip(vals)
-            .map(|(x, v)| {
-                (
-                    *x,
-                    v.map(|p| (p.u, [p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]])),
-                )
-            })
-            .collect();
-        if result.failure.is_none() {
+        let sampler = PointSampler::new(&inputs, settings, &pts);
+        let rows = section_rows(&pts, sampler.evaluate(&inputs));
+        if solved.failure.is_none() {
             if let Some(x) = rows.iter().find_map(|(x, v)| {
                 v.filter(|(u, sg)| !u.iter().chain(sg.iter()).all(|c| c.is_finite()))
                     .map(|_| *x)
             }) {
-                result.status = "failed: non-finite results".into();
-                result.failure = Some(non_finite_error(
+                solved.status = "failed: non-finite results".into();
+                solved.failure = Some(non_finite_error(
                     &format!("section {} at ({:e}, {:e})", s.name, x[0], x[1]),
                     scene,
                 ));
             }
         }
         if rows.iter().any(|r| r.1.is_none()) {
-            notes.push(format!(
+            post.notes.push(format!(
                 "section {}: some points lie outside every body (written as nan)",
                 s.name
             ));
         }
-        sections.push((s.name.clone(), rows));
+        post.sections.push((s.name.clone(), rows));
         if full_path {
-            // The recorded states are those of the record, the last being the final one.
-            let blocks: Vec<String> = rec
-                .states
-                .par_iter()
-                .zip(&recorded_loads)
-                .zip(&result.history.rows)
-                .map(|((record, st), row)| {
-                    let (iteration, load_step, load_factor, body_force) = st;
-                    let inputs =
-                        body_inputs(model, scene.plane, &record.fields, body_force, *load_factor);
-                    let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
-                    let mut text = String::new();
-                    for (x, v) in pts.iter().zip(sampler.evaluate(&inputs)) {
-                        let vals = match v {
-                            Some(p) => format!(
-                                "{:e},{:e},{:e},{:e},{:e}",
-                                p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
-                            ),
-                            None => "nan,nan,nan,nan,nan".into(),
-                        };
-                        let _ = writeln!(
-                            text,
-                            "{},{},{:e},{:e},{:e},{:e},{vals}",
-                            iteration, load_step, load_factor, detached, x[0], x[1]
-                        );
-                    }
-                    text
-                })
-                .collect();
-            let mut text = String::from(
-                "iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n",
-            );
-            text.extend(blocks);
-            section_paths.push((s.name.clone(), text));
+            let text = section_path(loaded, &pts, &sampler, rec, loads, &solved.history);
+            post.section_paths.push((s.name.clone(), text));
         }
     }
-    let mut field_nodes = 0usize;
-    let mut interior = Vec::new();
     if scene.output.field {
-        let total: usize = model.bodies.iter().map(crate::post::field_node_count).sum();
-        let stage = progress.bar("field points", total as u64);
-        for input in &inputs {
-            let values =
-                crate::post::field_at_nodes_with(input, &settings, &loaded.mesh.nodes, &|n| {
-                    stage.inc(n)
-                });
-            field_nodes += values.len();
-            let bad = values.iter().find(|v| {
-                !(v.u.iter().all(|c| c.is_finite())
-                    && v.sigma.iter().flatten().all(|c| c.is_finite()))
-            });
-            if let (Some(v), None) = (bad, &result.failure) {
-                result.status = "failed: non-finite results".into();
-                result.failure = Some(non_finite_error(
-                    &format!(
-                        "body \"{}\": interior field at mesh node {}",
-                        input.body.name, v.mesh_node
-                    ),
-                    scene,
-                ));
-            }
-            interior.push(crate::output::record::InteriorRecord::from_values(&values));
+        let failed = solved.failure.is_some();
+        if let Some(e) = interior_field(loaded, settings, &inputs, failed, &mut post, progress) {
+            solved.status = "failed: non-finite results".into();
+            solved.failure = Some(e);
         }
-        stage.finish();
     }
-    timings.add("postprocess", t2.elapsed().as_secs_f64());
+    post.seconds = t2.elapsed().as_secs_f64();
+    post
+}
 
-    // Outputs.
+/// The rows of a section's table from its points and their values.
+fn section_rows(
+    pts: &[[f64; 2]],
+    vals: Vec<Option<crate::post::PointValue>>,
+) -> Vec<csv::SectionRow> {
+    pts.iter()
+        .zip(vals)
+        .map(|(x, v)| {
+            (
+                *x,
+                v.map(|p| (p.u, [p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]])),
+            )
+        })
+        .collect()
+}
+
+/// A section's values at every recorded state (`sections/<name>_path.csv`); the recorded
+/// states are those of the record, the last being the final one.
+fn section_path(
+    loaded: &Loaded,
+    pts: &[[f64; 2]],
+    sampler: &PointSampler,
+    rec: &RunRecord,
+    loads: &[StateLoads],
+    history: &History,
+) -> String {
+    let Loaded { scene, model, .. } = loaded;
+    let blocks: Vec<String> = rec
+        .states
+        .par_iter()
+        .zip(loads)
+        .zip(&history.rows)
+        .map(|((record, st), row)| {
+            let (iteration, load_step, load_factor, body_force) = st;
+            let inputs = body_inputs(model, scene.plane, &record.fields, body_force, *load_factor);
+            let detached: f64 = row.detached_length.iter().sum::<f64>() + 0.0;
+            let mut text = String::new();
+            for (x, v) in pts.iter().zip(sampler.evaluate(&inputs)) {
+                let vals = match v {
+                    Some(p) => format!(
+                        "{:e},{:e},{:e},{:e},{:e}",
+                        p.u[0], p.u[1], p.sigma[0][0], p.sigma[1][1], p.sigma[0][1]
+                    ),
+                    None => "nan,nan,nan,nan,nan".into(),
+                };
+                let _ = writeln!(
+                    text,
+                    "{},{},{:e},{:e},{:e},{:e},{vals}",
+                    iteration, load_step, load_factor, detached, x[0], x[1]
+                );
+            }
+            text
+        })
+        .collect();
+    let mut text =
+        String::from("iteration,load_step,load_factor,detached_length,x,y,ux,uy,sxx,syy,sxy\n");
+    text.extend(blocks);
+    text
+}
+
+/// The interior field at the mesh nodes of every body (`field = true`); the failure of the
+/// first non-finite value where the run has not `failed` already.
+fn interior_field(
+    loaded: &Loaded,
+    settings: &QuadratureSettings,
+    inputs: &[crate::post::BodyInput],
+    failed: bool,
+    post: &mut Post,
+    progress: &Progress,
+) -> Option<Error> {
+    let mut failure = None;
+    let total: usize = loaded
+        .model
+        .bodies
+        .iter()
+        .map(crate::post::field_node_count)
+        .sum();
+    let stage = progress.bar("field points", total as u64);
+    for input in inputs {
+        let values = crate::post::field_at_nodes_with(input, settings, &loaded.mesh.nodes, &|n| {
+            stage.inc(n)
+        });
+        post.field_nodes += values.len();
+        let bad = values.iter().find(|v| {
+            !(v.u.iter().all(|c| c.is_finite()) && v.sigma.iter().flatten().all(|c| c.is_finite()))
+        });
+        if let (Some(v), false) = (bad, failed || failure.is_some()) {
+            failure = Some(non_finite_error(
+                &format!(
+                    "body \"{}\": interior field at mesh node {}",
+                    input.body.name, v.mesh_node
+                ),
+                &loaded.scene,
+            ));
+        }
+        post.interior.push(InteriorRecord::from_values(&values));
+    }
+    stage.finish();
+    failure
+}
+
+/// The interface and section tables (CSV).
+fn write_tables(
+    out_dir: &Path,
+    loaded: &Loaded,
+    solved: &ContactRun,
+    post: &Post,
+    timings: &mut Timings,
+) -> Result<()> {
     let t3 = Instant::now();
-    for (it, r) in model.interfaces.iter().zip(&result.interfaces) {
+    for (it, r) in loaded.model.interfaces.iter().zip(&solved.interfaces) {
         write_staged(
             &out_dir
                 .join("interfaces")
@@ -1255,74 +648,87 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             csv::interface_table(it, r).as_bytes(),
         )?;
     }
-    for (name, rows) in &sections {
+    for (name, rows) in &post.sections {
         write_staged(
             &out_dir.join("sections").join(format!("{name}.csv")),
             csv::section_table(rows).as_bytes(),
         )?;
     }
-    for (name, text) in &section_paths {
+    for (name, text) in &post.section_paths {
         write_staged(
             &out_dir.join("sections").join(format!("{name}_path.csv")),
             text.as_bytes(),
         )?;
     }
     timings.add("write", t3.elapsed().as_secs_f64());
-    let dofs: usize = prepared.systems.iter().map(|s| s.n()).sum();
-    let asym = prepared
+    Ok(())
+}
+
+/// `summary.json`'s content; a figure that overflows (serialised as null) fails the run.
+fn summary_of(
+    loaded: &Loaded,
+    ops: &Operators,
+    solved: &mut ContactRun,
+    post: &Post,
+) -> serde_json::Value {
+    let Loaded {
+        scene, model, plan, ..
+    } = loaded;
+    let dofs: usize = ops.systems.iter().map(|s| s.n()).sum();
+    let asym = ops
         .condensed
         .iter()
         .map(|c| c.asymmetry)
         .fold(0.0, f64::max);
-    let pivot = prepared
+    let pivot = ops
         .condensed
         .iter()
         .map(|c| c.pivot_ratio)
         .fold(1.0, f64::min);
     let mut summary = serde_json::json!({
         "title": scene.title,
-        "status": result.status,
+        "status": solved.status,
         "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { scene.solve.method.name() },
         "effects": plan.effects,
         "problem": format!("{:?}", plan.problem).to_lowercase(),
         "plane": match scene.plane { crate::input::scene::Plane::Strain => "strain", crate::input::scene::Plane::Stress => "stress" },
         "thickness": scene.thickness,
         "units": {"length": scene.units.length, "force": scene.units.force},
-        "load_factor": factor,
+        "load_factor": solved.load_factor,
         "quadrature": scene.solve.quadrature.name(),
         "counts": {
             "bodies": model.bodies.len(),
             "boundary_elements": model.element_count(),
             "interface_pairs": model.pair_count(),
             "dofs": dofs,
-            "field_nodes": field_nodes,
+            "field_nodes": post.field_nodes,
         },
-        "interfaces": summary::interfaces(&model.interfaces, &result.interfaces, scene.thickness),
-        "contact": result.contact,
+        "interfaces": summary::interfaces(&model.interfaces, &solved.interfaces, scene.thickness),
+        "contact": solved.contact,
         "diagnostics": {
             "d00_asymmetry": asym,
             "min_pivot_ratio": pivot,
         },
-        "notes": notes,
+        "notes": post.notes,
         "overrides": scene.overrides,
     });
-    summary["equilibrium"] = crate::post::equilibrium::summary(&balances);
+    summary["equilibrium"] = crate::post::equilibrium::summary(&post.balances);
     if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
         summary["interface_curves"] = curves;
     }
-    if let Some(qp) = &result.qp {
-        summary["qp"] = qp.clone();
+    if let Some(qp) = &solved.qp {
+        summary["qp"] = summary::qp(&model.interfaces, qp, scene.thickness);
     }
     if let Some(ts) = &scene.solve.time {
         // The load path: the pseudo-time of the final state and every step's.
-        summary["time"] = serde_json::json!(result.time);
+        summary["time"] = serde_json::json!(solved.time);
         summary["load_path"] = serde_json::json!({
             "time": ts,
             "depends_on_t": crate::plan::time_dependent(scene),
         });
     }
     // Figures that overflow (serialised as null): a resultant of finite tractions can.
-    if result.failure.is_none() {
+    if solved.failure.is_none() {
         let overflow = summary["interfaces"].as_object().and_then(|m| {
             m.iter().find_map(|(name, fig)| {
                 fig.as_object()?
@@ -1332,21 +738,33 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
             })
         });
         if let Some(where_) = overflow {
-            result.status = "failed: non-finite results".into();
-            summary["status"] = serde_json::json!(result.status);
-            result.failure = Some(non_finite_error(&where_, scene));
+            solved.status = "failed: non-finite results".into();
+            summary["status"] = serde_json::json!(solved.status);
+            solved.failure = Some(non_finite_error(&where_, scene));
         }
     }
-    let text = serde_json::to_string_pretty(&summary)
-        .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
+    summary
+}
 
-    // Archive and VTK files.
+/// The archive's last part, the VTK files, `timings.json` and `summary.json` (last), then the
+/// whole folder swapped in; returns where the run now is.
+#[allow(clippy::too_many_arguments)]
+fn write_run(
+    folder: RunFolder,
+    archive: ArchiveWriter,
+    mut rec: RunRecord,
+    loaded: &Loaded,
+    solved: &ContactRun,
+    summary: &serde_json::Value,
+    progress: &Progress,
+    mut timings: Timings,
+) -> Result<PathBuf> {
+    let out_dir = folder.staging().to_path_buf();
+    let text = serde_json::to_string_pretty(summary)
+        .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
     let t4 = Instant::now();
     let stage = progress.spinner("archive and VTK");
-    if let Some(last) = rec.states.last_mut() {
-        last.interior = interior;
-    }
-    rec.status = result.status.clone();
+    rec.status = solved.status.clone();
     rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
     rec.summary_json = text.clone();
     archive.send(ArchivePart::Finished {
@@ -1360,7 +778,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         summary_json: text.clone(),
     });
     // The VTK files (in parallel) while the archive's thread writes the final state.
-    let vtk = if scene.output.vtk {
+    let vtk = if loaded.scene.output.vtk {
         crate::output::vtk::write_vtk_staged(&out_dir.join("vtk"), &rec).map(|_| ())
     } else {
         Ok(())
@@ -1378,20 +796,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;
     // The summary last, then the whole folder swapped in.
     write_staged(&out_dir.join("summary.json"), text.as_bytes())?;
-    let out_dir = folder.target().to_path_buf();
+    let target = folder.target().to_path_buf();
     folder.commit()?;
-    if let Some(f) = result.failure {
-        return Err(f);
-    }
-    Ok(RunReport {
-        out_dir,
-        summary,
-        notes,
-    })
+    Ok(target)
 }
 
 /// Where a result holds a number that is not finite ("body \"A\" displacement", ...).
-fn non_finite(model: &Model, result: &RunResult) -> Option<String> {
+fn non_finite(model: &Model, result: &ContactRun) -> Option<String> {
     let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
     for (b, f) in model.bodies.iter().zip(&result.fields) {
         if let Some(n) = f.u.iter().position(|u| !finite(u)) {

@@ -68,6 +68,24 @@ impl Plan {
     pub fn effects_line(&self) -> String {
         self.effects.join(" + ")
     }
+
+    /// A numerical failure of the operators, naming the stiffness contrast when it is the
+    /// likely cause.
+    pub fn explain(&self, e: Error) -> Error {
+        let (c, iface) = &self.contrast;
+        if e.exit_code() == 3 && *c >= 1e6 {
+            Error::numerical(format!(
+                "{}; likely cause: the stiffness contrast across interface \"{iface}\" is \
+                 {c:.1e}, which costs about {:.0} of the 16 digits of the boundary systems: \
+                 model the much stiffer body as a rigid support (displacement conditions) or \
+                 keep the contrast below about 1e6",
+                e.message(),
+                c.log10()
+            ))
+        } else {
+            e
+        }
+    }
 }
 
 /// The prescribed values that depend on the pseudo-time `t`, as key paths.

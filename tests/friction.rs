@@ -591,7 +591,7 @@ fn shrink_fit_pressure_is_lame_and_friction_holds_the_torque_below_its_limit() {
 #[test]
 fn coupled_friction_lcp_reaches_the_fixed_point_state() {
     use sgbem::bem::quadrature::QuadratureSettings;
-    use sgbem::contact::{Method, Session};
+    use sgbem::contact::{Session, Solver};
     let dir = block_mesh("klarbring");
     // Dissimilar bodies (normal and tangential problems coupled) with partial slip.
     let scene = block_scene(0.8, 1.0)
@@ -601,17 +601,16 @@ fn coupled_friction_lcp_reaches_the_fixed_point_state() {
     let l =
         sgbem::pipeline::load(&path, Some(&dir.join("tb.msh"))).unwrap_or_else(|e| panic!("{e}"));
     let q = QuadratureSettings::standard();
-    let prep =
-        sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {})
-            .unwrap_or_else(|e| panic!("{e}"));
+    let prep = sgbem::bem::prepare(&l.model, l.scene.plane, &q, 1.0, &l.scene.path, &|_| {})
+        .unwrap_or_else(|e| panic!("{e}"));
     let mut fixed = Session::new(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
     fixed.coupled_after = usize::MAX;
     let start = fixed.initial();
-    let a = fixed.solve_step(&start, Method::Evolutive, 1e-10, 1000, 0, 1.0, false);
+    let a = fixed.solve_step(&start, Solver::Evolutive, 1e-10, 1000, 0, 1.0, false);
     assert!(a.converged, "{:?}", a.failure.as_ref().map(|e| e.message()));
     let mut coupled = Session::new(&l.model, &prep).unwrap_or_else(|e| panic!("{e}"));
     coupled.coupled_after = 1;
-    let b = coupled.solve_step(&start, Method::Evolutive, 1e-10, 1000, 0, 1.0, false);
+    let b = coupled.solve_step(&start, Solver::Evolutive, 1e-10, 1000, 0, 1.0, false);
     assert!(b.converged, "{:?}", b.failure.as_ref().map(|e| e.message()));
     assert!(
         b.notes.iter().any(|n| n.contains("Klarbring")),

@@ -5,8 +5,9 @@
 mod support;
 
 use sgbem::bem::kernels::Material;
+use sgbem::bem::prepare;
 use sgbem::bem::quadrature::QuadratureSettings;
-use sgbem::contact::solve::{prepare, solve_all_closed};
+use sgbem::contact::solve_all_closed;
 use sgbem::pipeline::load;
 use support::*;
 
@@ -204,8 +205,8 @@ fn solve_scene(
     quadrature: &str,
 ) -> (
     sgbem::pipeline::Loaded,
-    sgbem::contact::solve::Prepared,
-    sgbem::contact::solve::StatusSolution,
+    sgbem::bem::Operators,
+    sgbem::contact::StatusSolution,
 ) {
     let msh = mesh.save(dir, "m.msh");
     let sc = write(dir, "s.toml", scene);

@@ -728,7 +728,7 @@ fn the_estimate_counts_the_unknowns_the_assembly_numbers() {
         let (sc, msh) = stacked(&dir, &scene, n);
         let l = sgbem::pipeline::load(&sc, Some(&msh)).unwrap_or_else(|e| panic!("{e}"));
         let q = QuadratureSettings::standard();
-        let p = sgbem::contact::solve::prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {})
+        let p = sgbem::bem::prepare(&l.model, l.scene.plane, &q, 1.0, &sc, &|_| {})
             .unwrap_or_else(|e| panic!("{e}"));
         let est = sgbem::estimate::estimate(&l.model, &l.scene);
         for ((b, sys), size) in l.model.bodies.iter().zip(&p.systems).zip(&est.bodies) {

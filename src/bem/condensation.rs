@@ -17,8 +17,10 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use crate::bem::assembly::BodySystem;
+use crate::bem::assembly::{BodySystem, Unknown};
 use crate::error::{Error, Result};
+use crate::input::model::Model;
+use crate::solution::BodyField;
 
 /// A body condensed onto its interface unknowns.
 pub struct Condensed {
@@ -143,4 +145,84 @@ impl Condensed {
             .map(|(v, r)| v + factor * r)
             .collect()
     }
+}
+
+/// Nodal displacements and element-end tractions of a body from its unknowns.
+pub fn recover(
+    model: &Model,
+    b: usize,
+    sys: &BodySystem,
+    x: &[f64],
+    x0: &[f64],
+    factor: f64,
+) -> BodyField {
+    let body = &model.bodies[b];
+    let mut u: Vec<[f64; 2]> = sys
+        .known_u
+        .iter()
+        .map(|v| [factor * v[0], factor * v[1]])
+        .collect();
+    let mut t: Vec<[[f64; 2]; 2]> = sys
+        .known_t
+        .iter()
+        .map(|e| e.map(|v| [factor * v[0], factor * v[1]]))
+        .collect();
+    let value = |i: usize| if i < sys.n_x { x[i] } else { x0[i - sys.n_x] };
+    for (i, unk) in sys.unknowns.iter().enumerate() {
+        let v = value(i);
+        match *unk {
+            Unknown::Displacement { node, dir, .. } => {
+                // The unknown is −U.
+                u[node][0] -= v * dir[0];
+                u[node][1] -= v * dir[1];
+            }
+            Unknown::LoopMode { loop_index, .. } => {
+                for &ei in &body.loops[loop_index].elements {
+                    let nodes = body.elements[ei].nodes;
+                    for (te, node) in t[ei].iter_mut().zip(nodes) {
+                        let dir = unk.loop_mode_value(body.nodes[node]);
+                        te[0] += v * dir[0];
+                        te[1] += v * dir[1];
+                    }
+                }
+            }
+            Unknown::Traction1 { elem, end, dir } => {
+                t[elem][end][0] += v * dir[0];
+                t[elem][end][1] += v * dir[1];
+            }
+            Unknown::Traction0 {
+                iface, pair, dir, ..
+            } => {
+                let it = &model.interfaces[iface];
+                let node = if it.body_a == b {
+                    it.pairs[pair].node_a
+                } else {
+                    it.pairs[pair].node_b
+                };
+                for (e, el) in body.elements.iter().enumerate() {
+                    if el.role != crate::input::model::Role::Interface(iface) {
+                        continue;
+                    }
+                    for (end, te) in t[e].iter_mut().enumerate() {
+                        if el.nodes[end] == node {
+                            te[0] += v * dir[0];
+                            te[1] += v * dir[1];
+                        }
+                    }
+                }
+            }
+        }
+    }
+    // Reactions of the held components: their hypersingular rows applied to the unknowns.
+    let mut reaction = vec![[0.0; 2]; body.nodes.len()];
+    if !sys.held.is_empty() {
+        let all: Vec<f64> = (0..sys.n()).map(value).collect();
+        let r = crate::linalg::matvec(&sys.held_rows, &all);
+        for ((&(node, dir), rq), lq) in sys.held.iter().zip(&r).zip(&sys.held_load) {
+            let f = rq + factor * lq;
+            reaction[node][0] += f * dir[0];
+            reaction[node][1] += f * dir[1];
+        }
+    }
+    BodyField { u, t, reaction }
 }

@@ -5,4 +5,7 @@ pub mod assembly;
 pub mod condensation;
 pub mod galerkin;
 pub mod kernels;
+pub mod operators;
 pub mod quadrature;
+
+pub use operators::{prepare, Operators};

@@ -12,17 +12,7 @@
 
 use std::collections::HashSet;
 
-use crate::contact::lcp::{status_key, Columns, Inner, InnerState};
-
-/// Outcome of an inner solve.
-pub struct Outcome {
-    pub state: InnerState,
-    pub iterations: usize,
-    pub converged: bool,
-    pub notes: Vec<String>,
-    /// Violated rows that could not open without leaving a body free (a mechanism).
-    pub blocked: Vec<usize>,
-}
+use crate::contact::lcp::{status_key, Columns, Inner, InnerOutcome, InnerState};
 
 /// Solves the inner problem from the statuses `open` (with the slip directions `sign` of
 /// slipping friction rows); `record` is called with every state (the start included).
@@ -33,7 +23,7 @@ pub fn solve(
     sign: &[f64],
     max_iterations: usize,
     record: &mut dyn FnMut(&InnerState),
-) -> Outcome {
+) -> InnerOutcome {
     let mut notes = Vec::new();
     let open = inner.start_open(open, sign);
     let mut sign = sign.to_vec();
@@ -43,7 +33,8 @@ pub fn solve(
     let loose: Vec<usize> = refused.iter().copied().filter(|&r| inner.free[r]).collect();
     if !loose.is_empty() {
         let st = inner.state(cols, &o, &sign);
-        return Outcome {
+        return InnerOutcome {
+            stalled: false,
             state: st,
             iterations: 0,
             converged: false,
@@ -72,7 +63,8 @@ pub fn solve(
         let v = inner.violations(&st);
         if v.is_empty() {
             cols.keep(&o);
-            return Outcome {
+            return InnerOutcome {
+                stalled: false,
                 state: st,
                 iterations,
                 converged: true,
@@ -126,7 +118,8 @@ pub fn solve(
             cols.keep(&o);
             let mut rows: Vec<usize> = blocked.iter().copied().collect();
             rows.sort_unstable();
-            return Outcome {
+            return InnerOutcome {
+                stalled: false,
                 state: st,
                 iterations,
                 converged: false,
@@ -144,7 +137,8 @@ pub fn solve(
                     "the least-index rule returned to an earlier status after {iterations} \
                      iterations (the opening stiffness is not positive definite)"
                 ));
-                return Outcome {
+                return InnerOutcome {
+                    stalled: false,
                     state: st,
                     iterations,
                     converged: false,
@@ -166,7 +160,8 @@ pub fn solve(
         "the contact iteration did not converge in {max_iterations} iterations \
          (solve.max_iterations)"
     ));
-    Outcome {
+    InnerOutcome {
+        stalled: false,
         state: st,
         iterations,
         converged: false,

@@ -19,8 +19,8 @@
 use faer::linalg::solvers::Solve;
 use faer::Mat;
 
-use crate::bem::assembly::{BodySystem, Unknown};
 use crate::bem::condensation::Condensed;
+use crate::bem::operators::X0Map;
 use crate::error::{Error, Result};
 use crate::input::model::Model;
 use crate::solution::PairStatus;
@@ -46,37 +46,6 @@ pub struct Layout {
     /// Per body: (index in X0, constant) — the initial gap of a closed normal component:
     /// in contact, `u_B·n = u_A·n − h`, so B's `−U_n` is `Y + h`.
     pub offset: Vec<Vec<(usize, f64)>>,
-}
-
-/// Lookup table `(iface, pair, comp, traction) → X0 index` for one body.
-pub struct X0Map {
-    map: std::collections::HashMap<(usize, usize, usize, bool), usize>,
-}
-
-impl X0Map {
-    pub fn new(sys: &BodySystem) -> Self {
-        let mut map = std::collections::HashMap::new();
-        for (i, u) in sys.unknowns[sys.n_x..].iter().enumerate() {
-            match *u {
-                Unknown::Traction0 {
-                    iface, pair, comp, ..
-                } => {
-                    map.insert((iface, pair, comp, true), i);
-                }
-                Unknown::Displacement {
-                    on: Some((k, j, c)),
-                    ..
-                } => {
-                    map.insert((k, j, c, false), i);
-                }
-                _ => {}
-            }
-        }
-        X0Map { map }
-    }
-    pub fn get(&self, iface: usize, pair: usize, comp: usize, traction: bool) -> Option<usize> {
-        self.map.get(&(iface, pair, comp, traction)).copied()
-    }
 }
 
 /// Builds Y and the selections for the statuses `status[k][j][c]`.

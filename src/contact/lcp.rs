@@ -27,6 +27,85 @@ use std::collections::HashMap;
 
 use crate::contact::problem::{Base, Opening, Problem, RowKind};
 
+/// What a pivoting solver (`evolutive`, `active_set`) returns, and what the statuses of a
+/// solver that does not pivot (`lemke`, `qp`) become once their state is computed exactly.
+pub struct InnerOutcome {
+    pub state: InnerState,
+    pub iterations: usize,
+    pub converged: bool,
+    pub notes: Vec<String>,
+    /// Violated rows that could not open without leaving a body free (a mechanism).
+    pub blocked: Vec<usize>,
+    /// The solver stopped without a verdict (the active set cycled or ran out of
+    /// iterations): the driver goes on from `state` with the evolutive iteration.
+    pub stalled: bool,
+}
+
+/// The statuses a solver that does not pivot found: open rows and slip directions.
+pub struct Statuses {
+    pub open: Vec<bool>,
+    pub sign: Vec<f64>,
+}
+
+/// Why a solver that does not pivot found no statuses.
+#[derive(Debug, Clone, PartialEq)]
+pub enum InnerFailure {
+    /// The free tangential openings leave a body free (no dense form exists).
+    LeavesBodyFree,
+    /// Lemke's method ended on a secondary ray: no equilibrium exists.
+    SecondaryRay { pivots: usize },
+    /// Lemke's method reached its pivot limit.
+    PivotLimit { pivots: usize },
+    /// The QP is unbounded (dual infeasible): no equilibrium exists.
+    Unbounded,
+    /// The QP could not be set up or ended with another status.
+    Qp { message: String },
+    /// The state of the statuses found could not be computed.
+    State { message: String },
+}
+
+impl InnerFailure {
+    /// Whether the failure proves that no equilibrium exists.
+    pub fn is_mechanism(&self) -> bool {
+        matches!(
+            self,
+            InnerFailure::LeavesBodyFree
+                | InnerFailure::SecondaryRay { .. }
+                | InnerFailure::Unbounded
+        )
+    }
+}
+
+impl std::fmt::Display for InnerFailure {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            InnerFailure::LeavesBodyFree => write!(
+                f,
+                "the free tangential openings leave a body free: no equilibrium exists"
+            ),
+            InnerFailure::SecondaryRay { pivots } => write!(
+                f,
+                "Lemke's method ended on a secondary ray after {pivots} pivots: no equilibrium \
+                 exists (a mechanism)"
+            ),
+            InnerFailure::PivotLimit { pivots } => {
+                write!(
+                    f,
+                    "Lemke's method reached its pivot limit ({pivots} pivots)"
+                )
+            }
+            InnerFailure::Unbounded => write!(
+                f,
+                "the QP is unbounded: no equilibrium exists (a body can move freely under its \
+                 loads)"
+            ),
+            InnerFailure::Qp { message } | InnerFailure::State { message } => {
+                write!(f, "{message}")
+            }
+        }
+    }
+}
+
 /// Columns of the opening stiffness, computed once per row and kept for the whole run.
 #[derive(Default)]
 pub struct Columns {

@@ -8,6 +8,8 @@
 //! which certifies that no solution exists for a merely copositive M — is reported as an
 //! error, never hidden.
 
+use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
+
 /// Outcome of Lemke's method.
 #[derive(Debug, Clone)]
 pub struct LemkeSolution {
@@ -168,29 +170,19 @@ fn jacobi_scale(m: &mut [f64], q: &mut [f64]) -> Vec<f64> {
 /// the opening stiffness, free rows eliminated, friction rows split into their two slip
 /// directions). Returns the open statuses of the rows, the slip directions and the number
 /// of pivots; a secondary ray means no equilibrium exists (a mechanism).
-pub fn solve_inner(
-    inner: &crate::contact::lcp::Inner,
-    cols: &mut crate::contact::lcp::Columns,
-) -> Result<(Vec<bool>, Vec<f64>, usize), String> {
-    let dense = inner
-        .dense(cols)
-        .ok_or_else(|| "the free tangential openings leave a body free".to_string())?;
+pub fn solve(inner: &Inner, cols: &mut Columns) -> Result<(Statuses, usize), InnerFailure> {
+    let dense = inner.dense(cols).ok_or(InnerFailure::LeavesBodyFree)?;
     let n = dense.q.len();
     let (mut m, mut q) = (dense.m.clone(), dense.q.clone());
     jacobi_scale(&mut m, &mut q);
     let sol = lemke(&m, &q, 20 * n + 100).map_err(|f| match f {
-        LemkeFailure::SecondaryRay { pivots } => format!(
-            "Lemke's method ended on a secondary ray after {pivots} pivots: no equilibrium \
-             exists (a mechanism)"
-        ),
-        LemkeFailure::PivotLimit { pivots } => {
-            format!("Lemke's method reached its pivot limit ({pivots} pivots)")
-        }
+        LemkeFailure::SecondaryRay { pivots } => InnerFailure::SecondaryRay { pivots },
+        LemkeFailure::PivotLimit { pivots } => InnerFailure::PivotLimit { pivots },
     })?;
     // z is the (scaled) opening or slip, w its force: active where z is the positive one.
     let active: Vec<bool> = (0..n).map(|i| sol.z[i] > sol.w[i]).collect();
     let (open, sign) = inner.statuses(&dense, &active);
-    Ok((open, sign, sol.pivots))
+    Ok((Statuses { open, sign }, sol.pivots))
 }
 
 /// Solves Coulomb friction exactly, without the Tresca fixed point: Klarbring's 2D
@@ -209,8 +201,8 @@ pub fn solve_inner(
 /// solution.
 #[allow(clippy::type_complexity)]
 pub fn solve_coupled(
-    inner: &crate::contact::lcp::Inner,
-    cols: &mut crate::contact::lcp::Columns,
+    inner: &Inner,
+    cols: &mut Columns,
     mu: &[f64],
     normal_of: &[Option<usize>],
 ) -> Result<(Vec<bool>, Vec<f64>, Vec<f64>), String> {

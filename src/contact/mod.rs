@@ -1,7 +1,7 @@
 //! Contact and detachment on unilateral interfaces: the driver of load steps and of the outer
 //! loop, over one discrete problem (`problem`) that every solver solves.
 //!
-//! Place in the flow: `bem` (per-body operators, prepared once by `solve::prepare`) →
+//! Place in the flow: `bem` (per-body operators, prepared once by `bem::prepare`) →
 //! **`contact`** → results. Conditions per unilateral pair j, with the nodal contact force
 //! λ_j (compression positive, cohesion included) and the nodal gap g_j = h_j + n·(u_B − u_A)
 //! (see `problem` for the pairing):
@@ -29,40 +29,52 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod active_set;
+mod collapse;
+pub mod driver;
 pub mod evolutive;
 pub mod interface;
 pub mod lcp;
 pub mod lemke;
 pub mod problem;
 pub mod qp;
-pub mod solve;
 
 use std::collections::HashSet;
 
+use crate::bem::Operators;
 use crate::error::Error;
 use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
-use lcp::{Columns, Inner, InnerState};
+use lcp::{Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
+pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
-use solve::Prepared;
 
-/// Which solver.
+/// Which solver solves the inner problem.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Method {
+pub enum Solver {
     Evolutive,
     ActiveSet,
     Lemke,
     Qp,
 }
 
-impl Method {
+impl Solver {
     pub fn name(self) -> &'static str {
         match self {
-            Method::Evolutive => "lcp",
-            Method::ActiveSet => "active-set",
-            Method::Lemke => "lemke",
-            Method::Qp => "qp",
+            Solver::Evolutive => "lcp",
+            Solver::ActiveSet => "active-set",
+            Solver::Lemke => "lemke",
+            Solver::Qp => "qp",
+        }
+    }
+
+    /// Its entry in the run's timings.
+    pub fn timing_key(self) -> &'static str {
+        match self {
+            Solver::Evolutive => "contact_lcp",
+            Solver::ActiveSet => "contact_active_set",
+            Solver::Lemke => "contact_lemke",
+            Solver::Qp => "contact_qp",
         }
     }
 }
@@ -133,11 +145,26 @@ pub struct ContactResult {
     pub load_factor: f64,
 }
 
+/// What the outer loop of one load step carries besides the state: the recorded states of
+/// the evolutive path and the solvers' figures.
+struct StepLoop {
+    /// (iteration, open rows, openings) of each recorded state.
+    compact: Vec<(usize, Vec<bool>, Vec<f64>)>,
+    record: bool,
+    /// Iterations made before the current inner solve (the index of its first state).
+    iterations_recorded: usize,
+    /// Pivots that finished the friction rows of Lemke's and the QP's statuses.
+    finishing: usize,
+    /// Inner solves whose pivoting path the QP completed.
+    rescues: usize,
+    info: serde_json::Value,
+}
+
 /// A contact run: the problem and the columns of its opening stiffness, shared by every
 /// solver and load step.
 pub struct Session<'a> {
     pub model: &'a Model,
-    pub prepared: &'a Prepared,
+    pub prepared: &'a Operators,
     pub problem: Problem,
     pub cols: Columns,
     /// Outer iterations of the Tresca fixed point after which Coulomb's problem is solved
@@ -146,7 +173,7 @@ pub struct Session<'a> {
 }
 
 impl<'a> Session<'a> {
-    pub fn new(model: &'a Model, prepared: &'a Prepared) -> crate::error::Result<Self> {
+    pub fn new(model: &'a Model, prepared: &'a Operators) -> crate::error::Result<Self> {
         Ok(Session {
             model,
             prepared,
@@ -253,7 +280,7 @@ impl<'a> Session<'a> {
     pub fn solve_step(
         &mut self,
         start: &StepState,
-        method: Method,
+        method: Solver,
         tol: f64,
         max_iterations: usize,
         load_step: usize,
@@ -263,7 +290,6 @@ impl<'a> Session<'a> {
         let n = self.problem.n_open_rows;
         let mut st = start.clone();
         let mut notes = Vec::new();
-        let mut compact: Vec<(usize, Vec<bool>, Vec<f64>)> = Vec::new();
         let mut edge_slip = vec![false; n];
         let mut slipping = 0;
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
@@ -272,7 +298,6 @@ impl<'a> Session<'a> {
         let mut converged = false;
         let mut failure = None;
         let mut mechanism = false;
-        let mut info = serde_json::json!({});
         let mut last: Option<(InnerState, f64)> = None;
         // The outer iterates' open rows, to find the rows of a stick edge cycle.
         let mut iterates: Vec<Vec<bool>> = Vec::new();
@@ -283,8 +308,14 @@ impl<'a> Session<'a> {
         // (first step) from those with every pair closed.
         let mut bound = start.bound.clone();
         let mut bound_changes: Vec<f64> = Vec::new();
-        let mut finishing = 0;
-        let mut rescues = 0;
+        let mut lp = StepLoop {
+            compact: Vec::new(),
+            record,
+            finishing: 0,
+            rescues: 0,
+            iterations_recorded: 0,
+            info: serde_json::json!({}),
+        };
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
@@ -316,66 +347,18 @@ impl<'a> Session<'a> {
                 bound: bound.clone(),
                 tol,
             };
-            let start_open = st.open.clone();
-            let start_sign = st.sign.clone();
             let it0 = iterations;
-            let outcome: Result<evolutive::Outcome, String> = match method {
-                Method::Evolutive => {
-                    let mut k = it0;
-                    let first = compact.is_empty();
-                    let out = evolutive::solve(
-                        &inner,
-                        &mut self.cols,
-                        &start_open,
-                        &start_sign,
-                        max_iterations.saturating_sub(it0),
-                        &mut |s: &InnerState| {
-                            // Later outer iterations start where the last one ended.
-                            if record && (first || k > it0) {
-                                compact.push((k, s.open.clone(), s.s.clone()));
-                            }
-                            k += 1;
-                        },
-                    );
-                    Ok(out)
-                }
-                Method::ActiveSet => Ok(active_set::solve(
-                    &inner,
-                    &mut self.cols,
-                    &start_open,
-                    &start_sign,
-                    max_iterations.saturating_sub(it0),
-                )),
-                Method::Lemke => {
-                    lemke::solve_inner(&inner, &mut self.cols).and_then(|(open, sign, pivots)| {
-                        let (out, finish) = exact_state(&inner, &mut self.cols, &open, &sign)?;
-                        finishing += finish;
-                        info = serde_json::json!({
-                            "pivots": pivots, "friction_finishing_pivots": finishing,
-                        });
-                        Ok(out)
-                    })
-                }
-                Method::Qp => qp::solve(&inner, &mut self.cols, tol).and_then(|q| {
-                    let (out, finish) = exact_state(&inner, &mut self.cols, &q.open, &q.sign)?;
-                    finishing += finish;
-                    info = serde_json::json!({
-                        "iterations": q.iterations, "solver_status": q.solver_status,
-                        "objective": q.objective, "variables": q.variables,
-                        "constraints": q.constraints, "friction_finishing_pivots": finishing,
-                    });
-                    Ok(out)
-                }),
-            };
-            let outcome = match outcome {
+            lp.iterations_recorded = it0;
+            let budget = max_iterations.saturating_sub(it0);
+            let outcome = match inner_solve(&inner, &mut self.cols, method, &st, budget, &mut lp) {
                 Ok(o) => o,
                 Err(e) => {
                     // Name the mechanism: the pivoting path finds the rows that cannot open.
                     let probe = evolutive::solve(
                         &inner,
                         &mut self.cols,
-                        &start_open,
-                        &start_sign,
+                        &st.open,
+                        &st.sign,
                         max_iterations,
                         &mut |_| {},
                     );
@@ -393,38 +376,12 @@ impl<'a> Session<'a> {
                     break;
                 }
             };
-            // The pivoting path stops where the row to switch cannot open without leaving a
-            // body free; for a positive semidefinite opening stiffness that does not prove
-            // that no solution exists (another order of pivots may reach one). The convex QP
-            // of the same inner problem decides it: a bounded minimiser, checked exactly from
-            // its statuses, is the solution, and the iteration goes on from it; an unbounded
-            // QP confirms the mechanism.
             let outcome = if !outcome.converged
                 && !outcome.blocked.is_empty()
-                && matches!(method, Method::Evolutive | Method::ActiveSet)
+                && matches!(method, Solver::Evolutive | Solver::ActiveSet)
                 && n <= RESCUE_ROWS
             {
-                match qp::solve(&inner, &mut self.cols, tol)
-                    .and_then(|q| exact_state(&inner, &mut self.cols, &q.open, &q.sign))
-                {
-                    Ok((rescued, _)) if rescued.converged => {
-                        let k = it0 + outcome.iterations + 1;
-                        if method == Method::Evolutive && record {
-                            compact.push((k, rescued.state.open.clone(), rescued.state.s.clone()));
-                        }
-                        rescues += 1;
-                        let mut notes = outcome.notes;
-                        notes.extend(rescued.notes);
-                        evolutive::Outcome {
-                            state: rescued.state,
-                            iterations: outcome.iterations + 1,
-                            converged: true,
-                            notes,
-                            blocked: Vec::new(),
-                        }
-                    }
-                    _ => outcome,
-                }
+                qp_rescue(&inner, &mut self.cols, method, outcome, it0, &mut lp)
             } else {
                 outcome
             };
@@ -604,20 +561,22 @@ impl<'a> Session<'a> {
         // switch: then its state is not among the recorded ones, and the history must end
         // with the state the step gives.
         if record {
-            if let Some((k, open, s)) = compact.last() {
+            if let Some((k, open, s)) = lp.compact.last() {
                 if *open != final_state.open || *s != final_state.s {
                     let k = k + 1;
-                    compact.push((k, final_state.open.clone(), final_state.s.clone()));
+                    lp.compact
+                        .push((k, final_state.open.clone(), final_state.s.clone()));
                 }
             }
         }
-        if rescues > 0 {
+        if lp.rescues > 0 {
             notes.push(format!(
-                "the pivoting path stopped {rescues} time(s) at a row that could not open \
+                "the pivoting path stopped {} time(s) at a row that could not open \
                  without leaving a body free, although the problem had a solution: the QP of \
-                 the same problem found it (checked exactly) and the iteration went on from it"
+                 the same problem found it (checked exactly) and the iteration went on from it",
+                lp.rescues
             ));
-            info["qp_rescues"] = serde_json::json!(rescues);
+            lp.info["qp_rescues"] = serde_json::json!(lp.rescues);
         }
         if slipping > 0 {
             notes.push(format!(
@@ -635,11 +594,11 @@ impl<'a> Session<'a> {
         );
         let path = self.mark_slip(&mut interfaces, &final_state.s, &final_state.open, start);
         if friction {
-            info["friction_outer_changes"] = serde_json::json!(bound_changes);
+            lp.info["friction_outer_changes"] = serde_json::json!(bound_changes);
         }
         let mut rows = Vec::new();
         let mut states = Vec::new();
-        if !record || compact.is_empty() {
+        if !record || lp.compact.is_empty() {
             rows.push(history_row(
                 self.model,
                 &interfaces,
@@ -690,8 +649,8 @@ impl<'a> Session<'a> {
             notes,
             failure,
             mechanism,
-            info,
-            recorded: compact,
+            info: lp.info,
+            recorded: lp.compact,
             start: start.clone(),
             load_step,
             load_factor: factor,
@@ -868,6 +827,138 @@ const RESCUE_ROWS: usize = 3000;
 /// (Klarbring's LCP) is solved to restart it.
 const FRICTION_COUPLED_AFTER: usize = 10;
 
+/// One inner solve by `method` from the statuses of `st`, within `budget` iterations;
+/// the evolutive path records its states in `lp`.
+fn inner_solve(
+    inner: &Inner,
+    cols: &mut Columns,
+    method: Solver,
+    st: &StepState,
+    budget: usize,
+    lp: &mut StepLoop,
+) -> Result<InnerOutcome, InnerFailure> {
+    match method {
+        Solver::Evolutive => {
+            let it0 = lp.iterations_recorded;
+            let mut k = it0;
+            let first = lp.compact.is_empty();
+            let record = lp.record;
+            let compact = &mut lp.compact;
+            let out = evolutive::solve(
+                inner,
+                cols,
+                &st.open,
+                &st.sign,
+                budget,
+                &mut |s: &InnerState| {
+                    // Later outer iterations start where the last one ended.
+                    if record && (first || k > it0) {
+                        compact.push((k, s.open.clone(), s.s.clone()));
+                    }
+                    k += 1;
+                },
+            );
+            Ok(out)
+        }
+        Solver::ActiveSet => {
+            let out = active_set::solve(inner, cols, &st.open, &st.sign, budget);
+            Ok(if out.stalled {
+                hand_over(inner, cols, out, budget)
+            } else {
+                out
+            })
+        }
+        Solver::Lemke => {
+            let (statuses, pivots) = lemke::solve(inner, cols)?;
+            let (out, finish) = exact_state(inner, cols, &statuses);
+            lp.finishing += finish;
+            lp.info = serde_json::json!({
+                "pivots": pivots, "friction_finishing_pivots": lp.finishing,
+            });
+            Ok(out)
+        }
+        Solver::Qp => {
+            let q = qp::solve(inner, cols, inner.tol)?;
+            let (out, finish) = exact_state(inner, cols, &q.statuses);
+            lp.finishing += finish;
+            lp.info = serde_json::json!({
+                "iterations": q.iterations, "solver_status": q.solver_status,
+                "objective": q.objective, "variables": q.variables,
+                "constraints": q.constraints, "friction_finishing_pivots": lp.finishing,
+            });
+            Ok(out)
+        }
+    }
+}
+
+/// The active set stalled (a cycle or its iteration limit): the evolutive iteration goes
+/// on from where it stopped (the least-index rule after its own cycle terminates).
+fn hand_over(
+    inner: &Inner,
+    cols: &mut Columns,
+    stalled: InnerOutcome,
+    budget: usize,
+) -> InnerOutcome {
+    let mut notes = stalled.notes;
+    notes.push(format!(
+        "the active-set iteration cycled after {} iterations; continued with the \
+         evolutive iteration",
+        stalled.iterations
+    ));
+    let st = &stalled.state;
+    let mut out = evolutive::solve(
+        inner,
+        cols,
+        &st.open,
+        &st.sign,
+        budget.saturating_sub(stalled.iterations),
+        &mut |_| {},
+    );
+    out.iterations += stalled.iterations;
+    notes.append(&mut out.notes);
+    out.notes = notes;
+    out
+}
+
+/// The pivoting path stops where the row to switch cannot open without leaving a body
+/// free; for a positive semidefinite opening stiffness that does not prove that no
+/// solution exists (another order of pivots may reach one). The convex QP of the same
+/// inner problem decides it: a bounded minimiser, checked exactly from its statuses, is
+/// the solution, and the iteration goes on from it; an unbounded QP confirms the
+/// mechanism (`outcome` is returned as it is).
+fn qp_rescue(
+    inner: &Inner,
+    cols: &mut Columns,
+    method: Solver,
+    outcome: InnerOutcome,
+    it0: usize,
+    lp: &mut StepLoop,
+) -> InnerOutcome {
+    let rescued =
+        qp::solve(inner, cols, inner.tol).map(|q| exact_state(inner, cols, &q.statuses).0);
+    match rescued {
+        Ok(rescued) if rescued.converged => {
+            let k = it0 + outcome.iterations + 1;
+            if method == Solver::Evolutive && lp.record {
+                lp.compact
+                    .push((k, rescued.state.open.clone(), rescued.state.s.clone()));
+            }
+            lp.rescues += 1;
+            let mut notes = outcome.notes;
+            notes.extend(rescued.notes);
+            InnerOutcome {
+                state: rescued.state,
+                iterations: outcome.iterations + 1,
+                converged: true,
+                notes,
+                blocked: Vec::new(),
+                stalled: false,
+            }
+        }
+        _ => outcome,
+    }
+}
+
 /// Every row closed, nothing open: the state reported when no inner solve finished.
 fn all_closed_state(n: usize) -> InnerState {
     InnerState {
@@ -885,14 +976,9 @@ fn all_closed_state(n: usize) -> InnerState {
 /// slipping block of A is nearly singular and amplifies the last digits): such friction rows
 /// only are finished by the pivoting iteration from the solver's statuses, and the number of
 /// pivots is returned (0 when the statuses were exact).
-fn exact_state(
-    inner: &Inner,
-    cols: &mut Columns,
-    open: &[bool],
-    sign: &[f64],
-) -> Result<(evolutive::Outcome, usize), String> {
-    let (o, refused) = inner.factor(cols, open);
-    let state = inner.state(cols, &o, sign);
+fn exact_state(inner: &Inner, cols: &mut Columns, statuses: &Statuses) -> (InnerOutcome, usize) {
+    let (o, refused) = inner.factor(cols, &statuses.open);
+    let state = inner.state(cols, &o, &statuses.sign);
     let violations = inner.violations(&state);
     if refused.is_empty()
         && !violations.is_empty()
@@ -900,7 +986,7 @@ fn exact_state(
     {
         let out = evolutive::solve(inner, cols, &state.open, &state.sign, 100, &mut |_| {});
         let pivots = out.iterations;
-        return Ok((out, pivots));
+        return (out, pivots);
     }
     let converged = refused.is_empty() && violations.is_empty();
     let mut notes = Vec::new();
@@ -910,16 +996,17 @@ fn exact_state(
             refused.len()
         ));
     }
-    Ok((
-        evolutive::Outcome {
+    (
+        InnerOutcome {
             state,
             iterations: 0,
             converged,
             notes,
             blocked: refused,
+            stalled: false,
         },
         0,
-    ))
+    )
 }
 
 /// A history row of a state.

@@ -66,20 +66,13 @@ use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 
 use crate::bem::assembly::{BodySystem, Unknown};
-use crate::contact::solve::{body_field, Prepared};
+use crate::bem::condensation::recover;
+use crate::bem::operators::Operators;
 use crate::error::{Error, Result};
 use crate::input::model::Model;
 use crate::input::scene::{InterfaceModel, Tangential};
+use crate::linalg::matvec;
 use crate::solution::{BodyField, InterfaceResult, PairResult, PairStatus};
-
-/// `m x` by faer's product (vectorised, parallel on large blocks).
-pub fn matvec(m: &Mat<f64>, x: &[f64]) -> Vec<f64> {
-    if m.nrows() == 0 {
-        return Vec::new();
-    }
-    let y = m * faer::ColRef::from_slice(x);
-    y.iter().copied().collect()
-}
 
 /// One body's Steklov–Poincaré operator.
 pub struct BodyOp {
@@ -302,7 +295,7 @@ impl Problem {
     /// stiffness A stays symmetric positive (semi)definite: the LCP of the module doc
     /// holds unchanged. The nodal force of the junction node is carried by the kept rows;
     /// implied components report zero force (each body's balance stays exact).
-    pub fn new(model: &Model, prepared: &Prepared) -> Result<Problem> {
+    pub fn new(model: &Model, prepared: &Operators) -> Result<Problem> {
         let mut ops = Vec::with_capacity(model.bodies.len());
         let mut dof_start = Vec::with_capacity(model.bodies.len());
         let mut n_dofs = 0;
@@ -842,7 +835,7 @@ impl Problem {
     pub fn state(
         &self,
         model: &Model,
-        prepared: &Prepared,
+        prepared: &Operators,
         factor: f64,
         s: &[f64],
         open: &[bool],
@@ -862,7 +855,7 @@ impl Problem {
                 x0[i] = -factor * op.gz[m] + gu[m];
             }
             let x = prepared.condensed[b].recover_x_scaled(&x0, factor);
-            fields.push(body_field(model, b, sys, &x, &x0, factor));
+            fields.push(recover(model, b, sys, &x, &x0, factor));
             tractions.push(x0);
         }
         let p = self.forces(&u, factor);
@@ -1183,6 +1176,21 @@ impl Opening {
         }
         y
     }
+}
+
+/// The solution with every interface pair closed.
+pub struct StatusSolution {
+    pub fields: Vec<BodyField>,
+    pub interfaces: Vec<InterfaceResult>,
+}
+
+/// Solves the model with every interface pair closed (bonded interfaces, and unilateral ones
+/// held closed) through the contact problem's glued system, for the loads of `bem::prepare`.
+pub fn solve_all_closed(model: &Model, ops: &Operators) -> Result<StatusSolution> {
+    let problem = Problem::new(model, ops)?;
+    let n = problem.n_open_rows;
+    let (fields, interfaces, _) = problem.state(model, ops, 1.0, &vec![0.0; n], &vec![false; n]);
+    Ok(StatusSolution { fields, interfaces })
 }
 
 #[cfg(test)]

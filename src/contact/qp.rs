@@ -21,13 +21,12 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
 };
 
-use crate::contact::lcp::{Columns, Inner};
+use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
 
 /// What the QP found.
 pub struct QpOutcome {
     /// Open statuses of the rows and slip directions of friction rows.
-    pub open: Vec<bool>,
-    pub sign: Vec<f64>,
+    pub statuses: Statuses,
     pub iterations: u32,
     pub solver_status: String,
     pub objective: f64,
@@ -36,10 +35,8 @@ pub struct QpOutcome {
 }
 
 /// Solves the inner problem as a QP.
-pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutcome, String> {
-    let dense = inner.dense(cols).ok_or_else(|| {
-        "the free tangential openings leave a body free: no equilibrium exists".to_string()
-    })?;
+pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutcome, InnerFailure> {
+    let dense = inner.dense(cols).ok_or(InnerFailure::LeavesBodyFree)?;
     let nv = dense.q.len();
     let a = &dense.m;
     let d: Vec<f64> = (0..nv)
@@ -86,20 +83,24 @@ pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutc
         .tol_feas(tol)
         .max_iter(500)
         .build()
-        .map_err(|e| format!("QP settings rejected: {e:?}"))?;
+        .map_err(|e| InnerFailure::Qp {
+            message: format!("QP settings rejected: {e:?}"),
+        })?;
     let cones = [NonnegativeConeT(nv)];
-    let mut solver = DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings)
-        .map_err(|e| format!("the QP could not be set up: {e:?}"))?;
+    let mut solver =
+        DefaultSolver::new(&pm, &qv, &am, &b, &cones, settings).map_err(|e| InnerFailure::Qp {
+            message: format!("the QP could not be set up: {e:?}"),
+        })?;
     solver.solve();
     let st = solver.solution.status;
     if !matches!(st, SolverStatus::Solved | SolverStatus::AlmostSolved) {
         return Err(match st {
             SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => {
-                "the QP is unbounded: no equilibrium exists (a body can move freely under \
-                 its loads)"
-                    .to_string()
+                InnerFailure::Unbounded
             }
-            _ => format!("the contact QP did not solve: Clarabel status {st:?}"),
+            _ => InnerFailure::Qp {
+                message: format!("the contact QP did not solve: Clarabel status {st:?}"),
+            },
         });
     }
     let (x, z) = (&solver.solution.x, &solver.solution.z);
@@ -109,8 +110,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutc
     let active: Vec<bool> = (0..nv).map(|i| x[i] > z[i]).collect();
     let (open, sign) = inner.statuses(&dense, &active);
     Ok(QpOutcome {
-        open,
-        sign,
+        statuses: Statuses { open, sign },
         iterations: solver.info.iterations,
         solver_status: format!("{st:?}"),
         objective: solver.solution.obj_val * qscale * qscale,

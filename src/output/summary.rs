@@ -2,6 +2,7 @@
 
 use serde_json::{json, Map, Value};
 
+use crate::contact::driver::QpCheck;
 use crate::input::model::Interface;
 use crate::solution::{InterfaceResult, PairStatus};
 
@@ -77,6 +78,20 @@ pub fn interfaces(its: &[Interface], results: &[InterfaceResult], thickness: f64
         m.insert(it.spec.name.clone(), interface_figures(it, r, thickness));
     }
     Value::Object(m)
+}
+
+/// The summary's `qp` block: the QP's figures at the last load step.
+pub fn qp(its: &[Interface], q: &QpCheck, thickness: f64) -> Value {
+    let mut block = json!({
+        "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
+        "interfaces": interfaces(its, &q.interfaces, thickness),
+        "converged": q.converged,
+        "info": q.info,
+    });
+    if let Some(d) = q.differing_pairs {
+        block["differing_pairs_from_lcp"] = json!(d);
+    }
+    block
 }
 
 /// Per Physical Curve that joins several pairs of bodies (split into interfaces

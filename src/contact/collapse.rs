@@ -1,0 +1,126 @@
+//! The collapse search: the largest load multiplier t with an equilibrium
+//! (docs/formulation.md §9).
+//!
+//! Place in the flow: called by the `driver` before the run itself, which is then made at
+//! the multiplier found. Each trial is a single step from the unloaded state at t; a trial
+//! stands when the contact problem has a solution and fails when the solver reports a
+//! mechanism (no equilibrium exists). The multiplier is bracketed by bisection between 0
+//! (which must stand) and `max`, down to `tolerance`.
+
+use std::time::Instant;
+
+use super::driver::{step_at, StepAcc, StepContext, Stepper};
+use crate::bem::Operators;
+use crate::contact::Session;
+use crate::error::{Error, Result};
+use crate::input::model::fmt_num;
+use crate::input::scene::Collapse;
+use crate::timings::Timings;
+
+/// What the search found: the multiplier and the summary's `contact.collapse` block.
+pub(super) struct Found {
+    pub(super) multiplier: f64,
+    pub(super) info: serde_json::Value,
+}
+
+/// The trials of one search.
+struct Search<'a, 'b> {
+    stepper: &'a Stepper<'b>,
+    ctx: &'a StepContext<'b>,
+    trials: Vec<serde_json::Value>,
+}
+
+impl Search<'_, '_> {
+    /// One trial at `t`: `Some(mechanism)` when no equilibrium exists, an error when the
+    /// solver fails otherwise.
+    fn trial(
+        &mut self,
+        t: f64,
+        session: &mut Session,
+        timings: &mut Timings,
+        reassembled: &mut Option<Operators>,
+    ) -> Result<Option<Error>> {
+        let mut st = session.initial();
+        let mut a = StepAcc::default();
+        let t0 = Instant::now();
+        step_at(
+            self.stepper,
+            session,
+            self.ctx,
+            0,
+            (1.0, t),
+            &mut st,
+            &mut a,
+            timings,
+            reassembled,
+        )?;
+        timings.add("collapse_search", t0.elapsed().as_secs_f64());
+        let outcome = match a.failure {
+            None => None,
+            Some(e) if a.mechanism => Some(e),
+            Some(e) => {
+                return Err(Error::numerical(format!(
+                    "the collapse search failed at t = {}: {}",
+                    fmt_num(t),
+                    e.message()
+                )))
+            }
+        };
+        self.trials.push(serde_json::json!({
+            "t": t, "stands": outcome.is_none(),
+        }));
+        Ok(outcome)
+    }
+}
+
+/// Bisects the load multiplier of `c` on `session`.
+pub(super) fn search(
+    c: &Collapse,
+    stepper: &Stepper,
+    ctx: &StepContext,
+    session: &mut Session,
+    timings: &mut Timings,
+    reassembled: &mut Option<Operators>,
+) -> Result<Found> {
+    let mut s = Search {
+        stepper,
+        ctx,
+        trials: Vec::new(),
+    };
+    if let Some(e) = s.trial(0.0, session, timings, reassembled)? {
+        return Err(Error::numerical(format!(
+            "the collapse search found no equilibrium at t = 0 (before any load \
+             multiplier): {}",
+            e.message()
+        )));
+    }
+    let (mut lo, mut hi) = (0.0, c.max);
+    let mut mechanism = s.trial(c.max, session, timings, reassembled)?;
+    if mechanism.is_none() {
+        lo = c.max;
+    } else {
+        while hi - lo > c.tolerance {
+            let mid = 0.5 * (lo + hi);
+            match s.trial(mid, session, timings, reassembled)? {
+                None => lo = mid,
+                Some(e) => {
+                    hi = mid;
+                    mechanism = Some(e);
+                }
+            }
+        }
+    }
+    let collapses = mechanism.is_some();
+    Ok(Found {
+        multiplier: lo,
+        info: serde_json::json!({
+            "multiplier": lo,
+            "collapses_at": if collapses { serde_json::json!(hi) } else { serde_json::Value::Null },
+            "tolerance": c.tolerance,
+            "max": c.max,
+            "mechanism": mechanism.map(|e| e.message().to_string()),
+            "trials": s.trials,
+            "state": "the results are those of the largest multiplier with an equilibrium",
+        }),
+    })
+}

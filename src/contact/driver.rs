@@ -1,0 +1,725 @@
+//! The contact stage's driver: the load path of a run over one [`Session`].
+//!
+//! Place in the flow: `bem::prepare` (the bodies' operators) → **`driver`** → post-processing.
+//! [`solve`] runs every load step from the state the previous one left (docs/formulation.md
+//! §6): the main solver gives the answer and the history, the cross-check solvers solve the
+//! same step from the same state and their statuses are compared pair by pair. A step that
+//! does not converge for a reason other than a mechanism is solved again in substeps; with
+//! `[solve] time` and loads that depend on t, every step is assembled at its pseudo-time (the
+//! operators are those of the bodies; the columns of the opening stiffness are kept). With
+//! `[solve] collapse` the largest load multiplier with an equilibrium is searched first
+//! (`collapse`), then the run is made at that multiplier.
+
+use std::time::Instant;
+
+use crate::bem::quadrature::QuadratureSettings;
+use crate::bem::{prepare, Operators};
+use crate::contact::{status_differences, RecordedState, Session, Solver, StepState};
+use crate::error::{Error, Result};
+use crate::input::model::{fmt_num, Model};
+use crate::input::scene::{History as HistoryLevel, Method, Scene};
+use crate::output::progress::{ContactTick, Progress, Stage};
+use crate::plan::{ContactProblem, Plan};
+use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
+use crate::timings::Timings;
+
+/// What the contact stage works on.
+#[derive(Clone, Copy)]
+pub struct Case<'a> {
+    pub scene: &'a Scene,
+    pub model: &'a Model,
+    pub plan: &'a Plan,
+    pub settings: &'a QuadratureSettings,
+}
+
+/// Everything the contact stage computed, for post-processing and the writers.
+pub struct ContactRun {
+    pub status: String,
+    pub load_factor: f64,
+    /// Pseudo-time of the final state (1 without `[solve] time`).
+    pub time: f64,
+    /// Body force of each body at the final state (before the load factor).
+    pub body_force: Vec<Option<[f64; 2]>>,
+    pub fields: Vec<BodyField>,
+    pub interfaces: Vec<InterfaceResult>,
+    /// Nodal normal contact force of each interface pair (on the second body, compression
+    /// positive): the force the complementarity conditions hold.
+    pub nodal_force: Vec<Vec<f64>>,
+    pub history: History,
+    pub states: Vec<RecordedState>,
+    pub contact: serde_json::Value,
+    /// The QP's solution at the last load step, where it ran.
+    pub qp: Option<QpCheck>,
+    pub notes: Vec<String>,
+    pub failure: Option<Error>,
+    /// The bodies' operators at the final pseudo-time where they were assembled again
+    /// there (loads that depend on t); otherwise those the stage was given hold.
+    pub operators: Option<Operators>,
+}
+
+/// The QP's solution at the last load step (as the main solver or a cross-check).
+#[derive(Clone)]
+pub struct QpCheck {
+    pub interfaces: Vec<InterfaceResult>,
+    pub converged: bool,
+    /// Pairs whose status differs from the main solver's, as a cross-check.
+    pub differing_pairs: Option<usize>,
+    /// The solver's figures (iterations, status).
+    pub info: serde_json::Value,
+}
+
+/// Solves the contact problem of `case` (or, without unilateral interfaces, the one linear
+/// system) along the scene's load path, on the bodies' operators `ops`.
+pub fn solve(
+    case: Case,
+    ops: &Operators,
+    timings: &mut Timings,
+    progress: &Progress,
+) -> Result<ContactRun> {
+    let Case {
+        scene, model, plan, ..
+    } = case;
+    let t = Instant::now();
+    let mut session = Session::new(model, ops).map_err(|e| plan.explain(e))?;
+    timings.add("interface_system", t.elapsed().as_secs_f64());
+    if plan.problem == ContactProblem::None {
+        return solve_linear(case, &session, ops, timings);
+    }
+    let maxit = scene
+        .solve
+        .max_iterations
+        .unwrap_or_else(|| (4 * session.problem.n_open_rows).max(1000));
+    let (main, checks) = solvers(scene.solve.method, session.problem.n_open_rows);
+    let steps = scene.solve.steps();
+    let stage = progress.contact(steps.len());
+    let stepper = Stepper {
+        case,
+        timed: timed(scene),
+    };
+    let mut reassembled = None;
+    let ctx = |checks, steps: &[(f64, f64)]| StepContext {
+        scene,
+        model,
+        main,
+        checks,
+        last: steps.len() - 1,
+        steps: steps.len(),
+        tol: scene.solve.tolerance,
+        maxit,
+        stage: &stage,
+    };
+    // The collapse search: the largest multiplier t with an equilibrium, then the run
+    // itself at that t.
+    let (steps, collapse) = match scene.solve.collapse {
+        None => (steps, None),
+        Some(c) => {
+            let trial = ctx(&[], &[(1.0, 0.0)]);
+            let found = super::collapse::search(
+                &c,
+                &stepper,
+                &trial,
+                &mut session,
+                timings,
+                &mut reassembled,
+            )?;
+            (vec![(1.0, found.multiplier)], Some(found.info))
+        }
+    };
+    let acc = load_path(
+        &stepper,
+        &mut session,
+        &ctx(&checks, &steps),
+        &steps,
+        timings,
+        &mut reassembled,
+    )?;
+    stage.finish();
+    let mut run = finish(&session, main, steps.len(), acc)?;
+    if let Some(c) = collapse {
+        run.contact["collapse"] = c;
+    }
+    run.operators = reassembled;
+    Ok(run)
+}
+
+/// Whether every step is evaluated and assembled at its own pseudo-time: with `[solve]
+/// time` (or a collapse search) and values that depend on t.
+fn timed(scene: &Scene) -> bool {
+    (scene.solve.time.is_some() || scene.solve.collapse.is_some()) && crate::plan::uses_time(scene)
+}
+
+/// The main solver and the cross-checks of a scene's `method`.
+fn solvers(method: Method, open_rows: usize) -> (Solver, Vec<Solver>) {
+    let main = match method {
+        Method::Qp => Solver::Qp,
+        _ => Solver::Evolutive,
+    };
+    let mut checks = vec![Solver::ActiveSet];
+    if method == Method::Both {
+        checks.push(Solver::Qp);
+        if open_rows <= 2000 {
+            checks.push(Solver::Lemke);
+        }
+    }
+    (main, checks)
+}
+
+/// Without unilateral interfaces: one linear solve at the last load step.
+fn solve_linear(
+    case: Case,
+    session: &Session,
+    ops: &Operators,
+    timings: &mut Timings,
+) -> Result<ContactRun> {
+    let Case {
+        scene,
+        model,
+        plan,
+        settings,
+    } = case;
+    let t = Instant::now();
+    let steps = scene.solve.steps();
+    let (f, time) = steps[steps.len() - 1];
+    let at = if timed(scene) && time != model.time {
+        let m = model.at_time(scene, time)?;
+        let p = prepare(&m, scene.plane, settings, 1.0, &scene.path, &|_| {})
+            .map_err(|e| plan.explain(e))?;
+        Some((m, p))
+    } else {
+        None
+    };
+    let (m, p) = match &at {
+        Some((m, p)) => (m, p),
+        None => (model, ops),
+    };
+    // The session's factorised system serves unless the loads are those of another t.
+    let other = match &at {
+        Some(_) => Some(crate::contact::problem::Problem::new(m, p).map_err(|e| plan.explain(e))?),
+        None => None,
+    };
+    let problem = other.as_ref().unwrap_or(&session.problem);
+    let n = problem.n_open_rows;
+    let start = session.initial();
+    let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
+    timings.add("solve", t.elapsed().as_secs_f64());
+    let mut contact = serde_json::json!({"solver": "linear (no unilateral interface)"});
+    let junctions = m.junctions();
+    if !junctions.is_empty() {
+        contact["junctions"] = junctions_json(m, &junctions, &problem.implied);
+    }
+    let body_force = m.bodies.iter().map(|b| b.body_force).collect();
+    drop(other);
+    Ok(ContactRun {
+        status: "solved".into(),
+        load_factor: f,
+        time,
+        body_force,
+        fields,
+        interfaces,
+        nodal_force,
+        history: History::default(),
+        states: Vec::new(),
+        contact,
+        qp: None,
+        notes: Vec::new(),
+        failure: None,
+        operators: at.map(|(_, p)| p),
+    })
+}
+
+/// Every load step in turn, each from the state the previous one left; stops at a failure.
+fn load_path(
+    stepper: &Stepper,
+    session: &mut Session,
+    ctx: &StepContext,
+    steps: &[(f64, f64)],
+    timings: &mut Timings,
+    reassembled: &mut Option<Operators>,
+) -> Result<StepAcc> {
+    let mut state = session.initial();
+    let mut acc = StepAcc::default();
+    for (step, &to) in steps.iter().enumerate() {
+        // Where the step starts, for substeps: the previous step, or (timed paths aside)
+        // the unloaded state.
+        let from = match step {
+            0 if stepper.timed => None,
+            0 => Some((0.0, to.1)),
+            _ => Some(steps[step - 1]),
+        };
+        load_step(
+            stepper,
+            session,
+            ctx,
+            (step, from, to, 0),
+            &mut state,
+            &mut acc,
+            timings,
+            reassembled,
+        )?;
+        if acc.failure.is_some() {
+            break;
+        }
+    }
+    Ok(acc)
+}
+
+/// The run's result from what the load steps accumulated.
+fn finish(session: &Session, main: Solver, steps: usize, acc: StepAcc) -> Result<ContactRun> {
+    let StepAcc {
+        iterations,
+        residual,
+        final_sol,
+        cross,
+        qp_block,
+        notes,
+        history,
+        states,
+        failure,
+        ..
+    } = acc;
+    let converged = failure.is_none();
+    let mut contact = serde_json::json!({
+        "solver": main.name(),
+        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP; Tresca fixed point for friction)",
+        "iterations": iterations,
+        "converged": converged,
+        "complementarity_residual": residual,
+        "load_steps": steps,
+        "opening_stiffness_columns": session.cols.computed(),
+        "interface_system_size": session.problem.base_size(),
+        "cross_checks": cross,
+    });
+    let Some(sol) = final_sol else {
+        return Err(Error::numerical("the contact stage produced no state"));
+    };
+    let junctions = session.model.junctions();
+    if !junctions.is_empty() {
+        let implied = &session.problem.implied;
+        contact["junctions"] = junctions_json(session.model, &junctions, implied);
+        contact["junctions"]["implied_slipping"] =
+            implied_slipping(session.model, implied, &sol.interfaces);
+    }
+    Ok(ContactRun {
+        status: if converged {
+            "converged".into()
+        } else {
+            "not converged".into()
+        },
+        load_factor: sol.load_factor,
+        time: sol.time,
+        body_force: sol.body_force,
+        fields: sol.fields,
+        interfaces: sol.interfaces,
+        nodal_force: sol.nodal_force,
+        history,
+        states,
+        contact,
+        qp: qp_block,
+        notes,
+        failure,
+        operators: None,
+    })
+}
+
+/// What every load step of a contact run shares.
+pub(super) struct StepContext<'a> {
+    scene: &'a Scene,
+    model: &'a Model,
+    main: Solver,
+    checks: &'a [Solver],
+    last: usize,
+    steps: usize,
+    tol: f64,
+    maxit: usize,
+    stage: &'a Stage,
+}
+
+/// The `contact.junctions` block: how many points join three or more bodies, and the pair
+/// components there that the kept rows imply (no row of their own; see
+/// `contact::problem::Problem::new`), by interface.
+fn junctions_json(
+    model: &Model,
+    junctions: &[([f64; 2], Vec<usize>)],
+    implied: &[crate::contact::problem::Implied],
+) -> serde_json::Value {
+    let mut by_iface: std::collections::BTreeMap<String, Vec<serde_json::Value>> =
+        std::collections::BTreeMap::new();
+    for i in implied {
+        let it = &model.interfaces[i.iface];
+        by_iface
+            .entry(it.spec.name.clone())
+            .or_default()
+            .push(serde_json::json!({
+                "x": it.pairs[i.pair].x,
+                "component": if i.comp == 1 { "normal" } else { "tangential" },
+            }));
+    }
+    let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
+    serde_json::json!({
+        "points": junctions.len(),
+        "most_bodies_at_a_point": most,
+        "rule": "at a point where bodies meet in a cycle of pairs, rows are kept bonded first (normal components first), then unilateral normal, then tangential, while independent; the others are implied by the kept rows while these are closed, and carry no force of their own",
+        "implied_components": implied.len(),
+        "implied": by_iface,
+    })
+}
+
+/// The implied tangential components of closed pairs with friction (`friction` or `stick`)
+/// whose tangential jump is not zero (above 1e-9 of the model's size) in the final state:
+/// there the pair slides at its junction node without a friction force of its own, since an
+/// implied component has no row (it slides by the opening of a joint of its cycle, e.g. a
+/// bed joint beside a head joint that opens). A one-node approximation of each such joint,
+/// counted and located so that it is seen.
+fn implied_slipping(
+    model: &Model,
+    implied: &[crate::contact::problem::Implied],
+    interfaces: &[InterfaceResult],
+) -> serde_json::Value {
+    use crate::input::scene::Tangential;
+    let tol = 1e-9 * model.scale;
+    let mut at = Vec::new();
+    let mut largest = 0.0f64;
+    for i in implied.iter().filter(|i| i.comp == 0) {
+        let it = &model.interfaces[i.iface];
+        if !matches!(it.spec.tangential, Tangential::Friction | Tangential::Stick) {
+            continue;
+        }
+        let Some(p) = interfaces.get(i.iface).and_then(|r| r.pairs.get(i.pair)) else {
+            continue;
+        };
+        let slip = p.jump[0].abs();
+        if p.status == PairStatus::Closed && slip > tol {
+            largest = largest.max(slip);
+            at.push(serde_json::json!({
+                "interface": it.spec.name,
+                "x": it.pairs[i.pair].x,
+                "slip": p.jump[0],
+            }));
+        }
+    }
+    serde_json::json!({
+        "count": at.len(),
+        "largest_slip": largest,
+        "meaning": "closed pairs whose tangential component is implied at a junction and slips there: at that node the pair slides without a friction force of its own",
+        "at": at,
+    })
+}
+
+/// The final boundary solution of a step.
+#[derive(Clone)]
+struct FinalState {
+    load_factor: f64,
+    time: f64,
+    body_force: Vec<Option<[f64; 2]>>,
+    fields: Vec<BodyField>,
+    interfaces: Vec<InterfaceResult>,
+    nodal_force: Vec<Vec<f64>>,
+}
+
+/// What a load step needs to evaluate the model at another pseudo-time.
+pub(super) struct Stepper<'a> {
+    pub(super) case: Case<'a>,
+    /// Every step is assembled at its own pseudo-time ([`timed`]).
+    pub(super) timed: bool,
+}
+
+/// A (sub)step: the load step, where it starts (load factor, time; none for the first step
+/// of a load path), where it ends, and the subdivision level.
+type StepSpan = (usize, Option<(f64, f64)>, (f64, f64), usize);
+
+/// Substep levels of a load step that does not converge (up to 2³ substeps).
+const MAX_SUBDIVISION: usize = 3;
+
+/// One load step from the state `state`, to the load factor and pseudo-time `to`; a step
+/// that does not converge for a reason other than a mechanism is solved again in two halves
+/// from `from` (recursively, up to [`MAX_SUBDIVISION`] levels). `at` = (step, from, to,
+/// level).
+#[allow(clippy::too_many_arguments)]
+fn load_step(
+    stp: &Stepper,
+    session: &mut Session,
+    ctx: &StepContext,
+    at: StepSpan,
+    state: &mut StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+    reassembled: &mut Option<Operators>,
+) -> Result<()> {
+    let (step, from, to, level) = at;
+    if level == 0 {
+        acc.substeps = 0;
+    }
+    let saved = (state.clone(), acc.mark());
+    step_at(
+        stp,
+        session,
+        ctx,
+        step,
+        to,
+        state,
+        acc,
+        timings,
+        reassembled,
+    )?;
+    let Some(from) = from else { return Ok(()) };
+    if acc.failure.is_none() || acc.mechanism || level >= MAX_SUBDIVISION {
+        acc.substeps += 1;
+        return Ok(());
+    }
+    let why = acc
+        .failure
+        .as_ref()
+        .map(|e| e.message().to_string())
+        .unwrap_or_default();
+    acc.restore(saved.1);
+    *state = saved.0;
+    let mid = (0.5 * (from.0 + to.0), 0.5 * (from.1 + to.1));
+    load_step(
+        stp,
+        session,
+        ctx,
+        (step, Some(from), mid, level + 1),
+        state,
+        acc,
+        timings,
+        reassembled,
+    )?;
+    if acc.failure.is_none() {
+        load_step(
+            stp,
+            session,
+            ctx,
+            (step, Some(mid), to, level + 1),
+            state,
+            acc,
+            timings,
+            reassembled,
+        )?;
+    }
+    if level == 0 {
+        acc.notes.push(format!(
+            "load step {} (load factor {}, t = {}) did not converge in one step ({why}); it \
+             was solved again in {} substeps from load factor {}, t = {}{}",
+            step + 1,
+            fmt_num(to.0),
+            fmt_num(to.1),
+            acc.substeps,
+            fmt_num(from.0),
+            fmt_num(from.1),
+            if acc.failure.is_none() {
+                ", which converged"
+            } else {
+                ", the last of which did not converge either"
+            }
+        ));
+        acc.substeps = 0;
+    }
+    Ok(())
+}
+
+/// Solves one (sub)step at `(f, time)`: on the run's session, or, where the loads depend on
+/// t and the pseudo-time differs from the model's, on the model evaluated and assembled at
+/// `time` (the columns of the opening stiffness move between the sessions).
+#[allow(clippy::too_many_arguments)]
+pub(super) fn step_at(
+    stp: &Stepper,
+    session: &mut Session,
+    ctx: &StepContext,
+    step: usize,
+    (f, time): (f64, f64),
+    state: &mut StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+    reassembled: &mut Option<Operators>,
+) -> Result<()> {
+    if !stp.timed || time == stp.case.model.time {
+        contact_step(session, ctx, step, f, state, acc, timings);
+        return Ok(());
+    }
+    let Case {
+        scene,
+        model,
+        plan,
+        settings,
+    } = stp.case;
+    let model_t = model.at_time(scene, time)?;
+    let prepared_t = prepare(&model_t, scene.plane, settings, 1.0, &scene.path, &|_| {})
+        .map_err(|e| plan.explain(e))?;
+    timings.add("assemble", prepared_t.assemble_seconds);
+    timings.add("condense", prepared_t.condense_seconds);
+    let t1 = Instant::now();
+    {
+        let mut s = Session::new(&model_t, &prepared_t).map_err(|e| plan.explain(e))?;
+        s.cols = std::mem::take(&mut session.cols);
+        s.coupled_after = session.coupled_after;
+        timings.add("interface_system", t1.elapsed().as_secs_f64());
+        // Cohesion follows its expression where the pair has never opened.
+        for (k, it) in model_t.interfaces.iter().enumerate() {
+            for (j, p) in it.pairs.iter().enumerate() {
+                if !state.broken[k][j] {
+                    state.cohesion[k][j] = p.cohesion;
+                }
+            }
+        }
+        contact_step(&mut s, ctx, step, f, state, acc, timings);
+        session.cols = std::mem::take(&mut s.cols);
+    }
+    *reassembled = Some(prepared_t);
+    Ok(())
+}
+
+/// Lengths and values of a [`StepAcc`] to go back to.
+struct AccMark {
+    iterations: usize,
+    residual: f64,
+    final_sol: Option<FinalState>,
+    cross: usize,
+    qp_block: Option<QpCheck>,
+    notes: usize,
+    rows: usize,
+    states: usize,
+}
+
+impl StepAcc {
+    fn mark(&self) -> AccMark {
+        AccMark {
+            iterations: self.iterations,
+            residual: self.residual,
+            final_sol: self.final_sol.clone(),
+            cross: self.cross.len(),
+            qp_block: self.qp_block.clone(),
+            notes: self.notes.len(),
+            rows: self.history.rows.len(),
+            states: self.states.len(),
+        }
+    }
+
+    /// Forgets what was accumulated since `m` (a failed step solved again in substeps).
+    fn restore(&mut self, m: AccMark) {
+        self.iterations = m.iterations;
+        self.residual = m.residual;
+        self.final_sol = m.final_sol;
+        self.cross.truncate(m.cross);
+        self.qp_block = m.qp_block;
+        self.notes.truncate(m.notes);
+        self.history.rows.truncate(m.rows);
+        self.states.truncate(m.states);
+        self.failure = None;
+        self.mechanism = false;
+    }
+}
+
+/// What the load steps of a contact run accumulate.
+#[derive(Default)]
+pub(super) struct StepAcc {
+    iterations: usize,
+    residual: f64,
+    final_sol: Option<FinalState>,
+    cross: Vec<serde_json::Value>,
+    qp_block: Option<QpCheck>,
+    notes: Vec<String>,
+    history: History,
+    states: Vec<RecordedState>,
+    pub(super) failure: Option<Error>,
+    /// The failure is a mechanism (no equilibrium): no substeps help.
+    pub(super) mechanism: bool,
+    /// Substeps solved since the last load step that was subdivided.
+    substeps: usize,
+}
+
+/// One load step of a contact run: the main solver, the cross-checks, the history.
+fn contact_step(
+    session: &mut Session,
+    ctx: &StepContext,
+    step: usize,
+    f: f64,
+    state: &mut StepState,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+) {
+    let (scene, main) = (ctx.scene, ctx.main);
+    let t = Instant::now();
+    let full = scene.output.history == HistoryLevel::Full;
+    let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
+    timings.add(main.timing_key(), t.elapsed().as_secs_f64());
+    let t = Instant::now();
+    session.expand(&mut r);
+    timings.add("contact_record", t.elapsed().as_secs_f64());
+    for &c in ctx.checks {
+        cross_check(session, ctx, c, step, f, state, &r.interfaces, acc, timings);
+    }
+    acc.iterations += r.iterations;
+    acc.residual = acc.residual.max(r.residual);
+    acc.notes.extend(r.notes.iter().cloned());
+    acc.history.rows.extend(r.rows);
+    if let Some(row) = acc.history.rows.last() {
+        let status = row.status.iter().flatten();
+        ctx.stage.contact_tick(&ContactTick {
+            load_step: step,
+            load_steps: ctx.steps,
+            iteration: row.iteration,
+            max_iterations: ctx.maxit,
+            open_pairs: status.clone().filter(|s| **s == PairStatus::Open).count(),
+            pairs: status.count(),
+            detached_length: row.detached_length.iter().sum(),
+            step_done: true,
+        });
+    }
+    acc.states.extend(r.states);
+    if main == Solver::Qp && step == ctx.last {
+        acc.qp_block = Some(QpCheck {
+            interfaces: r.interfaces.clone(),
+            converged: r.converged,
+            differing_pairs: None,
+            info: r.info,
+        });
+    }
+    *state = r.state;
+    acc.final_sol = Some(FinalState {
+        load_factor: f,
+        time: session.model.time,
+        body_force: session.body_forces(),
+        fields: r.fields,
+        interfaces: r.interfaces,
+        nodal_force: r.nodal_force,
+    });
+    if let Some(e) = r.failure {
+        acc.failure = Some(e);
+        acc.mechanism = r.mechanism;
+    }
+}
+
+/// One cross-check of a load step: solver `c` from the same state, its statuses compared
+/// with the main solver's (`main`) pair by pair.
+#[allow(clippy::too_many_arguments)]
+fn cross_check(
+    session: &mut Session,
+    ctx: &StepContext,
+    c: Solver,
+    step: usize,
+    f: f64,
+    state: &StepState,
+    main: &[InterfaceResult],
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+) {
+    let t = Instant::now();
+    let x = session.solve_step(state, c, ctx.tol, ctx.maxit, step, f, false);
+    timings.add(c.timing_key(), t.elapsed().as_secs_f64());
+    let (all, degenerate) = status_differences(&x.interfaces, main, ctx.model.scale);
+    let differing = all - degenerate;
+    acc.cross.push(serde_json::json!({
+        "solver": c.name(), "load_step": step, "iterations": x.iterations,
+        "outer_iterations": x.outer_iterations, "converged": x.converged,
+        "differing_pairs": differing, "degenerate_pairs": degenerate, "info": x.info,
+        "failure": x.failure.as_ref().map(|e| e.message()),
+    }));
+    if c == Solver::Qp && step == ctx.last {
+        acc.qp_block = Some(QpCheck {
+            interfaces: x.interfaces,
+            converged: x.converged,
+            differing_pairs: Some(differing),
+            info: x.info,
+        });
+    }
+}
