@@ -1,4 +1,5 @@
-//! Body forces by the Galerkin-vector transformation (formulation §4, §7 item 8, Appendix A6).
+//! Body forces by the Galerkin-vector transformation (docs/formulation.md §4, §7 item 8,
+//! Appendix A6).
 #![allow(clippy::needless_range_loop)]
 
 mod common;
@@ -290,7 +291,7 @@ fn body_force_calderon_residuals_converge() {
             "slope {slope} vs {want}: {slopes:?}"
         );
     }
-    // Without the body-force terms the residuals stall (formulation §4.1).
+    // Without the body-force terms the residuals stall (docs/formulation.md §4.1).
     assert!(bare[bare.len() - 1] > 0.5 * bare[0], "{bare:?}");
 }
 

@@ -1,4 +1,4 @@
-//! Contact and detachment (formulation §6, §7 items 12 and 16): trivial cases, the paper's
+//! Contact and detachment (docs/formulation.md §6, §7 items 12 and 16): trivial cases, the paper's
 //! example 2, agreement of the solvers, independence of the initial status, and operators
 //! that never change during the iterations.
 

@@ -1,4 +1,4 @@
-//! Convergence to the closed-form benchmarks (formulation §7 item 14, §9).
+//! Convergence to the closed-form benchmarks (docs/formulation.md §7 item 14, §9).
 //!
 //! Each benchmark is a pipeline: `geo/<name>.geo` (refined by its `n` parameter) and
 //! `pipelines/<name>.toml`, whose boundary data are the exact solution of `tests/exact`.
@@ -62,7 +62,7 @@ impl Rate {
     }
 }
 
-/// Formulation §7 item 14 for P1 elements: interior displacements and stresses O(h²)
+/// docs/formulation.md §7 item 14 for P1 elements: interior displacements and stresses O(h²)
 /// (geometry and boundary-data interpolation are O(h²) too, so no faster in general);
 /// near the boundary, displacements tend to the boundary displacement, O(h²) or better, and
 /// stresses to the boundary traction, O(h) to O(h^1.5), so only lower bounds there.

@@ -1,4 +1,4 @@
-//! Kernel identities by finite differences (formulation §2.1, §7 item 1).
+//! Kernel identities by finite differences (docs/formulation.md §2.1, §7 item 1).
 #![allow(clippy::needless_range_loop)]
 
 use sgbem::bem::kernels::{

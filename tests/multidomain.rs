@@ -1,4 +1,4 @@
-//! Bonded multidomain solves against exact linear fields (formulation §7 items 9–11): the
+//! Bonded multidomain solves against exact linear fields (docs/formulation.md §7 items 9–11): the
 //! single-body patch test, the bonded two-body patch test for stiffness ratios up to 1e6,
 //! symmetry of the condensed operators.
 
@@ -98,7 +98,7 @@ fn traction_lines(name: &str, t: [f64; 2]) -> String {
     format!("[boundary.{name}]\ntx = {:e}\nty = {:e}\n", t[0], t[1])
 }
 
-/// The bonded patch test of formulation Appendix A2 for E_lower / E_upper = `ratio`.
+/// The bonded patch test of docs/formulation.md Appendix A2 for E_lower / E_upper = `ratio`.
 fn bonded_patch(ratio: f64, n: usize, quadrature: &str) -> (f64, f64, f64) {
     let nu = 0.3;
     let (e_up, e_low) = (1.0, ratio);
@@ -218,7 +218,7 @@ fn solve_scene(
     (l, prep, sol)
 }
 
-/// Formulation §7 item 9: one body, mixed conditions, a linear field with rotation: the
+/// docs/formulation.md §7 item 9: one body, mixed conditions, a linear field with rotation: the
 /// displacements of the free nodes and the tractions on Γ1 are exact; rigid Γ1 data give
 /// zero tractions.
 #[test]
@@ -243,7 +243,7 @@ fn single_body_patch_test() {
         c: [0.0, 0.0],
         sigma,
     };
-    // The quadrilateral of formulation Appendix A1, 4 elements per side.
+    // The quadrilateral of docs/formulation.md Appendix A1, 4 elements per side.
     let v = [[0.0, 0.0], [1.0, 0.0], [1.2, 0.6], [0.1, 0.8]];
     let mut m = Msh::default();
     for k in 0..4 {
@@ -303,7 +303,7 @@ fn single_body_patch_test() {
     );
 }
 
-/// Formulation §7 item 11: every condensed D00 is symmetric, its (W,F) block positive
+/// docs/formulation.md §7 item 11: every condensed D00 is symmetric, its (W,F) block positive
 /// definite and its (P,−U) block negative definite — or semidefinite with exactly the three
 /// rigid modes for a body held only by its interface (the upper block here).
 #[test]
@@ -520,8 +520,8 @@ fn results_follow_rotation_translation_and_scaling() {
     }
 }
 
-/// Formulation §7 item 15 and §8.4: a circle of radius 1.34 (just above the degenerate scale
-/// a* = 1.3202 of plane strain, ν = 0.3) integrated at its physical size has an indefinite
+/// docs/formulation.md §7 item 15 and §8.4: a circle of radius 1.34 (just above the degenerate
+/// scale a* = 1.3202 of plane strain, ν = 0.3) integrated at its physical size has an indefinite
 /// single layer, which the detector reports; sgbem's own scaling (the body in a disk of
 /// radius 1/2) makes the same body solvable.
 #[test]

@@ -1,4 +1,4 @@
-//! Element-pair integrals and assembled Galerkin operators (formulation §2.3–2.4, §7 items
+//! Element-pair integrals and assembled Galerkin operators (docs/formulation.md §2.3–2.4, §7 items
 //! 2–7, §8.4–8.5).
 #![allow(clippy::needless_range_loop)]
 
@@ -328,7 +328,7 @@ fn duffy_adjacent_convergence() {
         let w = worst[q];
         println!("  {name:>2}: {:.1e} / {:.1e} / {:.1e}", w[0], w[1], w[2]);
     }
-    // Formulation §2.4b / §7 item 4: ≤ 1.4e-8 / 3e-11 / 1.2e-13. Met at n = 10 and 16 (with
+    // docs/formulation.md §2.4b / §7 item 4: ≤ 1.4e-8 / 3e-11 / 1.2e-13. Met at n = 10 and 16 (with
     // quartic grading there); at n = 6 (cubic, the `fast` preset) K and K' meet it but V
     // (8.8e-8; its entries are the largest, c_U(3−4ν) ≈ 3 c_S) and D (1.5e-8) do not: the
     // bounds asserted for those two are the measured figures, see the report.
@@ -530,7 +530,7 @@ fn hypersingular_rigid_modes_and_spectrum() {
 
 #[test]
 fn single_layer_degenerate_scale() {
-    // Formulation §8.4 / Appendix A5: a* = exp(1/(2(3−4ν))) = 1.3202 for ν = 0.3.
+    // docs/formulation.md §8.4 / Appendix A5: a* = exp(1/(2(3−4ν))) = 1.3202 for ν = 0.3.
     let m = steel_like();
     let s = QuadratureSettings::standard();
     let astar = (0.5 / (3.0 - 4.0 * m.nu)).exp();
@@ -650,8 +650,8 @@ fn euclid(r: &[f64]) -> f64 {
 
 #[test]
 fn somigliana_reproduces_linear_field_near_the_boundary() {
-    // Formulation §2.1 (interior formulas) and §8.5: with exact P1 data of a linear field the
-    // identities hold to quadrature accuracy at any interior point, also very close to the
+    // docs/formulation.md §2.1 (interior formulas) and §8.5: with exact P1 data of a linear field
+    // the identities hold to quadrature accuracy at any interior point, also very close to the
     // boundary and to a corner, thanks to the adaptive point–element rule.
     let m = steel_like();
     let s = QuadratureSettings::standard();

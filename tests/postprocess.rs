@@ -1,5 +1,5 @@
-//! Post-processing against exact fields (formulation §2.1, §2.4 "Interior points", §4, §8.5):
-//! boundary data are set from an exact elastic field, no solver runs, and the recovered
+//! Post-processing against exact fields (docs/formulation.md §2.1, §2.4 "Interior points", §4,
+//! §8.5): boundary data are set from an exact elastic field, no solver runs, and the recovered
 //! boundary stresses and interior fields are compared with the same field.
 #![allow(clippy::needless_range_loop)]
 
@@ -10,7 +10,7 @@ use sgbem::input::model::{Body, DofClass, Element, Loop, NodeDofs, Role};
 use sgbem::post::*;
 use sgbem::solution::BodyField;
 
-/// The quadrilateral of formulation Appendix A1.
+/// The quadrilateral of docs/formulation.md Appendix A1.
 const QUAD: [Vec2; 4] = [[0.0, 0.0], [1.0, 0.0], [1.2, 0.6], [0.1, 0.8]];
 
 /// A body from polygons (outer counter-clockwise, holes clockwise), each side cut into `n`
@@ -145,7 +145,7 @@ fn kelvin(m: Material, y0: Vec2, f: Vec2) -> (impl Fn(Vec2) -> Vec2, impl Fn(Vec
     )
 }
 
-/// Self-weight particular field of formulation §4.2 for `b = (0, −γ)`, with the effective ν
+/// Self-weight particular field of docs/formulation.md §4.2 for `b = (0, −γ)`, with the effective ν
 /// (so it holds in both planes).
 fn self_weight(m: Material, gamma: f64, y0: f64) -> (impl Fn(Vec2) -> Vec2, impl Fn(Vec2) -> Mat2) {
     let (mu, nu) = (m.mu, m.nu);
@@ -452,7 +452,7 @@ fn kelvin_field_near_the_boundary() {
 
 #[test]
 fn body_force_particular_field() {
-    // Formulation §4.2: σ = diag(0, γ(y − y0)) with b = (0, −γ). u is quadratic, so P1 data
+    // docs/formulation.md §4.2: σ = diag(0, γ(y − y0)) with b = (0, −γ). u is quadratic, so P1 data
     // are not exact and the interior error converges at O(h²); without the body-force terms it
     // stalls at O(1).
     let set = QuadratureSettings::standard();

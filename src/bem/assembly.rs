@@ -1,4 +1,5 @@
-//! Per-body Galerkin system of the SGBEM in residual-W form ([paper eq. 10], formulation §3).
+//! Per-body Galerkin system of the SGBEM in residual-W form ([paper eq. 10],
+//! docs/formulation.md §3).
 //!
 //! Place in the flow: `model` + `galerkin` → **`assembly`** → `condensation`. For one body it
 //! numbers the unknowns
@@ -7,7 +8,7 @@
 //!   X  = [F1; −U2]   traction on Γ1 (per element end and constrained direction),
 //!                    displacement of free nodes (per unknown direction)
 //!   X0 = [F0; −U0]   interface traction hats and interface displacements, in the local
-//!                    pair frame (s_j, n_j) of formulation §5.4
+//!                    pair frame (s_j, n_j) of docs/formulation.md §5.4
 //! ```
 //!
 //! and assembles the symmetric matrix `G = [[A, A0], [A0ᵀ, A00]]` and the load `[L̂; L̂0]` of
@@ -17,12 +18,12 @@
 //!   Z0 = A0ᵀ X + A00 X0 + L̂0    (Z0 = [W0; P0], the interface outputs)
 //! ```
 //!
-//! Blocks (formulation §3.1–§3.2): (W, F) = V; (W, −U) = K + ½M on every W row (the
+//! Blocks (docs/formulation.md §3.1–§3.2): (W, F) = V; (W, −U) = K + ½M on every W row (the
 //! residual form, which keeps every condensed operator symmetric); (P, −U) = −D;
 //! (P, F) = (W, −U)ᵀ. Known data go to the load: `V t̄ − (K + ½M) ū` on W rows,
-//! `(Kᵀ − ½Mᵀ) t̄ + D ū` on P rows, plus the body-force terms W^b, P^b (formulation §4).
+//! `(Kᵀ − ½Mᵀ) t̄ + D ū` on P rows, plus the body-force terms W^b, P^b (docs/formulation.md §4).
 //!
-//! Degenerate scale (formulation §8.4): each body is integrated in coordinates centred on
+//! Degenerate scale (docs/formulation.md §8.4): each body is integrated in coordinates centred on
 //! its bounding box and divided by its diagonal, so that it fits in a unit disk, and the
 //! blocks are brought back to physical units (V·L², K·L, D·1). This uses the single-layer
 //! kernel up to an additive constant, an equivalent formulation that is uniquely solvable.
@@ -639,7 +640,7 @@ pub fn assemble_body_scaled(
     })
 }
 
-/// Degenerate-scale detector (formulation §8.4, §7 item 15): the single-layer block V over
+/// Degenerate-scale detector (docs/formulation.md §8.4, §7 item 15): the single-layer block V over
 /// the traction unknowns must be positive definite. Returns the smallest pivot of its
 /// Cholesky factor relative to the largest; an error when the factorisation fails.
 pub fn check_single_layer(sys: &BodySystem, body: &str) -> Result<f64> {
@@ -684,8 +685,8 @@ pub fn body_segment(body: &Body, ei: usize) -> Segment {
 
 /// Centre and length of the scaled coordinates `(x − c)/L`: c is the centroid of the
 /// boundary nodes and L twice the largest distance from it, so the scaled body lies in a
-/// disk of radius 1/2, below every degenerate scale (formulation §8.4). Both follow rotations,
-/// translations and rescalings of the body exactly, so results do too.
+/// disk of radius 1/2, below every degenerate scale (docs/formulation.md §8.4). Both follow
+/// rotations, translations and rescalings of the body exactly, so results do too.
 pub fn scaling(body: &Body) -> ([f64; 2], f64) {
     let n = body.nodes.len().max(1) as f64;
     let c = [

@@ -1,5 +1,5 @@
 //! Condensation of a body onto its interface unknowns, and recovery of the rest
-//! ([paper eqs. 11–14], formulation §3.3, with the sign of eq. 14a fixed).
+//! ([paper eqs. 11–14], docs/formulation.md §3.3, with the sign of eq. 14a fixed).
 //!
 //! Place in the flow: `assembly` → **`condensation`** → `interface`. From
 //! `0 = A X + A0 X0 + L̂` and `Z0 = A0ᵀ X + A00 X0 + L̂0`:

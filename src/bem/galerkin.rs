@@ -5,7 +5,7 @@
 //! 2×2 blocks of one ordered element pair, which the caller scatters into global matrices.
 //!
 //! For a test element e (coordinate x, shape functions N_a) and a trial element f (coordinate
-//! y, shape functions N_b), a, b ∈ {1, 2} (stored at indices 0, 1), formulation §2.3:
+//! y, shape functions N_b), a, b ∈ {1, 2} (stored at indices 0, 1), docs/formulation.md §2.3:
 //!
 //! * `V_ab = ∫_e∫_f N_a(x) U(x,y) N_b(y)` — single layer (G_uu, [paper eq. 10] A_uu);
 //! * `K_ab = ∫_e∫_f N_a(x) T(x,y) N_b(y)` — double layer, normal of f (G_ut); the adjoint
@@ -15,15 +15,15 @@
 //!   (the Galerkin block of G_tt is `−D`);
 //! * `M_ab = ∫_e N_a N_b` — [`element_mass`].
 //!
-//! Pair kinds (formulation §2.4), decided by [`classify`] from the caller's node indices:
+//! Pair kinds (docs/formulation.md §2.4), decided by [`classify`] from the caller's node indices:
 //! coincident pairs use closed forms; vertex-adjacent pairs the graded Duffy rule, its angular
 //! variable split towards the pole that acute corners and unequal lengths bring close; near pairs
 //! (distance < η·longer length) recursive bisection of the *longer* element with Gauss leaves;
 //! far pairs plain Gauss with orders by distance.
 //!
 //! Also here: point–element integrals for the Somigliana identities at interior points
-//! ([paper eqs. 1a,b], adaptive bisection by distance, formulation §8.5), and the Galerkin
-//! body-force loads `W^b`, `P^b` of formulation §4.1.
+//! ([paper eqs. 1a,b], adaptive bisection by distance, docs/formulation.md §8.5), and the Galerkin
+//! body-force loads `W^b`, `P^b` of docs/formulation.md §4.1.
 
 // Index loops mirror the component formulas (δ_ik, r̂_i r̂_k, …) and read better than iterators.
 #![allow(clippy::needless_range_loop)]
@@ -56,7 +56,7 @@ impl ElementRef {
 /// How an ordered element pair is integrated.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum PairKind {
-    /// e = f: closed forms (formulation §2.4a).
+    /// e = f: closed forms (docs/formulation.md §2.4a).
     Coincident,
     /// One shared vertex: end `e_end` of e (0 = P, 1 = Q) is end `f_end` of f (§2.4b).
     Adjacent { e_end: usize, f_end: usize },
@@ -168,13 +168,13 @@ pub fn pair_blocks_of_kind(
     }
 }
 
-/// `∫₀¹∫₀¹ N_a(ξ) N_b(η) ln|ξ−η| dξ dη` (formulation §2.4a; their sum is −3/2).
+/// `∫₀¹∫₀¹ N_a(ξ) N_b(η) ln|ξ−η| dξ dη` (docs/formulation.md §2.4a; their sum is −3/2).
 pub const LOG_INTEGRALS: [[f64; 2]; 2] = [[-7.0 / 16.0, -5.0 / 16.0], [-5.0 / 16.0, -7.0 / 16.0]];
 
 /// Sign of `N_a' · L`: `N_1' = −1/L`, `N_2' = +1/L`.
 const DERIVATIVE_SIGN: [f64; 2] = [-1.0, 1.0];
 
-/// Closed forms for e = f (formulation §2.4a). On a straight element `r = L|ξ−η|`,
+/// Closed forms for e = f (docs/formulation.md §2.4a). On a straight element `r = L|ξ−η|`,
 /// `r̂ = ±τ` and `r̂·n = 0`, so U reduces to log integrals, T to its antisymmetric part
 /// `(1−2ν)c_T J/(s−t)` (a CPV whose symmetrised value is `∓L/2` off the diagonal of (a,b)),
 /// and B to `∫∫ ln|s−t| = L²(ln L − 3/2)`.
@@ -236,7 +236,8 @@ pub fn duffy_grading(order: usize) -> i32 {
     }
 }
 
-/// Vertex-adjacent pair (formulation §2.4b): end `e_end` of e coincides with end `f_end` of f.
+/// Vertex-adjacent pair (docs/formulation.md §2.4b): end `e_end` of e coincides with end
+/// `f_end` of f.
 ///
 /// Both elements are re-parametrised from the shared vertex V, `x = V + s E_e`,
 /// `y = V + t E_f` (E = edge vectors from V), the square is split along its diagonal, and
@@ -431,7 +432,7 @@ impl Accumulator {
     }
 }
 
-/// Recursive bisection for near pairs (formulation §2.4c). The parameter intervals refer to
+/// Recursive bisection for near pairs (docs/formulation.md §2.4c). The parameter intervals refer to
 /// the parent elements, so the parent shape functions are evaluated directly on the leaves
 /// (the same as carrying them over as combinations of the children's). The longer piece is
 /// split; pieces of equal length are split together, which keeps the (e,f) and (f,e)
@@ -514,7 +515,7 @@ pub struct PointStress {
 /// Bisection cap of the point–element rule: resolves points down to about 1e-14·L from the
 /// element. Deliberately independent of `max_depth` (which bounds the quadratic cost of pair
 /// bisection): here the cost is linear in the depth, and points close to the boundary are
-/// the whole purpose (formulation §8.5).
+/// the whole purpose (docs/formulation.md §8.5).
 const POINT_MAX_DEPTH: usize = 48;
 
 /// Visits the quadrature points `(η, weight in ds)` of an adaptive rule on f for a field
@@ -634,8 +635,8 @@ pub fn point_integrals_on(
     (pd, ps)
 }
 
-/// Galerkin body-force loads of one test element e (formulation §4.1), per shape function a:
-/// `w[a] = ∫_e N_a u^b ds` (added to W-rows) and `p[a] = ∫_e N_a σ^b n_e ds` (added to P-rows).
+/// Galerkin body-force loads of one test element e (docs/formulation.md §4.1), per shape function
+/// a: `w[a] = ∫_e N_a u^b ds` (added to W-rows) and `p[a] = ∫_e N_a σ^b n_e ds` (added to P-rows).
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct BodyForceLoads {
     pub w: [Vec2; 2],

@@ -3,7 +3,7 @@
 //! Place in the flow: `model` → **`kernels`** → `quadrature` → `galerkin`. This module knows
 //! nothing about quadrature: every function is a pointwise kernel or an exact closed form.
 //!
-//! Conventions (formulation §1, §2.1): `x` is the effect (field, test) point, `y` the cause
+//! Conventions (docs/formulation.md §1, §2.1): `x` is the effect (field, test) point, `y` the cause
 //! (source, trial) point, `r = x − y`. Plane stress is handled once, in [`Material::new`], by
 //! the substitution `ν̄ = ν/(1+ν)`; every formula below then reads as plane strain.
 //!
@@ -12,9 +12,9 @@
 //! * `G_tu,ik = Σ_ijk n_j(x)` — [`tu_kernel`]; `G_ut = T` (normal at y) — [`t_kernel`].
 //! * `S_kij` — stress at x due to a double-layer density k at y — [`s_kernel`] ([paper eq. 1b]).
 //! * `B = c_S(−ln r I + r̂r̂ᵀ)` — regularised hypersingular kernel of the by-parts form of
-//!   `G_tt` (formulation §0.2, §2.3) — [`b_kernel`].
-//! * Body forces by the Galerkin-vector transformation (formulation §4.1): the domain integral
-//!   `∫_Ω U b dΩ` and its gradient become boundary integrals whose integrands are at worst
+//!   `G_tt` (docs/formulation.md §0.2, §2.3) — [`b_kernel`].
+//! * Body forces by the Galerkin-vector transformation (docs/formulation.md §4.1): the domain
+//!   integral `∫_Ω U b dΩ` and its gradient become boundary integrals whose integrands are at worst
 //!   log-singular. On straight segments these boundary integrals have closed forms, so
 //!   [`body_force_displacement`] and [`body_force_gradient`] are exact for any point, including
 //!   points on or next to the boundary, with no quadrature at all.
@@ -34,7 +34,7 @@ pub type Tensor3 = [[[f64; 2]; 2]; 2];
 /// Isotropic linear elastic material in the plane-strain form used by all kernels.
 ///
 /// `nu` is the *effective* Poisson ratio: the given ν in plane strain, `ν/(1+ν)` in plane
-/// stress (formulation §1.2). The shear modulus is the same in both.
+/// stress (docs/formulation.md §1.2). The shear modulus is the same in both.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Material {
     pub mu: f64,
@@ -82,7 +82,7 @@ impl Material {
     }
 
     /// The body-force constant `κ = (7−8ν)/(16πμ(1−ν))` of the Galerkin-vector identity
-    /// (formulation §4.1); it exists because U as normalised here has no additive constant.
+    /// (docs/formulation.md §4.1); it exists because U as normalised here has no additive constant.
     pub fn body_force_kappa(&self) -> f64 {
         (7.0 - 8.0 * self.nu) / (16.0 * PI * self.mu * (1.0 - self.nu))
     }
@@ -193,7 +193,8 @@ pub fn tu_kernel(m: &Material, r: Vec2, n_x: Vec2) -> Mat2 {
 
 /// Double-layer kernel `G_ut,ik = T_ik` (Brebbia's traction kernel) with the outward normal
 /// `n_y` at the cause point: displacement i at x due to a unit double-layer density k at y.
-/// Integrates to `−I`, `−½I`, `0` for x inside, on a smooth boundary, outside (formulation §2.1).
+/// Integrates to `−I`, `−½I`, `0` for x inside, on a smooth boundary, outside
+/// (docs/formulation.md §2.1).
 #[inline]
 pub fn t_kernel(m: &Material, r: Vec2, n_y: Vec2) -> Mat2 {
     let (len, e) = split(r);
@@ -282,7 +283,7 @@ pub fn b_kernel(m: &Material, r: Vec2) -> Mat2 {
     [[c * (lg + e[0] * e[0]), off], [off, c * (lg + e[1] * e[1])]]
 }
 
-/// A straight boundary element from `p` to `q` (formulation §1.1).
+/// A straight boundary element from `p` to `q` (docs/formulation.md §1.1).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Segment {
     pub p: Vec2,
@@ -462,7 +463,7 @@ fn segment_moments(seg: &Segment, x: Vec2) -> (SegmentMoments, f64, f64) {
 /// constant body force `b` over the body bounded by `boundary` (all loops, outward normals),
 /// whose area is `area` (see [`boundary_area`]).
 ///
-/// Formulation §4.1 with `n = n(y)`:
+/// docs/formulation.md §4.1 with `n = n(y)`:
 /// `u^b_i = (1/8πμ) ∮ (2 ln r + 1)[b_i (r·n) − r_i (b·n)/(2(1−ν))] ds + κ b_i |Ω|` and
 /// `∂_k u^b_i = (1/8πμ) ∮ { b_i[(2 ln r + 1) n_k + 2 r̂_k (r̂·n)]
 ///                         − (b·n)[(2 ln r + 1) δ_ik + 2 r̂_i r̂_k]/(2(1−ν)) } ds`,
@@ -517,12 +518,12 @@ pub fn body_force_fields(
 }
 
 /// Body-force displacement `u^b(x) = ∫_Ω U(x,y) b dΩ_y` for a constant body force `b`
-/// (formulation §4.1), by exact boundary integrals over `boundary`.
+/// (docs/formulation.md §4.1), by exact boundary integrals over `boundary`.
 pub fn body_force_displacement(m: &Material, x: Vec2, boundary: &[Segment], b: Vec2) -> Vec2 {
     body_force_fields(m, x, boundary, b, boundary_area(boundary)).0
 }
 
-/// Gradient `g[i][k] = ∂u^b_i/∂x_k` of the body-force displacement (formulation §4.1). The
+/// Gradient `g[i][k] = ∂u^b_i/∂x_k` of the body-force displacement (docs/formulation.md §4.1). The
 /// log-singular integrand is integrated exactly, so x may lie on or near the boundary.
 pub fn body_force_gradient(m: &Material, x: Vec2, boundary: &[Segment], b: Vec2) -> Mat2 {
     body_force_fields(m, x, boundary, b, 0.0).1

@@ -5,7 +5,7 @@
 //!
 //! * Gauss–Legendre on \[0,1\] for any order (nodes by Newton iteration on the Legendre
 //!   three-term recurrence) — [`gauss`].
-//! * Vertex-adjacent element pairs (formulation §2.4b): the singularity sits at the corner
+//! * Vertex-adjacent element pairs (docs/formulation.md §2.4b): the singularity sits at the corner
 //!   (0,0) of the parameter square. Split the square along its diagonal, map each triangle by
 //!   Duffy's transformation `(s,t) = (ρ, ρw)` / `(ρw, ρ)` (Jacobian ρ) and grade `ρ = u³`.
 //!   A `1/r` integrand becomes smooth and `ln r` becomes `u⁵ ln u`, so n×n Gauss points in
@@ -259,7 +259,8 @@ impl QuadratureSettings {
         }
     }
 
-    /// The verified default (formulation Appendix A): operator residuals about 1e-11 relative.
+    /// The verified default (docs/formulation.md Appendix A): operator residuals about 1e-11
+    /// relative.
     pub fn standard() -> Self {
         QuadratureSettings {
             duffy_order: 10,

@@ -1,5 +1,5 @@
 //! The collapse search: the largest load multiplier t with an equilibrium
-//! (docs/formulation.md §9).
+//! (docs/formulation.md §11).
 //!
 //! Place in the flow: called by the `driver` before the run itself, which is then made at
 //! the multiplier found. Each trial is a single step from the unloaded state at t; a trial

@@ -1,4 +1,5 @@
-//! Status-driven multidomain assembly on the interfaces ([paper eqs. 15–25], formulation §5).
+//! Status-driven multidomain assembly on the interfaces ([paper eqs. 15–25],
+//! docs/formulation.md §5).
 //!
 //! Place in the flow: `condensation` → **`interface`** → solve / contact. Every interface pair
 //! j and local component c (s or n) has a status:

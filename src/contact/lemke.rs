@@ -1,5 +1,5 @@
 //! Lemke's complementary pivoting for the linear complementarity problem
-//! `w = M z + q, w ≥ 0, z ≥ 0, wᵀz = 0` (Cottle–Pang–Stone 1992; formulation §6.4).
+//! `w = M z + q, w ≥ 0, z ≥ 0, wᵀz = 0` (Cottle–Pang–Stone 1992; docs/formulation.md §6.4).
 //!
 //! Place in the flow: `lcp` (the inner contact problem) → **`lemke`** → `contact`: the exact,
 //! finite cross-check of the other solvers and the fallback of the outer loop. For a P-matrix (every SPD matrix is one) Lemke's

@@ -14,7 +14,7 @@
 //! `tangential = "stick"`, the tangential tie of a pair (tied while closed). The driver fixes
 //! both, solves the inner LCP (unique when the opening stiffness is positive definite), then
 //! drops the cohesion of the pairs found open and ties exactly the closed stick pairs, and
-//! repeats until nothing changes (formulation §6.1). Every solver runs the same outer loop,
+//! repeats until nothing changes (docs/formulation.md §6.1). Every solver runs the same outer loop,
 //! so they reach the same statuses:
 //!
 //! * `evolutive` — the paper's iterative LCP: one switch per iteration, every state recorded;

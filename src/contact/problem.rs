@@ -1,4 +1,4 @@
-//! The one discrete contact problem that every solver solves (formulation §6.2 (ii)).
+//! The one discrete contact problem that every solver solves (docs/formulation.md §6.2 (ii)).
 //!
 //! Place in the flow: `bem` (per-body condensed operators D00, Z̄0) → **`problem`** → the
 //! solvers (`evolutive`, `active_set`, `lemke`, `qp`) → results.

@@ -1,5 +1,5 @@
 //! The contact problem as one convex quadratic programme, solved with Clarabel (the only
-//! module that touches Clarabel; [paper §3.2], formulation §6.3).
+//! module that touches Clarabel; [paper §3.2], docs/formulation.md §6.3).
 //!
 //! Place in the flow: `lcp` (the inner problem) → **`qp`** → `contact`. The inner LCP of
 //! `problem` is the optimality system of

@@ -3,8 +3,8 @@
 //! Place in the flow: used by `scene` (parsing and validation) and later stages (evaluation
 //! at nodes and quadrature points). Expressions are parsed once by the `evalexpr` crate and
 //! evaluated through a small context of our own that knows exactly `x`, `y`, `t`, `pi` and the
-//! functions SPEC.md lists (`sqrt sin cos tan exp ln abs atan2 min max`), so any other name is
-//! refused when the scene is read, not in the middle of a solve.
+//! functions docs/scene.md §9 lists (`sqrt sin cos tan exp ln abs atan2 min max`), so any other
+//! name is refused when the scene is read, not in the middle of a solve.
 //!
 //! Integer literals are read as floating-point numbers: `"1/2*x"` means 0.5·x, as an engineer
 //! would expect, not integer division.

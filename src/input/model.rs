@@ -8,17 +8,17 @@
 //!   surfaces (a curve bounding two surfaces of the same body is internal and dropped); its
 //!   2-node line elements are chained into closed loops. The outer loop is oriented
 //!   counter-clockwise and holes clockwise, by signed area and nesting, whatever direction
-//!   gmsh drew each curve in (formulation §1.1).
+//!   gmsh drew each curve in (docs/formulation.md §1.1).
 //! * **Nodes are per body**: a mesh node on an interface appears once in each of the two
-//!   bodies (formulation §5.1).
+//!   bodies (docs/formulation.md §5.1).
 //! * **Boundary parts** are Physical Curves with per-component conditions; curves the scene
 //!   does not list are traction-free.
 //! * **Interfaces** are Physical Curves shared by exactly two bodies, turned into node pairs
 //!   (matched by mesh node, or by position when the two sides were drawn as separate
-//!   coincident curves) with the outward normal of the first body (formulation §5.4–§5.5).
+//!   coincident curves) with the outward normal of the first body (docs/formulation.md §5.4–§5.5).
 //! * **Double traction nodes** (`traction_break`) at corners and changes of condition
-//!   (formulation §2.2, §8.3).
-//! * **Node classes** per displacement component (formulation §2.2): U1 known (touching a
+//!   (docs/formulation.md §2.2, §8.3).
+//! * **Node classes** per displacement component (docs/formulation.md §2.2): U1 known (touching a
 //!   displacement condition in that direction), U0 unknown on an interface, U2 unknown
 //!   elsewhere.
 //!
@@ -84,7 +84,7 @@ pub struct Loop {
     pub is_hole: bool,
 }
 
-/// Class of one displacement component at a node (formulation §2.2).
+/// Class of one displacement component at a node (docs/formulation.md §2.2).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum DofClass {
     /// U1: prescribed by a displacement condition.
@@ -1788,7 +1788,7 @@ fn constrained_directions(e: &Element, parts: &[Part]) -> Vec<([f64; 2], usize, 
     out
 }
 
-/// Directions and classes of the displacement components at each node (formulation §2.2):
+/// Directions and classes of the displacement components at each node (docs/formulation.md §2.2):
 /// directions prescribed by the adjacent elements are known (U1), the others unknown, U0 on
 /// an interface and U2 elsewhere. Nearly parallel directions of the same condition on a
 /// curved boundary (un on an arc) are averaged into one.

@@ -18,7 +18,7 @@ use crate::error::{did_you_mean, Error, Result};
 use crate::input::expr::{Expr, Scalar};
 use crate::input::tables::{Glob, Pattern, Tables};
 
-/// Plane strain or plane stress (SPEC.md `plane`).
+/// Plane strain or plane stress (docs/scene.md §2, `plane`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Plane {
     Strain,

@@ -155,7 +155,7 @@ impl MeshRecord {
     }
 }
 
-/// The Galerkin system of one body and its condensation (formulation §3):
+/// The Galerkin system of one body and its condensation (docs/formulation.md §3):
 /// `G = [[A, A0], [A0ᵀ, A00]]`, load `[L̂; L̂0]`, `D00` and `Z̄0`.
 #[derive(Debug, Clone, Default)]
 pub struct BodyOperators {

@@ -6,20 +6,20 @@
 //! [`BodyField`], its body force (already multiplied by the load factor) and the
 //! [`QuadratureSettings`]. Outputs are plain arrays in global components.
 //!
-//! * **Boundary stress** (formulation §2.4, "Interior points"): at an element end the traction
-//!   gives `σ_nn = t_n`, `σ_ns = t_s`, and the tangential strain of the P1 displacement gives
-//!   `σ_ss = E'ε_ss + ν'σ_nn`, `ε_ss = du_s/ds`. With the effective Poisson ratio ν of
+//! * **Boundary stress** (docs/formulation.md §2.4, "Interior points"): at an element end the
+//!   traction gives `σ_nn = t_n`, `σ_ns = t_s`, and the tangential strain of the P1 displacement
+//!   gives `σ_ss = E'ε_ss + ν'σ_nn`, `ε_ss = du_s/ds`. With the effective Poisson ratio ν of
 //!   [`Material`] (ν̄ = ν/(1+ν) in plane stress) both planes read `E' = 2μ/(1−ν)`,
 //!   `ν' = ν/(1−ν)`: the plane-strain `E/(1−ν²)`, `ν/(1−ν)` and the plane-stress `E`, `ν` of
 //!   the formulation. [`boundary_stress`] uses the element's own (one-sided, first-order)
 //!   strain; [`smoothed_boundary_stress`] and [`nodal_boundary_stress`] use the centred strain
 //!   at smooth nodes and a traction fit at corners (second order).
-//! * **Interior points**: the Somigliana identities [paper eqs. 1a,b] (formulation §2.1),
+//! * **Interior points**: the Somigliana identities [paper eqs. 1a,b] (docs/formulation.md §2.1),
 //!   `u_i(x) = ∫ U_ik t_k − ∫ T_ik u_k + u^b_i` and `σ_ij(x) = ∫ Σ_ijk t_k − ∫ S_kij u_k + σ^b_ij`,
-//!   with the P1 boundary data and the exact body-force terms `u^b`, `σ^b` of formulation §4.1.
-//!   [`somigliana`] evaluates them as they are.
-//! * **Near the boundary** (formulation §8.5) the identities with P1 data are only first order
-//!   within about half an element of the boundary, and their error grows like `log(L/d)`
+//!   with the P1 boundary data and the exact body-force terms `u^b`, `σ^b` of docs/formulation.md
+//!   §4.1. [`somigliana`] evaluates them as they are.
+//! * **Near the boundary** (docs/formulation.md §8.5) the identities with P1 data are only first
+//!   order within about half an element of the boundary, and their error grows like `log(L/d)`
 //!   towards nodes and corners, where the data have kinks (measured in tests/postprocess.rs).
 //!   [`interior`] therefore interpolates across a layer of [`BOUNDARY_LAYER`] element lengths,
 //!   along the ray from the nearest boundary point (or corner) through x, between the boundary
@@ -30,8 +30,8 @@
 //! * **Invariants**: [`out_of_plane_stress`], [`von_mises`], [`principal_stresses`].
 //!
 //! **Scaled coordinates.** The boundary operators of a body are integrated in the scaled
-//! coordinates `x' = (x − c)/L` of [`crate::bem::assembly::scaling`] (formulation §8.4), which
-//! amounts to the single-layer kernel `U + const·I`. The interior identities use the same
+//! coordinates `x' = (x − c)/L` of [`crate::bem::assembly::scaling`] (docs/formulation.md §8.4),
+//! which amounts to the single-layer kernel `U + const·I`. The interior identities use the same
 //! coordinates, so that interior values belong to the same discrete solution as the boundary
 //! values. Back in physical units the single-layer displacement integrals carry a factor L,
 //! the double layer 1, the stress single layer 1, the stress double layer 1/L, and the
@@ -138,7 +138,7 @@ fn project(seg: &Segment, x: Vec2) -> (f64, f64) {
 // Boundary stress recovery.
 
 /// `E' = 2μ/(1−ν)` and `ν' = ν/(1−ν)` with the effective ν of the material: plane strain
-/// `E/(1−ν²)`, `ν/(1−ν)`; plane stress (ν̄ = ν/(1+ν)) `E`, `ν` (formulation §2.4).
+/// `E/(1−ν²)`, `ν/(1−ν)`; plane stress (ν̄ = ν/(1+ν)) `E`, `ν` (docs/formulation.md §2.4).
 fn recovery_moduli(m: &Material) -> (f64, f64) {
     (2.0 * m.mu / (1.0 - m.nu), m.nu / (1.0 - m.nu))
 }
@@ -156,7 +156,7 @@ fn from_local(s: Vec2, n: Vec2, ss: f64, nn: f64, ns: f64) -> Mat2 {
 }
 
 /// The stress tensor at both ends of every element, indexed `[element][end][i][j]` in global
-/// components, by the recovery formula (formulation §2.4): `σ_nn = t_n`, `σ_ns = t_s`,
+/// components, by the recovery formula (docs/formulation.md §2.4): `σ_nn = t_n`, `σ_ns = t_s`,
 /// `σ_ss = E'ε_ss + ν'σ_nn` with `ε_ss = (u_Q − u_P)·τ/L` of the element's P1 displacement.
 /// Exact for a linear displacement field with its constant stress.
 pub fn boundary_stress(body: &Body, material: &Material, field: &BodyField) -> Vec<[Mat2; 2]> {
@@ -741,7 +741,7 @@ pub fn somigliana(
 ///   element): the Somigliana identities ([`somigliana`]).
 /// * On the boundary: the boundary values at x, i.e. the linear displacement and the
 ///   [`smoothed_boundary_stress`] interpolated along the element.
-/// * In between (formulation §8.5): linear interpolation along a ray from the boundary
+/// * In between (docs/formulation.md §8.5): linear interpolation along a ray from the boundary
 ///   through x, between the boundary value at its base (the nearest boundary point, or a
 ///   corner node within the layer, with the [`nodal_boundary_stress`] there) and the
 ///   identities at distance ρ = [`BOUNDARY_LAYER`]·L_e along the ray. Of these rays the one

@@ -1,6 +1,6 @@
 //! Test-local assembly of the Galerkin operators on one closed loop (continuous P1
 //! displacement hats, discontinuous P1 tractions), for the operator-level checks of
-//! formulation §7 items 5–8. Not the crate's assembly: deliberately plain and dense.
+//! docs/formulation.md §7 items 5–8. Not the crate's assembly: deliberately plain and dense.
 #![allow(dead_code, clippy::needless_range_loop)]
 
 use faer::Mat;
@@ -62,7 +62,7 @@ impl Loop {
     }
 }
 
-/// The A1 quadrilateral of formulation Appendix A.
+/// The A1 quadrilateral of docs/formulation.md Appendix A.
 pub const QUAD: [Vec2; 4] = [[0.0, 0.0], [1.0, 0.0], [1.2, 0.6], [0.1, 0.8]];
 
 /// Dense operators. Traction DOF (e, a, i) = 4e + 2a + i; displacement DOF (node j, i) = 2j + i.
@@ -215,7 +215,7 @@ pub fn hat_row_norm(lp: &Loop, r: &[f64]) -> f64 {
 }
 
 /// Calderón residuals `r1 = V t − (½M + K) u` and `r2 = D u − (½Mᵀ − Kᵀ) t`
-/// (formulation §2.3), optionally with body-force terms added by the caller.
+/// (docs/formulation.md §2.3), optionally with body-force terms added by the caller.
 pub fn calderon_residuals(ops: &Operators, u: &[f64], t: &[f64]) -> (Vec<f64>, Vec<f64>) {
     let vt = matvec(&ops.v, t);
     let mu = matvec(&ops.m, u);

@@ -1,5 +1,5 @@
-//! Closed-form elastic fields of the analytic benchmarks (formulation §9), with the geometry
-//! of the scenes that pose them (`pipelines/<name>.toml` on `geo/<name>.geo`), for
+//! Closed-form elastic fields of the analytic benchmarks (docs/formulation.md §9), with the
+//! geometry of the scenes that pose them (`pipelines/<name>.toml` on `geo/<name>.geo`), for
 //! `tests/convergence.rs`.
 //!
 //! Every benchmark gives displacement and stress at any point of its domain, its material
@@ -212,7 +212,8 @@ fn in_quarter_ring(p: P2, a: f64, b: f64) -> bool {
     p[0] > 0.0 && p[1] > 0.0 && r > a && r < b
 }
 
-/// §9.2: the quarter thick cylinder a = 0.5 < r < b = 1, p_i = 10, E = 1000, ν = 0.3.
+/// docs/formulation.md §9.2: the quarter thick cylinder a = 0.5 < r < b = 1, p_i = 10,
+/// E = 1000, ν = 0.3.
 pub struct Lame {
     pub ring: Ring,
 }
@@ -267,9 +268,9 @@ impl Exact for Lame {
     }
 }
 
-/// §9.2 compound cylinder: inner ring a = 0.5 < r < c = 0.75 (E = 1000) bonded to the outer
-/// ring c < r < b = 1 (E = 3000), ν = 0.3, p_i = 10, p_o = 0; the interface pressure p_c
-/// comes from the continuity of u_r at r = c (105/23 for these numbers).
+/// docs/formulation.md §9.2 compound cylinder: inner ring a = 0.5 < r < c = 0.75 (E = 1000) bonded
+/// to the outer ring c < r < b = 1 (E = 3000), ν = 0.3, p_i = 10, p_o = 0; the interface pressure
+/// p_c comes from the continuity of u_r at r = c (105/23 for these numbers).
 pub struct Compound {
     pub inner: Ring,
     pub outer: Ring,
@@ -380,7 +381,8 @@ impl Exact for Compound {
     }
 }
 
-/// §9.3: the quarter plate [0, W]² with the hole r < a, remote σ_xx = S (plane strain).
+/// docs/formulation.md §9.3: the quarter plate [0, W]² with the hole r < a, remote
+/// σ_xx = S (plane strain).
 pub struct Kirsch {
     pub a: f64,
     pub half_width: f64,
@@ -463,8 +465,8 @@ impl Exact for Kirsch {
     }
 }
 
-/// §9.4: the Timoshenko–Goodier cantilever [0, L] × [−c, c] (plane stress), end load P on
-/// x = 0, held at x = L.
+/// docs/formulation.md §9.4: the Timoshenko–Goodier cantilever [0, L] × [−c, c] (plane stress), end
+/// load P on x = 0, held at x = L.
 pub struct Cantilever {
     pub length: f64,
     pub c: f64,
@@ -542,7 +544,7 @@ impl Exact for Cantilever {
 }
 
 /// A column [−w/2, w/2] × [0, H] under its weight γ (plane strain): σ_yy = γ(y − H),
-/// σ_xx = σ_xy = 0, the displacement of formulation §4.2 with y0 = H.
+/// σ_xx = σ_xy = 0, the displacement of docs/formulation.md §4.2 with y0 = H.
 pub struct Column {
     pub width: f64,
     pub height: f64,
