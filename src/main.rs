@@ -29,6 +29,7 @@ enum MethodArg {
     Lcp,
     Qp,
     Both,
+    Sparse,
 }
 
 #[derive(Subcommand)]
@@ -230,6 +231,7 @@ fn main() -> ExitCode {
                     MethodArg::Lcp => Method::Lcp,
                     MethodArg::Qp => Method::Qp,
                     MethodArg::Both => Method::Both,
+                    MethodArg::Sparse => Method::Sparse,
                 }),
                 quiet,
                 sets: set,

@@ -95,6 +95,8 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     }
     let mesh = mesh::read_msh(&mesh_path)?;
     let model = model::build(&scene, &mesh, &mesh_path)?;
+    let mut scene = scene;
+    scene.solve.choose_method(model.unilateral_pair_count());
     let plan = plan::plan(&scene, &model)?;
     Ok(Loaded {
         scene,
@@ -273,6 +275,8 @@ fn load_for_run(scene_path: &Path, opts: &RunOptions, timings: &mut Timings) -> 
     )?;
     if let Some(m) = opts.method {
         loaded.scene.solve.method = m;
+        loaded.scene.solve.method_given = true;
+        loaded.plan = plan::plan(&loaded.scene, &loaded.model)?;
     }
     if let Some(o) = &opts.out {
         loaded.scene.output.directory = o.clone();

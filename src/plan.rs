@@ -379,6 +379,16 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
                 format!("{form} with Clarabel{cohesion_note}{steps_note}"),
             ));
         }
+        if scene.solve.method == Method::Sparse {
+            stages.push((
+                "contact_sparse",
+                format!(
+                    "active set on the sparse system of displacements and openings \
+                     ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
+                     {steps_note}"
+                ),
+            ));
+        }
     }
     let mut post = vec!["boundary stresses and interface tractions".to_string()];
     if scene.output.field {

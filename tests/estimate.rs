@@ -91,11 +91,12 @@ fn the_estimate_of_a_many_body_wall_follows_its_peak_memory() {
         est >= peak && est <= 2.5 * peak,
         "estimate {est:e}, peak {peak:e}"
     );
-    // 410 bodies, estimated only (the run takes half a minute; README, Speed: 0.73 GB): no
-    // dense matrix over its 8050 pairs (8 · (8 · 8050)² bytes = 33 GB), under 2.5 GB.
+    // 410 bodies, estimated only (solved by the sparse solver, as a scene without `method`
+    // of over 3000 unilateral pairs is: 0.72 GB measured with history "final"): no dense
+    // matrix over its 8050 pairs (8 · (8 · 8050)² bytes = 33 GB), under 2.5 GB.
     let (scene, msh) = wall(&dir, 20, 20);
     let (big, bodies) = estimate(&scene, &msh);
     assert_eq!(bodies, 410);
     println!("410-body wall: estimate {:.0} MB", big / 1e6);
-    assert!(big < 2.5e9 && big > 0.73e9, "{big:e}");
+    assert!(big < 2.5e9 && big > 0.72e9, "{big:e}");
 }

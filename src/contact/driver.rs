@@ -152,8 +152,18 @@ fn timed(scene: &Scene) -> bool {
 fn solvers(method: Method, open_rows: usize) -> (Solver, Vec<Solver>) {
     let main = match method {
         Method::Qp => Solver::Qp,
+        Method::Sparse => Solver::Sparse,
         _ => Solver::Evolutive,
     };
+    if method == Method::Sparse {
+        // The paper's path cross-checks the sparse solver while its columns are affordable.
+        let checks = if open_rows <= 2000 {
+            vec![Solver::Evolutive]
+        } else {
+            Vec::new()
+        };
+        return (main, checks);
+    }
     let mut checks = vec![Solver::ActiveSet];
     if method == Method::Both {
         checks.push(Solver::Qp);

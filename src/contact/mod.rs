@@ -37,6 +37,7 @@ pub mod lcp;
 pub mod lemke;
 pub mod problem;
 pub mod qp;
+pub mod sparse;
 
 use std::collections::HashSet;
 
@@ -56,6 +57,8 @@ pub enum Solver {
     ActiveSet,
     Lemke,
     Qp,
+    /// The active set on the sparse system of displacements and openings (`sparse`).
+    Sparse,
 }
 
 impl Solver {
@@ -65,6 +68,7 @@ impl Solver {
             Solver::ActiveSet => "active-set",
             Solver::Lemke => "lemke",
             Solver::Qp => "qp",
+            Solver::Sparse => "sparse",
         }
     }
 
@@ -75,6 +79,7 @@ impl Solver {
             Solver::ActiveSet => "contact_active_set",
             Solver::Lemke => "contact_lemke",
             Solver::Qp => "contact_qp",
+            Solver::Sparse => "contact_sparse",
         }
     }
 }
@@ -167,6 +172,9 @@ pub struct Session<'a> {
     pub prepared: &'a Operators,
     pub problem: Problem,
     pub cols: Columns,
+    /// The sparse system of displacements and openings, built when `Solver::Sparse` first
+    /// runs.
+    pub sparse: Option<sparse::SparseSystem>,
     /// Outer iterations of the Tresca fixed point after which Coulomb's problem is solved
     /// exactly (Klarbring's LCP through Lemke) to restart it.
     pub coupled_after: usize,
@@ -179,6 +187,7 @@ impl<'a> Session<'a> {
             prepared,
             problem: Problem::new(model, prepared)?,
             cols: Columns::default(),
+            sparse: None,
             coupled_after: FRICTION_COUPLED_AFTER,
         })
     }
@@ -350,7 +359,15 @@ impl<'a> Session<'a> {
             let it0 = iterations;
             lp.iterations_recorded = it0;
             let budget = max_iterations.saturating_sub(it0);
-            let outcome = match inner_solve(&inner, &mut self.cols, method, &st, budget, &mut lp) {
+            let outcome = match inner_solve(
+                &inner,
+                &mut self.cols,
+                &mut self.sparse,
+                method,
+                &st,
+                budget,
+                &mut lp,
+            ) {
                 Ok(o) => o,
                 Err(e) => {
                     // Name the mechanism: the pivoting path finds the rows that cannot open.
@@ -829,9 +846,11 @@ const FRICTION_COUPLED_AFTER: usize = 10;
 
 /// One inner solve by `method` from the statuses of `st`, within `budget` iterations;
 /// the evolutive path records its states in `lp`.
+#[allow(clippy::too_many_arguments)]
 fn inner_solve(
     inner: &Inner,
     cols: &mut Columns,
+    system: &mut Option<sparse::SparseSystem>,
     method: Solver,
     st: &StepState,
     budget: usize,
@@ -863,7 +882,31 @@ fn inner_solve(
         Solver::ActiveSet => {
             let out = active_set::solve(inner, cols, &st.open, &st.sign, budget);
             Ok(if out.stalled {
-                hand_over(inner, cols, out, budget)
+                hand_over(inner, cols, out, budget, "active-set iteration cycled")
+            } else {
+                out
+            })
+        }
+        Solver::Sparse => {
+            if system.is_none() {
+                let built = sparse::SparseSystem::new(inner.problem)
+                    .map_err(|message| InnerFailure::State { message })?;
+                *system = Some(built);
+            }
+            let Some(sys) = system.as_ref() else {
+                return Err(InnerFailure::State {
+                    message: "the sparse contact system is missing".into(),
+                });
+            };
+            let out = sparse::solve(inner, sys, &st.open, &st.sign, budget);
+            Ok(if out.stalled {
+                hand_over(
+                    inner,
+                    cols,
+                    out,
+                    budget,
+                    "sparse active-set iteration stopped",
+                )
             } else {
                 out
             })
@@ -898,11 +941,11 @@ fn hand_over(
     cols: &mut Columns,
     stalled: InnerOutcome,
     budget: usize,
+    why: &str,
 ) -> InnerOutcome {
     let mut notes = stalled.notes;
     notes.push(format!(
-        "the active-set iteration cycled after {} iterations; continued with the \
-         evolutive iteration",
+        "the {why} after {} iterations; continued with the evolutive iteration",
         stalled.iterations
     ));
     let st = &stalled.state;

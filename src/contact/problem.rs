@@ -675,6 +675,34 @@ impl Problem {
             .collect()
     }
 
+    /// The number of glued unknowns v.
+    pub(crate) fn n_glued(&self) -> usize {
+        self.n_glued
+    }
+
+    /// The unknowns w = (v, s) that dof `d` moves (`U_d = Σ x·w_k` plus the closed gaps): the
+    /// glued unknowns, then the openings of the rows that can open at `n_glued + r`.
+    pub(crate) fn dof_unknowns(&self, d: usize) -> Vec<(usize, f64)> {
+        let mut out = self.tmap[d].clone();
+        for &(r, x) in &self.offs[d] {
+            if r < self.n_open_rows {
+                out.push((self.n_glued + r, x));
+            }
+        }
+        out
+    }
+
+    /// The gradient over w = (v, s) of the bodies' energy at w = 0 (every gap closed) for a
+    /// load factor, with the cohesion terms of the rows (`Base::cohesion`) added to the rows'
+    /// part: the row forces are `λ = H w + c` on the rows' part.
+    pub(crate) fn linear_term(&self, factor: f64, cohesion: &[f64]) -> Vec<f64> {
+        let u0 = self.displacements(&vec![0.0; self.n_glued], &vec![0.0; self.n_open_rows]);
+        let p0 = self.forces(&u0, factor);
+        let mut c = self.gather(&p0);
+        c.extend((0..self.n_open_rows).map(|r| self.row_force(&p0, r) + cohesion[r]));
+        c
+    }
+
     /// The force of row r from the nodal forces `p` of every body: `λ_r = t_rᵀ P`.
     fn row_force(&self, p: &[Vec<f64>], r: usize) -> f64 {
         self.row_t[r]

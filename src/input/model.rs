@@ -256,6 +256,15 @@ impl Model {
         self.interfaces.iter().map(|i| i.pairs.len()).sum()
     }
 
+    /// The pairs of unilateral interfaces (the contact problem's complementarity rows).
+    pub fn unilateral_pair_count(&self) -> usize {
+        self.interfaces
+            .iter()
+            .filter(|i| i.spec.model == crate::input::scene::InterfaceModel::Unilateral)
+            .map(|i| i.pairs.len())
+            .sum()
+    }
+
     /// The junctions: points where a body meets two or more others (a node of one body in
     /// pairs of two or more interfaces), as (point, bodies meeting there), in body order.
     pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {

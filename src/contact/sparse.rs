@@ -1,0 +1,298 @@
+//! The inner problem on the sparse system of glued displacements and row openings: no column
+//! of the opening stiffness, memory linear in the number of bodies.
+//!
+//! Place in the flow: `lcp` (the inner problem) → **`sparse`** → `contact` (the driver). The
+//! opening stiffness A of `problem` is the Schur complement of the bodies' energy over the
+//! unknowns `w = (v, s)` — the glued displacements v and the openings s of the rows that can
+//! open (docs/formulation.md §6.2):
+//!
+//! ```text
+//!   E(w) = ½ wᵀ H w + cᵀ w,   H = Σ_b T_bᵀ S_b T_b,   λ = ∂E/∂s = (H w + c)_s
+//! ```
+//!
+//! with `U_b = T_b w` plus the closed gaps (`Problem::dof_unknowns`), `c` the gradient at
+//! w = 0 with the rows' cohesion terms (`Problem::linear_term`). H is sparse (bodies couple
+//! only through their rows) and its pattern does not depend on the statuses. A status is
+//! solved by one sparse Cholesky factorisation of H with the closed rows pinned (their rows
+//! and columns replaced by the identity, their openings fixed at the offset): the pattern,
+//! hence the symbolic factorisation, is the same for every status.
+//!
+//! The statuses are found by the primal–dual active set iteration (semismooth Newton,
+//! Hintermüller–Ito–Kunisch): every violated row switches at once. It usually ends in a few
+//! iterations; a repeated status or a status that leaves a body free (the pinned H is not
+//! positive definite) ends it without a verdict (`stalled`), and the driver hands over to
+//! the evolutive iteration.
+
+use std::collections::HashSet;
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Mat, Side};
+
+use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState};
+use crate::contact::problem::Problem;
+
+/// H over w = (v, s) (lower triangle) and its symbolic factorisation.
+pub struct SparseSystem {
+    n_glued: usize,
+    /// Rows that can open.
+    n: usize,
+    h: SparseColMat<usize, f64>,
+    symbolic: SymbolicLlt<usize>,
+}
+
+impl SparseSystem {
+    /// Assembles H of `problem` and analyses its pattern.
+    pub fn new(problem: &Problem) -> Result<SparseSystem, String> {
+        let (n_glued, n) = (problem.n_glued(), problem.n_open_rows);
+        let size = n_glued + n;
+        let mut trip = Vec::new();
+        for (b, op) in problem.ops.iter().enumerate() {
+            let m = op.u_idx.len();
+            let t: Vec<Vec<(usize, f64)>> = (0..m)
+                .map(|l| problem.dof_unknowns(problem.dof_start[b] + l))
+                .collect();
+            for i in 0..m {
+                for j in 0..m {
+                    let sij = op.s[(i, j)];
+                    if sij == 0.0 {
+                        continue;
+                    }
+                    for &(gi, xi) in &t[i] {
+                        for &(gj, xj) in &t[j] {
+                            if gj >= gi {
+                                trip.push(Triplet::new(gj, gi, xi * xj * sij));
+                            }
+                        }
+                    }
+                }
+            }
+        }
+        // Every diagonal entry exists, so that a pinned row keeps its place in the pattern.
+        trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
+        let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
+            .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
+        let symbolic = SymbolicLlt::try_new(h.symbolic(), Side::Lower)
+            .map_err(|e| format!("analysing the sparse contact system: {e:?}"))?;
+        Ok(SparseSystem {
+            n_glued,
+            n,
+            h,
+            symbolic,
+        })
+    }
+
+    /// Number of unknowns w.
+    pub fn size(&self) -> usize {
+        self.n_glued + self.n
+    }
+
+    /// Stored entries of H (lower triangle).
+    pub fn stored(&self) -> usize {
+        self.h.val().len()
+    }
+
+    /// `H x` with the full symmetric H from its lower triangle.
+    fn apply(&self, x: &[f64]) -> Vec<f64> {
+        let mut y = vec![0.0; x.len()];
+        let sym = self.h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), self.h.val());
+        for c in 0..x.len() {
+            for p in cp[c]..cp[c + 1] {
+                let r = ri[p];
+                y[r] += val[p] * x[c];
+                if r != c {
+                    y[c] += val[p] * x[r];
+                }
+            }
+        }
+        y
+    }
+
+    /// The state of the status `open` (free rows open whatever `open` says) with the slip
+    /// directions `sign` of slipping friction rows; None when the status leaves a body free.
+    /// With `reg > 0` every open row gets that fraction of its own stiffness added to its
+    /// diagonal: a body that the status leaves free then moves far but finitely, and the
+    /// iteration closes the rows it runs into (used for iterates only, never for a result).
+    fn state(
+        &self,
+        inner: &Inner,
+        c: &[f64],
+        open: &[bool],
+        sign: &[f64],
+        reg: f64,
+    ) -> Option<InnerState> {
+        let (ng, n) = (self.n_glued, self.n);
+        let open: Vec<bool> = (0..n).map(|r| open[r] || inner.free[r]).collect();
+        let mut sg = vec![0.0; n];
+        // Fixed openings of the closed rows, the others zero.
+        let mut x = vec![0.0; ng + n];
+        for r in 0..n {
+            if open[r] {
+                if inner.is_friction(r) {
+                    sg[r] = if sign[r] < 0.0 { -1.0 } else { 1.0 };
+                }
+            } else {
+                x[ng + r] = inner.base.offset[r];
+            }
+        }
+        let hx = self.apply(&x);
+        let target = |r: usize| {
+            if inner.is_friction(r) {
+                -sg[r] * inner.bound[r]
+            } else {
+                0.0
+            }
+        };
+        let rhs: Vec<f64> = (0..ng + n)
+            .map(|k| {
+                if k >= ng && !open[k - ng] {
+                    x[k]
+                } else {
+                    let t = if k >= ng { target(k - ng) } else { 0.0 };
+                    t - c[k] - hx[k]
+                }
+            })
+            .collect();
+        let pinned = |k: usize| k >= ng && !open[k - ng];
+        let sym = self.h.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let mut val = self.h.val().to_vec();
+        for col in 0..ng + n {
+            for p in cp[col]..cp[col + 1] {
+                let row = ri[p];
+                if pinned(row) || pinned(col) {
+                    val[p] = if row == col { 1.0 } else { 0.0 };
+                } else if row == col && col >= ng && reg > 0.0 {
+                    val[p] += reg * val[p].abs().max(f64::MIN_POSITIVE);
+                }
+            }
+        }
+        let m = SparseColMatRef::new(sym, &val);
+        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), m, Side::Lower).ok()?;
+        let b = Mat::<f64>::from_fn(ng + n, 1, |i, _| rhs[i]);
+        let sol = llt.solve(&b);
+        let w: Vec<f64> = (0..ng + n).map(|i| sol[(i, 0)]).collect();
+        // A factorisation can pass on a matrix that is singular up to roundoff (a body left
+        // free): its displacements then run to about 1/ε of the loaded state's.
+        let size = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let reference = size(&inner.base.v0).max(size(&inner.base.offset));
+        if !w.iter().all(|v| v.is_finite()) || (reg == 0.0 && size(&w) > SINGULAR * reference) {
+            return None;
+        }
+        let grad = self.apply(&w);
+        let mut lambda: Vec<f64> = (0..n).map(|r| grad[ng + r] + c[ng + r]).collect();
+        for r in 0..n {
+            if open[r] {
+                lambda[r] = target(r);
+            }
+        }
+        Some(InnerState {
+            open,
+            sign: sg,
+            s: w[ng..].to_vec(),
+            lambda,
+        })
+    }
+}
+
+/// Relative diagonal added to the open rows of an iterate that leaves a body free.
+const REGULARISATION: f64 = 1e-8;
+
+/// Displacements this many times those of the loaded, all-closed state mean a body is free.
+const SINGULAR: f64 = 1e7;
+
+/// Solves the inner problem from the statuses `open` and slip directions `sign` by the
+/// primal–dual active set iteration on the sparse system. Every violated row switches at
+/// once; after a repeated status only the larger half of the violations switch (then a
+/// quarter, …), which breaks the cycles of the full step.
+pub fn solve(
+    inner: &Inner,
+    sys: &SparseSystem,
+    open: &[bool],
+    sign: &[f64],
+    max_iterations: usize,
+) -> InnerOutcome {
+    let c = inner
+        .problem
+        .linear_term(inner.base.factor, &inner.base.cohesion);
+    let mut sign = sign.to_vec();
+    let mut open = inner.start_open(open, &sign);
+    let mut seen: HashSet<Vec<i8>> = HashSet::new();
+    let mut iterations = 0;
+    let mut damping = 0u32;
+    let mut last: Option<InnerState> = None;
+    loop {
+        let exact = sys.state(inner, &c, &open, &sign, 0.0);
+        let (st, regularised) = match exact {
+            Some(st) => (st, false),
+            None => match sys.state(inner, &c, &open, &sign, REGULARISATION) {
+                Some(st) => (st, true),
+                None => {
+                    let state = last.unwrap_or_else(|| closed_state(inner));
+                    return stalled(state, iterations, "a status leaves a body free");
+                }
+            },
+        };
+        let v = inner.violations(&st);
+        if v.is_empty() && !regularised {
+            return InnerOutcome {
+                state: st,
+                iterations,
+                converged: true,
+                notes: Vec::new(),
+                blocked: Vec::new(),
+                stalled: false,
+            };
+        }
+        if v.is_empty() {
+            // The statuses hold only with the regularisation: a body is free.
+            return stalled(st, iterations, "a status leaves a body free");
+        }
+        if iterations >= max_iterations {
+            return stalled(st, iterations, "the iteration limit");
+        }
+        if !seen.insert(status_key(&st)) {
+            damping += 1;
+            if damping > 30 {
+                return stalled(st, iterations, "a repeated status");
+            }
+        }
+        open = st.open.clone();
+        sign = st.sign.clone();
+        let take = if damping == 0 {
+            v.len()
+        } else {
+            (v.len() >> damping.min(31)).max(1)
+        };
+        for x in &v[..take] {
+            open[x.row] = !open[x.row];
+            sign[x.row] = if open[x.row] { x.sign } else { 0.0 };
+        }
+        last = Some(st);
+        iterations += 1;
+    }
+}
+
+fn stalled(state: InnerState, iterations: usize, why: &str) -> InnerOutcome {
+    InnerOutcome {
+        state,
+        iterations,
+        converged: false,
+        notes: vec![format!("the sparse active set stopped: {why}")],
+        blocked: Vec::new(),
+        stalled: true,
+    }
+}
+
+/// Every row closed at its offset, with the forces of the base.
+fn closed_state(inner: &Inner) -> InnerState {
+    let n = inner.n();
+    InnerState {
+        open: vec![false; n],
+        sign: vec![0.0; n],
+        s: inner.base.offset.clone(),
+        lambda: inner.base.lambda0.clone(),
+    }
+}

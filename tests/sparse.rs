@@ -1,0 +1,158 @@
+//! The sparse solver (`method = "sparse"`: the active set on the sparse system of
+//! displacements and openings, no column of the opening stiffness) against the paper's
+//! evolutive path: the same statuses pair by pair and the same tractions, on the shipped
+//! scenes of every law (frictionless, stick, friction, cohesion, junctions), and the same
+//! mechanism where none exists.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use support::*;
+
+/// Runs `scene` with `method` into `out`; the mesh is meshed from `geo` unless the scene
+/// meshes its own `.geo`.
+fn run(scene: &str, geo: Option<&str>, out: &Path, method: &str) -> (i32, String) {
+    let scene_path = root().join(format!("pipelines/{scene}.toml"));
+    let mut args: Vec<String> = vec!["run".into(), scene_path.to_string_lossy().into_owned()];
+    if let Some(g) = geo {
+        let msh: PathBuf = gmsh(
+            &root().join(format!("geo/{g}.geo")),
+            out.parent().expect("a parent folder"),
+            &format!("{g}.msh"),
+            false,
+            &[],
+        );
+        args.push("--mesh".into());
+        args.push(msh.to_string_lossy().into_owned());
+    }
+    for a in [
+        "--out",
+        &out.to_string_lossy(),
+        "--method",
+        method,
+        "--quiet",
+    ] {
+        args.push(a.to_string());
+    }
+    let refs: Vec<&str> = args.iter().map(String::as_str).collect();
+    let (code, _, err) = sgbem(&refs);
+    (code, err)
+}
+
+fn summary(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary JSON")
+}
+
+/// The same statuses pair by pair and tractions within `1e-8` of the largest traction of the
+/// run, on every interface of two runs of one scene.
+fn assert_same_interfaces(scene: &str, a: &Path, b: &Path) {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(a.join("interfaces"))
+        .expect("interfaces folder")
+        .map(|e| e.expect("entry").path())
+        .collect();
+    files.sort();
+    assert!(!files.is_empty(), "{scene}: no interface table");
+    let tables: Vec<_> = files
+        .iter()
+        .map(|f| {
+            let name = f.file_name().expect("a file name");
+            (
+                read_interface_csv(f),
+                read_interface_csv(&b.join("interfaces").join(name)),
+            )
+        })
+        .collect();
+    let scale = tables
+        .iter()
+        .flat_map(|(_, rows)| rows.iter().map(|r| r.tn.abs().max(r.tt.abs())))
+        .fold(0.0f64, f64::max);
+    assert!(scale > 0.0, "{scene}: no traction at all");
+    for (sparse, lcp) in &tables {
+        assert_eq!(sparse.len(), lcp.len(), "{scene}");
+        for (p, q) in sparse.iter().zip(lcp) {
+            assert_eq!(p.closed, q.closed, "{scene}: status at ({}, {})", p.x, p.y);
+            assert_eq!(
+                p.tangential_status, q.tangential_status,
+                "{scene}: tangential status at ({}, {})",
+                p.x, p.y
+            );
+            for (u, v, what) in [(p.tn, q.tn, "normal"), (p.tt, q.tt, "tangential")] {
+                assert!(
+                    (u - v).abs() <= 1e-8 * scale,
+                    "{scene}: {what} traction at ({}, {}): sparse {u}, evolutive {v} \
+                     (scale {scale})",
+                    p.x,
+                    p.y
+                );
+            }
+        }
+    }
+}
+
+/// Frictionless contact (Hertz, the contact patch), stick joints from closed starts
+/// (example 2, beam on blocks), Coulomb friction (beam on blocks, incline, vault), cohesion
+/// and frictional junctions (the running-bond wall, the arch): the sparse solver and the
+/// evolutive path agree pair by pair, and the evolutive cross-check inside the sparse run
+/// finds no differing pair.
+#[test]
+fn sparse_solver_agrees_with_the_evolutive_path() {
+    for (scene, geo) in [
+        ("clamped_beam_joint", Some("clamped_beam_joint")),
+        ("beam_on_blocks", Some("beam_on_blocks")),
+        ("beam_on_blocks_friction", Some("beam_on_blocks")),
+        ("hertz_contact", Some("hertz_contact")),
+        ("contact_patch", Some("contact_patch")),
+        ("incline_block", Some("two_blocks")),
+        ("vault_friction", Some("vault")),
+        ("wall", None),
+        ("wall_running_bond", None),
+        ("arch", None),
+    ] {
+        let dir = tmpdir(&format!("sparse-{scene}"));
+        let (sparse, lcp) = (dir.join("sparse"), dir.join("lcp"));
+        let (code, err) = run(scene, geo, &sparse, "sparse");
+        assert_eq!(code, 0, "{scene} (sparse): {err}");
+        let (code, err) = run(scene, geo, &lcp, "lcp");
+        assert_eq!(code, 0, "{scene} (lcp): {err}");
+        let s = summary(&sparse);
+        assert_eq!(s["status"], "converged", "{scene}");
+        assert_eq!(s["contact"]["solver"], "sparse", "{scene}");
+        let n_rows = s["contact"]["interface_system_size"].as_u64().unwrap_or(0);
+        for c in s["contact"]["cross_checks"]
+            .as_array()
+            .expect("cross checks")
+        {
+            assert_eq!(c["solver"], "lcp", "{scene}");
+            assert_eq!(c["differing_pairs"], 0, "{scene}: {c}");
+            assert_eq!(c["converged"], true, "{scene}: {c}");
+        }
+        assert!(n_rows > 0, "{scene}");
+        assert_same_interfaces(scene, &sparse, &lcp);
+        // Every body balances to round-off with the sparse solver too.
+        for (body, b) in s["equilibrium"].as_object().expect("equilibrium") {
+            if let Some(r) = b["relative_imbalance"].as_f64() {
+                assert!(r <= 1e-8, "{scene}: body {body} imbalance {r}");
+            }
+        }
+    }
+}
+
+/// A block on an incline whose load exceeds what friction holds: no equilibrium, and the
+/// sparse solver names the same mechanism as the evolutive path (exit 3).
+#[test]
+fn sparse_solver_names_the_sliding_mechanism() {
+    let dir = tmpdir("sparse-incline-slides");
+    let (code, err) = run(
+        "incline_block_slides",
+        Some("two_blocks"),
+        &dir.join("out"),
+        "sparse",
+    );
+    assert_eq!(code, 3, "{err}");
+    assert!(
+        err.contains("no equilibrium exists (a sliding mechanism): body \"upper\" slides"),
+        "{err}"
+    );
+}
