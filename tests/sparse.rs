@@ -156,3 +156,103 @@ fn sparse_solver_names_the_sliding_mechanism() {
         "{err}"
     );
 }
+
+/// A stick joint that starts open with zero gap under compression closes and ties at once:
+/// the same state as the joint that starts closed (the evolutive path alone stopped at a
+/// false mechanism there: the untied joint leaves the upper block free to slide), with the
+/// default solver and with the sparse one.
+#[test]
+fn a_stick_joint_that_starts_open_ties_as_it_closes() {
+    let dir = tmpdir("sparse-stick-open");
+    let closed = dir.join("closed");
+    let (code, err) = run("two_blocks", Some("two_blocks"), &closed, "lcp");
+    assert_eq!(code, 0, "{err}");
+    for method in ["lcp", "sparse"] {
+        let out = dir.join(format!("open-{method}"));
+        let scene = root().join("pipelines/two_blocks.toml");
+        let msh = dir.join("two_blocks.msh");
+        let (code, _, err) = sgbem(&[
+            "run",
+            scene.to_str().unwrap(),
+            "--mesh",
+            msh.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--method",
+            method,
+            "--set",
+            "interface.joint.initial=open",
+            "--set",
+            "interface.joint.gap=0.0",
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{method}: {err}");
+        assert_eq!(summary(&out)["status"], "converged", "{method}");
+        assert_same_interfaces(&format!("open start, {method}"), &out, &closed);
+    }
+}
+
+/// The collapse multiplier of a 4-course, 5-brick running-bond wall under a lateral body
+/// force grows with the friction coefficient and stays below that of stick joints (the
+/// limit μ → ∞): the Tresca fixed point settles at μ = 10 (it oscillated without the
+/// relaxation of its bounds).
+#[test]
+fn collapse_multipliers_grow_with_friction_towards_stick() {
+    let dir = tmpdir("sparse-collapse-mu");
+    let text = std::fs::read_to_string(root().join("pipelines/wall_collapse.toml"))
+        .expect("wall_collapse.toml")
+        .replace(
+            "../geo/wall.geo",
+            &root().join("geo/wall.geo").to_string_lossy(),
+        )
+        .replace("courses = 5", "courses = 4")
+        .replace("bricks = 3", "bricks = 5")
+        .replace("tolerance = 0.001", "tolerance = 0.002");
+    let stick = text.replace(
+        "tangential = \"friction\"\nfriction = 0.8",
+        "tangential = \"stick\"",
+    );
+    assert_ne!(
+        stick, text,
+        "the scene's interface table changed: update this test"
+    );
+    let mut multipliers = Vec::new();
+    for (name, scene) in [
+        ("mu1", text.replace("friction = 0.8", "friction = 1.0")),
+        ("mu3", text.replace("friction = 0.8", "friction = 3.0")),
+        ("mu10", text.replace("friction = 0.8", "friction = 10.0")),
+        ("stick", stick),
+    ] {
+        let path = write(&dir, &format!("{name}.toml"), &scene);
+        let out = dir.join(name);
+        let (code, _, err) = sgbem(&[
+            "run",
+            path.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+            "--method",
+            "sparse",
+            "--quiet",
+        ]);
+        assert_eq!(code, 0, "{name}: {err}");
+        let s = summary(&out);
+        let m = s["contact"]["collapse"]["multiplier"]
+            .as_f64()
+            .expect("a multiplier");
+        multipliers.push((name, m));
+    }
+    println!("{multipliers:?}");
+    for w in multipliers.windows(2) {
+        assert!(
+            w[0].1 <= w[1].1 + 0.002,
+            "the multiplier falls from {} to {}: {multipliers:?}",
+            w[0].0,
+            w[1].0
+        );
+    }
+    // Friction matters: μ = 1 is well below stick.
+    assert!(
+        multipliers[0].1 < multipliers[3].1 - 0.02,
+        "{multipliers:?}"
+    );
+}

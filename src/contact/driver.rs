@@ -652,6 +652,24 @@ fn contact_step(
     let full = scene.output.history == HistoryLevel::Full;
     let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
     timings.add(main.timing_key(), t.elapsed().as_secs_f64());
+    if r.mechanism && main == Solver::Evolutive {
+        // The pivoting path can stop at a row that cannot open without leaving a body free
+        // although an equilibrium exists (a stick pair that starts open and must tie as it
+        // closes): the sparse solver decides it from the same state.
+        let t = Instant::now();
+        let x = session.solve_step(state, Solver::Sparse, ctx.tol, ctx.maxit, step, f, full);
+        timings.add(Solver::Sparse.timing_key(), t.elapsed().as_secs_f64());
+        if x.converged && x.failure.is_none() {
+            let why = r.failure.as_ref().map(|e| e.message().to_string());
+            r = x;
+            r.notes.push(format!(
+                "load step {}: the evolutive path found no equilibrium ({}); the sparse solver \
+                 found one from the same state, which is the step's result",
+                step + 1,
+                why.unwrap_or_default()
+            ));
+        }
+    }
     let t = Instant::now();
     session.expand(&mut r);
     timings.add("contact_record", t.elapsed().as_secs_f64());

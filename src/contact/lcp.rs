@@ -164,6 +164,9 @@ pub struct Inner<'a> {
     /// Rows that are open whatever happens (untied stick rows, friction rows without a
     /// slip bound).
     pub free: Vec<bool>,
+    /// Free stick rows whose pair is open: tied once the pair's normal row closes (the
+    /// sparse solver applies this within the inner problem).
+    pub tie_on_close: Vec<bool>,
     /// Slip bound g_r = μ_r λ_n of each friction row (0 on other rows).
     pub bound: Vec<f64>,
     /// Relative tolerance of the violation checks.

@@ -317,6 +317,7 @@ impl<'a> Session<'a> {
         // (first step) from those with every pair closed.
         let mut bound = start.bound.clone();
         let mut bound_changes: Vec<f64> = Vec::new();
+        let mut relax = Relaxation::new();
         let mut lp = StepLoop {
             compact: Vec::new(),
             record,
@@ -349,10 +350,16 @@ impl<'a> Session<'a> {
                     _ => false,
                 })
                 .collect();
+            // Untied stick rows of open pairs tie as their pair closes (the sparse solver
+            // follows that within the inner problem; the others through this outer loop).
+            let tie_on_close = (0..n)
+                .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r] && !edge_slip[r])
+                .collect();
             let inner = Inner {
                 problem: &self.problem,
                 base: &base,
                 free,
+                tie_on_close,
                 bound: bound.clone(),
                 tol,
             };
@@ -465,7 +472,8 @@ impl<'a> Session<'a> {
             if friction {
                 bound_changes.push(change);
             }
-            bound = new_bound;
+            relax.update(outer, change);
+            bound = relax.apply(&bound, new_bound);
             if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
                 // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
                 // LCP through Lemke) and restart the fixed point from its bounds.
@@ -476,6 +484,7 @@ impl<'a> Session<'a> {
                     problem: &self.problem,
                     base: &base,
                     free,
+                    tie_on_close: vec![false; n],
                     bound: vec![0.0; n],
                     tol,
                 };
@@ -898,8 +907,13 @@ fn inner_solve(
                     message: "the sparse contact system is missing".into(),
                 });
             };
-            let out = sparse::solve(inner, sys, &st.open, &st.sign, budget);
+            let mut out = sparse::solve(inner, sys, &st.open, &st.sign, budget);
             Ok(if out.stalled {
+                // The evolutive path starts again from the step's statuses, with the whole
+                // budget: the sparse iterates may have gone far from a solution.
+                out.state.open = st.open.clone();
+                out.state.sign = st.sign.clone();
+                let budget = budget + out.iterations;
                 hand_over(
                     inner,
                     cols,
@@ -999,6 +1013,51 @@ fn qp_rescue(
             }
         }
         _ => outcome,
+    }
+}
+
+/// Outer iterations of the Tresca fixed point taken whole whatever happens; after them, a
+/// change of the bounds that does not fall (an oscillating fixed point: large μ, where the
+/// slip of one pair moves the normal force of its neighbours) halves the step the new
+/// bounds take from the old ones (down to 1/16), and a change that halves doubles it again.
+/// The settled bounds are the same fixed point.
+const RELAX_AFTER: usize = 20;
+
+/// The step of the Tresca fixed point.
+struct Relaxation {
+    weight: f64,
+    last_change: f64,
+}
+
+impl Relaxation {
+    fn new() -> Self {
+        Relaxation {
+            weight: 1.0,
+            last_change: f64::INFINITY,
+        }
+    }
+
+    fn update(&mut self, outer: usize, change: f64) {
+        if outer > RELAX_AFTER {
+            if change >= 0.95 * self.last_change {
+                self.weight = (0.5 * self.weight).max(1.0 / 16.0);
+            } else if change <= 0.5 * self.last_change {
+                self.weight = (2.0 * self.weight).min(1.0);
+            }
+        }
+        self.last_change = change;
+    }
+
+    /// The next slip bounds from the old ones and those of the new normal forces.
+    fn apply(&self, old: &[f64], new: Vec<f64>) -> Vec<f64> {
+        if self.weight >= 1.0 || old.len() != new.len() {
+            return new;
+        }
+        let w = self.weight;
+        old.iter()
+            .zip(new)
+            .map(|(&x, y)| if x.is_finite() { x + w * (y - x) } else { y })
+            .collect()
     }
 }
 

@@ -124,7 +124,18 @@ impl SparseSystem {
         reg: f64,
     ) -> Option<InnerState> {
         let (ng, n) = (self.n_glued, self.n);
-        let open: Vec<bool> = (0..n).map(|r| open[r] || inner.free[r]).collect();
+        let rows = &inner.problem.rows;
+        let row_of = &inner.problem.row_of;
+        let open: Vec<bool> = (0..n)
+            .map(|r| {
+                let row = &rows[r];
+                match row_of[row.iface][row.pair][1].filter(|&q| q < n) {
+                    // A stick row of an open pair ties as its pair closes.
+                    Some(q) if inner.tie_on_close[r] => open[q],
+                    _ => open[r] || inner.free[r],
+                }
+            })
+            .collect();
         let mut sg = vec![0.0; n];
         // Fixed openings of the closed rows, the others zero.
         let mut x = vec![0.0; ng + n];
@@ -200,6 +211,11 @@ impl SparseSystem {
 /// Relative diagonal added to the open rows of an iterate that leaves a body free.
 const REGULARISATION: f64 = 1e-8;
 
+/// Iterations of one inner solve, and halvings of the step after repeated statuses, before
+/// the evolutive path takes over (the active set ends in a few where it converges).
+const MAX_ITERATIONS: usize = 200;
+const MAX_HALVINGS: u32 = 8;
+
 /// Displacements this many times those of the loaded, all-closed state mean a body is free.
 const SINGULAR: f64 = 1e7;
 
@@ -250,12 +266,12 @@ pub fn solve(
             // The statuses hold only with the regularisation: a body is free.
             return stalled(st, iterations, "a status leaves a body free");
         }
-        if iterations >= max_iterations {
+        if iterations >= max_iterations.min(MAX_ITERATIONS) {
             return stalled(st, iterations, "the iteration limit");
         }
         if !seen.insert(status_key(&st)) {
             damping += 1;
-            if damping > 30 {
+            if damping > MAX_HALVINGS {
                 return stalled(st, iterations, "a repeated status");
             }
         }
