@@ -14,7 +14,7 @@ SGBEM   := target/release/sgbem
 MESH_OPTS ?=
 SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
-PY_PACKAGES  := meshio pyvista h5py matplotlib
+PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
@@ -25,7 +25,7 @@ help:
 	@echo "sgbem — make targets"
 	@echo "  make demo      set up, build, mesh and check the paper's clamped-beam example"
 	@echo "  make test      set up, then run every test (what CI runs)"
-	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)) and $(VENV) ($(PY_PACKAGES))"
+	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)), $(VENV) ($(PY_PACKAGES)) and the package sgbem (python/)"
 	@echo "  make build     cargo build --release"
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
@@ -46,9 +46,14 @@ setup:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
 	fi
 	@test -x $(PY) || python3 -m venv $(VENV)
-	@$(PY) -c "import meshio, pyvista, h5py, matplotlib" 2>/dev/null || \
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest" 2>/dev/null || \
 	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
 	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
+	@# The Python package sgbem (python/), editable: the venv follows the working tree.
+	@$(PY) -c "import sgbem, pathlib, sys; \
+	  sys.exit(pathlib.Path(sgbem.__file__).resolve().parent != pathlib.Path('python/sgbem').resolve())" \
+	  2>/dev/null || { echo "setup: installing the Python package sgbem (python/) into $(VENV)"; \
+	    $(PY) -m pip install -q --disable-pip-version-check -e python; }
 
 build:
 	$(CARGO) build --release
@@ -79,6 +84,8 @@ demo: setup build mesh
 test: setup mesh
 	$(CARGO) test --release
 	$(CARGO) build --release
+	@# The Python package (python/) against real runs of the built sgbem.
+	$(PY) -m pytest -q python/tests
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
