@@ -79,13 +79,14 @@ demo: setup build mesh
 	@echo
 	@echo "demo: results of the paper's example 2 in out/clamped_beam_joint/:"
 	@echo "  summary.json, archive.h5 (sgbem inspect), interfaces/joint.csv, sections/a-a.csv,"
-	@echo "  vtk/history.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
+	@echo "  vtk/states.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
 
 test: setup mesh
 	$(CARGO) test --release
 	$(CARGO) build --release
 	@# The Python package (python/) against real runs of the built sgbem.
-	$(PY) -m pytest -q python/tests
+	@# (with ParaView installed also view.py and the VTK series in pvpython; skipped otherwise)
+	$(PY) -m pytest -q -rs python/tests
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
@@ -99,8 +100,10 @@ test: setup mesh
 	$(PY) pipelines/check_outputs.py out/test/wall_running_bond
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
-	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
-	  xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint; \
+	  for run in clamped_beam_joint wall_running_bond; do \
+	    echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run"; \
+	    xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run || exit 1; \
+	  done; \
 	else \
 	  echo "test: ParaView check SKIPPED: no pvpython or xvfb-run (apt-get install -y paraview xvfb)"; \
 	fi
@@ -165,8 +168,9 @@ report: setup
 
 # A run's final state rendered off-screen by ParaView (pvpython under xvfb-run): strained
 # shape (warp factor: 5 % of the model size over the largest displacement) coloured by von
-# Mises, into docs/img/NAME_paraview.png (the README's screenshots: `make view` is the way
-# to refresh them). Runs the scene first if out/NAME/ has no results.
+# Mises where the run has an interior field, into docs/img/NAME_paraview.png (the README's
+# screenshots: `make view` is the way to refresh them), and the same view as a ParaView
+# state, out/NAME/vtk/view.pvsm. Runs the scene first if out/NAME/ has no results.
 NAME ?= clamped_beam_joint
 view: out/$(NAME)/summary.json
 	@command -v pvpython >/dev/null && command -v xvfb-run >/dev/null || \

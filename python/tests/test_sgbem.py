@@ -1,9 +1,5 @@
-"""Tests of the Python package against real runs of the built sgbem (target/release/sgbem).
-
-The scenes are the shipped ones, meshed here with gmsh into a temporary folder:
-clamped_beam_joint (the paper's example 2: one joint, interior field) and a running-bond
-wall of 3 courses of 4 bricks (13 bodies, friction, 26 split interfaces whose run order is
-not the alphabetical order h5py lists them in: brick_10 before brick_2)."""
+"""Tests of the Python package against real runs of the built sgbem (target/release/sgbem):
+the runs `beam` and `wall` of conftest.py."""
 
 import json
 import pathlib
@@ -15,29 +11,7 @@ import pandas as pd
 import pytest
 
 import sgbem
-
-ROOT = pathlib.Path(__file__).resolve().parents[2]
-
-
-def mesh(geo, dest, *params):
-    out = dest / (pathlib.Path(geo).stem + ".msh")
-    subprocess.run(["gmsh", "-2", "-format", "msh41", *params, str(ROOT / geo), "-o", str(out)],
-                   check=True, capture_output=True)
-    return out
-
-
-@pytest.fixture(scope="session")
-def beam(tmp_path_factory):
-    d = tmp_path_factory.mktemp("beam")
-    return sgbem.run(ROOT / "pipelines/clamped_beam_joint.toml", out=d / "run",
-                     mesh=mesh("geo/clamped_beam_joint.geo", d))
-
-
-@pytest.fixture(scope="session")
-def wall(tmp_path_factory):
-    d = tmp_path_factory.mktemp("wall")
-    return sgbem.run(ROOT / "pipelines/wall_running_bond.toml", out=d / "run",
-                     set={"mesh.courses": 3, "mesh.bricks": 4})
+from conftest import ROOT, mesh
 
 
 def csv_table(run, name):
