@@ -106,9 +106,13 @@ pub struct RunReport {
     pub notes: Vec<String>,
 }
 
-/// Seconds per stage, in stage order.
+/// Seconds per stage, in stage order; and the stages timed within a stage (the collapse
+/// search's trials), apart, so that the total counts them once.
 #[derive(Debug, Clone, Default)]
-pub struct Timings(pub Vec<(&'static str, f64)>);
+pub struct Timings(
+    pub Vec<(&'static str, f64)>,
+    pub Vec<(&'static str, Timings)>,
+);
 
 impl Timings {
     fn add(&mut self, stage: &'static str, seconds: f64) {
@@ -116,6 +120,33 @@ impl Timings {
             Some((_, t)) => *t += seconds,
             None => self.0.push((stage, seconds)),
         }
+    }
+    /// `seconds` spent in `stage`, of which `inner` itemises the stages within it.
+    fn add_within(&mut self, stage: &'static str, seconds: f64, inner: Timings) {
+        self.add(stage, seconds);
+        if !self.1.iter().any(|(s, _)| *s == stage) {
+            self.1.push((stage, Timings::default()));
+        }
+        if let Some((_, t)) = self.1.iter_mut().find(|(s, _)| *s == stage) {
+            for (s, v) in inner.0 {
+                t.add(s, v);
+            }
+            for (s, c) in inner.1 {
+                t.add_within(s, 0.0, c);
+            }
+        }
+    }
+    /// timings.json's `within`: per stage with parts, their seconds (a tree).
+    fn within_json(&self) -> serde_json::Value {
+        let mut m = serde_json::Map::new();
+        for (s, t) in &self.1 {
+            let mut v = t.json();
+            if !t.1.is_empty() {
+                v["within"] = t.within_json();
+            }
+            m.insert((*s).to_string(), v);
+        }
+        serde_json::Value::Object(m)
     }
     fn json(&self) -> serde_json::Value {
         let mut m = serde_json::Map::new();
@@ -339,6 +370,7 @@ fn solve_loaded_then(
                 let mut st = session.initial();
                 let mut a = StepAcc::default();
                 let t0 = Instant::now();
+                let mut inner = Timings::default();
                 step_at(
                     &stepper,
                     session,
@@ -347,10 +379,10 @@ fn solve_loaded_then(
                     (1.0, t),
                     &mut st,
                     &mut a,
-                    timings,
+                    &mut inner,
                     last_prepared,
                 )?;
-                timings.add("collapse_search", t0.elapsed().as_secs_f64());
+                timings.add_within("collapse_search", t0.elapsed().as_secs_f64(), inner);
                 let outcome = match a.failure {
                     None => None,
                     Some(e) if a.mechanism => Some(e),
@@ -1373,6 +1405,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let timing_text = serde_json::to_string_pretty(&serde_json::json!({
         "created": rec.created,
         "stages": timings.json(),
+        "within": timings.within_json(),
     }))
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
     write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;
