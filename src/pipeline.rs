@@ -1010,6 +1010,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 
     let mut timings = Timings::default();
     let t0 = Instant::now();
+    // The folder's lock first, before meshing a .geo or computing anything: a second run
+    // into the same folder is refused at once, not after the first one has computed. The
+    // run writes into a staging folder, swapped in when complete (output/folder.rs).
+    // (The scene is read first, so that its errors come before any folder is touched.)
+    let scene = crate::input::scene::read_scene_with(scene_path, &opts.sets)?;
+    let target = opts.out.clone().unwrap_or(scene.output.directory);
+    let folder = crate::output::folder::RunFolder::acquire(&target)?;
     let mut loaded = load_with(
         scene_path,
         &LoadOptions {
@@ -1028,8 +1035,6 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // Refuse what cannot fit before allocating any of it.
     crate::estimate::estimate(&loaded.model, &loaded.scene)
         .check_fits(&loaded.model, scene_path)?;
-    // The run writes into a staging folder, swapped in when complete (output/folder.rs).
-    let folder = crate::output::folder::RunFolder::acquire(&loaded.scene.output.directory)?;
     // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
     let meshed = loaded.scene.output.directory.join("mesh");
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
