@@ -3,7 +3,7 @@
     import sgbem
     run = sgbem.open("out/clamped_beam_joint")   # a run folder, or its archive.h5
     run.summary                                  # dict, as summary.json
-    run.history                                  # DataFrame: one row per contact iteration
+    run.history                                  # DataFrame: one row per recorded contact state
     run.pairs("joint", state=-1)                 # DataFrame: one row per contact point
     run.to_pyvista(state=-1)                     # pyvista MultiBlock: boundary (+ field)
     sgbem.run("pipelines/x.toml", out="out/x", set={"interface.joint.cohesion": 2.0})

@@ -149,9 +149,11 @@ class Run:
 
     @property
     def history(self):
-        """One row per row of the contact history (`/history`: every contact iteration of
-        every load step): load_step, iteration, load_factor, solver, and per interface
-        NAME the columns `detached_length/NAME`, `open_pairs/NAME`, `closed_pairs/NAME`."""
+        """One row per recorded contact state (`/history`: with history = "full" per load
+        step its initial status, every contact iteration and the state once the outer
+        iterations settle, the rows of `states`; none without a unilateral interface):
+        load_step, iteration, load_factor, solver, and per interface NAME the columns
+        `detached_length/NAME`, `open_pairs/NAME`, `closed_pairs/NAME`."""
         with self._file() as f:
             h = f["history"]
             df = pd.DataFrame({
@@ -161,10 +163,12 @@ class Run:
                 "solver": _texts(h["solver"]),
             })
             units = {"load_step": "1", "iteration": "1", "load_factor": "1", "solver": ""}
-            detached = _floats(h["detached_length"]).reshape(len(df), -1)
+            rows = len(df)
+            detached = _floats(h["detached_length"]).reshape(rows, len(self.interfaces))
             per = h["interfaces"]
             for i, (name, gname) in enumerate(self._history_interfaces(per)):
-                status = np.asarray(per[gname]["status"]).reshape(len(df), -1)
+                pairs = int(self._pair_offset[i + 1] - self._pair_offset[i])
+                status = np.asarray(per[gname]["status"]).reshape(rows, pairs)
                 df[f"detached_length/{name}"] = detached[:, i]
                 df[f"open_pairs/{name}"] = (status == 0).sum(axis=1)
                 df[f"closed_pairs/{name}"] = (status == 1).sum(axis=1)

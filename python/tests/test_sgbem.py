@@ -160,3 +160,21 @@ def test_run_overrides_and_errors(beam, tmp_path):
     assert e.value.returncode == 2
     assert "body.A.poison" in e.value.message and "poisson" in e.value.message
     assert e.value.out is None
+
+
+def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
+    lame = sgbem.run(ROOT / "pipelines/lame_cylinder.toml", out=tmp_path / "lame",
+                     mesh=mesh("geo/lame_cylinder.geo", tmp_path))
+    assert lame.interfaces == [] and lame.state_count == 1
+    assert len(lame.history) == 0 and list(lame.history.columns) == [
+        "load_step", "iteration", "load_factor", "solver"]
+    blocks = lame.to_pyvista()
+    assert blocks.keys() == ["boundary", "field"] and blocks["field"].n_points > 0
+    # A sliding mechanism: exit 3, every output written; the error names the folder.
+    with pytest.raises(sgbem.SgbemError) as e:
+        sgbem.run(ROOT / "pipelines/incline_block_slides.toml", out=tmp_path / "slides",
+                  mesh=mesh("geo/two_blocks.geo", tmp_path))
+    assert e.value.returncode == 3 and "slides on interface" in e.value.message
+    failed = sgbem.open(e.value.out)
+    assert failed.status == "not converged" == failed.summary["status"]
+    assert len(failed.pairs("joint")) == failed.summary["interfaces"]["joint"]["pairs"]
