@@ -14,7 +14,7 @@ SGBEM   := target/release/sgbem
 MESH_OPTS ?=
 SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
-PY_PACKAGES  := meshio pyvista h5py matplotlib
+PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
@@ -25,7 +25,7 @@ help:
 	@echo "sgbem — make targets"
 	@echo "  make demo      set up, build, mesh and check the paper's clamped-beam example"
 	@echo "  make test      set up, then run every test (what CI runs)"
-	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)) and $(VENV) ($(PY_PACKAGES))"
+	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)), $(VENV) ($(PY_PACKAGES)) and the package sgbem (python/)"
 	@echo "  make build     cargo build --release"
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
@@ -46,9 +46,14 @@ setup:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
 	fi
 	@test -x $(PY) || python3 -m venv $(VENV)
-	@$(PY) -c "import meshio, pyvista, h5py, matplotlib" 2>/dev/null || \
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest" 2>/dev/null || \
 	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
 	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
+	@# The Python package sgbem (python/), editable: the venv follows the working tree.
+	@$(PY) -c "import sgbem, pathlib, sys; \
+	  sys.exit(pathlib.Path(sgbem.__file__).resolve().parent != pathlib.Path('python/sgbem').resolve())" \
+	  2>/dev/null || { echo "setup: installing the Python package sgbem (python/) into $(VENV)"; \
+	    $(PY) -m pip install -q --disable-pip-version-check -e python; }
 
 build:
 	$(CARGO) build --release
@@ -74,11 +79,14 @@ demo: setup build mesh
 	@echo
 	@echo "demo: results of the paper's example 2 in out/clamped_beam_joint/:"
 	@echo "  summary.json, archive.h5 (sgbem inspect), interfaces/joint.csv, sections/a-a.csv,"
-	@echo "  vtk/history.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
+	@echo "  vtk/states.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
 
 test: setup mesh
 	$(CARGO) test --release
 	$(CARGO) build --release
+	@# The Python package (python/) against real runs of the built sgbem.
+	@# (with ParaView installed also view.py and the VTK series in pvpython; skipped otherwise)
+	$(PY) -m pytest -q -rs python/tests
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
@@ -92,8 +100,10 @@ test: setup mesh
 	$(PY) pipelines/check_outputs.py out/test/wall_running_bond
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
-	  echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint"; \
-	  xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/clamped_beam_joint; \
+	  for run in clamped_beam_joint wall_running_bond; do \
+	    echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run"; \
+	    xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run || exit 1; \
+	  done; \
 	else \
 	  echo "test: ParaView check SKIPPED: no pvpython or xvfb-run (apt-get install -y paraview xvfb)"; \
 	fi
@@ -158,8 +168,9 @@ report: setup
 
 # A run's final state rendered off-screen by ParaView (pvpython under xvfb-run): strained
 # shape (warp factor: 5 % of the model size over the largest displacement) coloured by von
-# Mises, into docs/img/NAME_paraview.png (the README's screenshots: `make view` is the way
-# to refresh them). Runs the scene first if out/NAME/ has no results.
+# Mises where the run has an interior field, into docs/img/NAME_paraview.png (the README's
+# screenshots: `make view` is the way to refresh them), and the same view as a ParaView
+# state, out/NAME/vtk/view.pvsm. Runs the scene first if out/NAME/ has no results.
 NAME ?= clamped_beam_joint
 view: out/$(NAME)/summary.json
 	@command -v pvpython >/dev/null && command -v xvfb-run >/dev/null || \

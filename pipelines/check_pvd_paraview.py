@@ -2,10 +2,13 @@
 
 Usage: xvfb-run -a pvpython pipelines/check_pvd_paraview.py RUN_DIR
 
-Checks, at every time of the series: two blocks (boundary, interior field); the field block
-has `stress` as a 6-component symmetric tensor (components XX YY ZZ XY YZ XZ) and the
-scalars sxx, syy, sxy that equal its components; both blocks carry the title and units as
-field data; the boundary's `iteration` field data increases with time; the times increase.
+Checks, at every time of history.pvd: two blocks (boundary, interior field), or the
+boundary alone for a run without an interior field; the field block has `stress` as a
+6-component symmetric tensor (components XX YY ZZ XY YZ XZ) and the scalars sxx, syy, sxy
+that equal its components; every block carries the title and units as field data; the
+boundary's `iteration` field data increases with time; the times increase. Then states.pvd:
+the same times, at each a multiblock with a block named "boundary" and, only in a state
+that has its interior field (the final one, where computed), a block named "field".
 Prints one line per check group; exits 1 on the first failure.
 """
 import os
@@ -14,6 +17,7 @@ import sys
 from paraview import servermanager
 from paraview.simple import PVDReader
 from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkCompositeDataSet
 
 
 def fail(msg):
@@ -36,19 +40,47 @@ def number(block, name):
     return arr.GetValue(0)
 
 
-def leaves(obj):
+def named_leaves(obj, name=None):
+    """(block name, dataset) of every leaf (a plain grid: one leaf named None)."""
     if obj is None:
         return []
     if obj.IsA("vtkMultiBlockDataSet"):
         out = []
         for i in range(obj.GetNumberOfBlocks()):
-            out.extend(leaves(obj.GetBlock(i)))
+            meta = obj.GetMetaData(i) if obj.HasMetaData(i) else None
+            key = vtkCompositeDataSet.NAME()
+            out.extend(named_leaves(obj.GetBlock(i),
+                                    meta.Get(key) if meta is not None and meta.Has(key) else None))
         return out
-    return [obj]
+    return [(name, obj)]
+
+
+def leaves(obj):
+    return [b for _, b in named_leaves(obj)]
+
+
+def check_states(run, times, with_field):
+    """states.pvd: one multiblock per time, named blocks, the field only at the last time."""
+    pvd = os.path.join(run, "vtk", "states.pvd")
+    reader = PVDReader(FileName=pvd)
+    reader.UpdatePipelineInformation()
+    if list(reader.TimestepValues) != times:
+        fail(f"{pvd}: times differ from history.pvd's")
+    for k, t in enumerate(times):
+        reader.UpdatePipeline(t)
+        named = named_leaves(servermanager.Fetch(reader))
+        want = ["boundary", "field"] if with_field and k == len(times) - 1 else ["boundary"]
+        if [n for n, _ in named] != want:
+            fail(f"{pvd} at time {t}: blocks {[n for n, _ in named]}, want {want}")
+        if named[-1][1].GetNumberOfPoints() == 0:
+            fail(f"{pvd} at time {t}: empty block {named[-1][0]}")
+    print(f"check_pvd_paraview: {pvd}: {len(times)} multiblocks, block boundary at every "
+          f"time, field {'at the last time only' if with_field else 'nowhere'}: ok")
 
 
 def main():
     run = sys.argv[1]
+    with_field = any(f.startswith("field_") for f in os.listdir(os.path.join(run, "vtk")))
     pvd = os.path.join(run, "vtk", "history.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -65,8 +97,9 @@ def main():
         for b in blocks:
             pd = b.GetPointData()
             kinds["field" if pd.GetArray("stress") is not None else "boundary"] = b
-        if set(kinds) != {"boundary", "field"}:
-            fail(f"time {t}: blocks {sorted(kinds)}, want boundary and field")
+        want = {"boundary", "field"} if with_field else {"boundary"}
+        if set(kinds) != want:
+            fail(f"time {t}: blocks {sorted(kinds)}, want {sorted(want)}")
         for kind, b in kinds.items():
             if not text(b, "title"):
                 fail(f"time {t}: {kind} has an empty title")
@@ -76,6 +109,8 @@ def main():
         if it <= last_iteration:
             fail(f"time {t}: iteration {it} after {last_iteration}")
         last_iteration = it
+        if not with_field:
+            continue
         f = kinds["field"]
         if f.GetNumberOfPoints() == 0 or f.GetNumberOfCells() == 0:
             fail(f"time {t}: empty field block")
@@ -94,8 +129,11 @@ def main():
                 fail(f"time {t}: {name} differs from stress component {col}")
         if not (abs(tensor[:, 0]).max() > 0.0):
             fail(f"time {t}: stress is zero everywhere")
+    what = ("boundary and field blocks at every time, stress a named 6-component tensor"
+            if with_field else "the boundary at every time (no interior field)")
     print(f"check_pvd_paraview: {pvd}: {len(times)} times from {times[0]:g} to {times[-1]:g}, "
-          f"boundary and field blocks at every time, stress a named 6-component tensor: ok")
+          f"{what}: ok")
+    check_states(run, times, with_field)
 
 
 main()

@@ -1,21 +1,28 @@
-"""Renders a run's final state off-screen in ParaView: the interior field warped by the
-displacement and coloured by von Mises stress, with the boundary lines on top.
+"""Renders a run's final state off-screen in ParaView: the interior field (where the run
+computed one) warped by the displacement and coloured by von Mises stress, with the boundary
+lines on top; saves the same view as a ParaView state file for the GUI.
 
 Usage: xvfb-run -a pvpython pipelines/view.py RUN_DIR OUT.png   (what `make view` runs)
 
-The warp factor comes from the results: 5 % of the model size (the larger side of its
-bounding box) over the largest displacement magnitude, rounded to 1, 2 or 5 times a power
-of ten; it is printed and written in the picture's title.
+Reads RUN_DIR/vtk/states.pvd (one multiblock per time, blocks "boundary" and, where
+computed, "field"), or history.pvd of older runs; either may come back from ParaView's
+reader as a multiblock or, with a single part, as a plain grid: both are handled. The view
+is set at the last time step. The warp factor comes from the results: 5 % of the model size
+(the larger side of its bounding box) over the largest displacement magnitude, rounded to
+1, 2 or 5 times a power of ten; it is printed and written in the picture's title. Writes
+RUN_DIR/vtk/view.pvsm (File > Load State in ParaView opens this view at the last time).
 """
 import math
 import os
 import sys
 
 from paraview import servermanager
-from paraview.simple import (ColorBy, GetActiveViewOrCreate, GetColorTransferFunction,
-                             GetScalarBar, PVDReader, Render, ResetCamera, SaveScreenshot,
-                             Show, Text, WarpByVector, ExtractBlock)  # noqa: F401
+from paraview.simple import (ColorBy, ExtractBlock, GetActiveViewOrCreate,
+                             GetAnimationScene, GetColorTransferFunction, GetScalarBar,
+                             PVDReader, Render, SaveScreenshot, SaveState, Show, Text,
+                             WarpByVector)
 from vtkmodules.util.numpy_support import vtk_to_numpy
+from vtkmodules.vtkCommonDataModel import vtkCompositeDataSet
 
 
 def nice(x):
@@ -26,12 +33,21 @@ def nice(x):
     return min((m * p for m in (1.0, 2.0, 5.0, 10.0)), key=lambda v: abs(math.log(v / x)))
 
 
-def leaves(obj):
+def leaves(obj, path=("Root",)):
+    """(selector path, dataset) of every leaf; the path as ParaView's ExtractBlock selectors
+    name it: a block's name, or Block<index> for an unnamed one. A plain grid is one leaf
+    with no path."""
     if obj is None:
         return []
-    if obj.IsA("vtkMultiBlockDataSet"):
-        return [b for i in range(obj.GetNumberOfBlocks()) for b in leaves(obj.GetBlock(i))]
-    return [obj]
+    if not obj.IsA("vtkMultiBlockDataSet"):
+        return [(None if len(path) == 1 else "/" + "/".join(path), obj)]
+    out = []
+    for i in range(obj.GetNumberOfBlocks()):
+        meta = obj.GetMetaData(i) if obj.HasMetaData(i) else None
+        name = meta.Get(vtkCompositeDataSet.NAME()) if meta is not None and \
+            meta.Has(vtkCompositeDataSet.NAME()) else f"Block{i}"
+        out.extend(leaves(obj.GetBlock(i), path + (name,)))
+    return out
 
 
 def text_field(block, name):
@@ -41,24 +57,75 @@ def text_field(block, name):
     return bytes(int(a.GetValue(i)) for i in range(a.GetNumberOfTuples())).decode()
 
 
+def open_series(run):
+    """The run's series (states.pvd, else history.pvd) at its last time: (reader, time)."""
+    vtk = os.path.join(os.path.abspath(run), "vtk")
+    for name in ("states.pvd", "history.pvd"):
+        path = os.path.join(vtk, name)
+        if os.path.exists(path):
+            break
+    else:
+        sys.exit(f"view: {run}: no vtk/states.pvd nor vtk/history.pvd (output.vtk = false?)")
+    reader = PVDReader(FileName=path)
+    reader.UpdatePipelineInformation()
+    times = list(reader.TimestepValues) or [0.0]
+    t = times[-1]
+    scene = GetAnimationScene()
+    scene.UpdateAnimationUsingDataTimeSteps()
+    scene.AnimationTime = t    # the GUI and the saved state open at the final state
+    reader.UpdatePipeline(t)
+    return reader, t
+
+
+def part(reader, selector):
+    """The block at `selector` of the reader's output, or the whole output (a plain grid)."""
+    if selector is None:
+        return reader
+    block = ExtractBlock(Input=reader)
+    block.Selectors = [selector]
+    return block
+
+
+def show_part(source, view, factor, colour, unit):
+    warp = WarpByVector(Input=source)
+    warp.Vectors = ["POINTS", "displacement"]
+    warp.ScaleFactor = factor
+    d = Show(warp, view)
+    if colour:
+        ColorBy(d, ("POINTS", colour))
+        lut = GetColorTransferFunction(colour)
+        lut.ApplyPreset("Viridis (matplotlib)", True)
+        d.SetScalarBarVisibility(view, True)
+        bar = GetScalarBar(lut, view)
+        bar.Title = f"von Mises ({unit})" if unit else "von Mises"
+        bar.ComponentTitle = ""
+        bar.TitleColor = bar.LabelColor = [0, 0, 0]
+    else:
+        ColorBy(d, None)
+        d.AmbientColor = d.DiffuseColor = [0.0, 0.0, 0.0]
+        d.LineWidth = 2.0
+    return warp
+
+
 def main():
     run, png = sys.argv[1], sys.argv[2]
-    reader = PVDReader(FileName=os.path.join(run, "vtk", "history.pvd"))
-    reader.UpdatePipelineInformation()
-    t = list(reader.TimestepValues)[-1]
-    reader.UpdatePipeline(t)
+    reader, t = open_series(run)
     blocks = leaves(servermanager.Fetch(reader))
-    field = [b for b in blocks if b.GetPointData().GetArray("stress") is not None]
-    show = field[0] if field else blocks[0]
+    field = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is not None]
+    boundary = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is None]
+    if not boundary:
+        sys.exit(f"view: {run}: the series has no boundary block at time {t:g}")
+    show = field[0][1] if field else boundary[0][1]
     pts = vtk_to_numpy(show.GetPoints().GetData())
     u = vtk_to_numpy(show.GetPointData().GetArray("displacement"))
     size = float((pts.max(axis=0) - pts.min(axis=0)).max())
     umax = float(abs(u).max() and (u ** 2).sum(axis=1).max() ** 0.5)
     factor = nice(0.05 * size / umax) if umax > 0 else 1.0
-    print(f"view: {run}: model size {size:g}, max |u| {umax:.4g}, warp factor {factor:g}")
+    print(f"view: {run}: model size {size:g}, max |u| {umax:.4g}, warp factor {factor:g}, "
+          f"time {t:g}, blocks: {'boundary and field' if field else 'boundary only'}")
 
     view = GetActiveViewOrCreate("RenderView")
-    view.ViewTime = t          # the final state (the view starts at the first time)
+    view.ViewTime = t
     view.ViewSize = [1600, 700]
     view.OrientationAxesVisibility = 0
     view.Background = [1.0, 1.0, 1.0]
@@ -66,35 +133,10 @@ def main():
         view.UseColorPaletteForBackground = 0
     except AttributeError:
         pass
-    parts = []
-    for index, colour in ((2, "von_mises"), (1, None)):
-        # Block indices of the multiblock: 1 the boundary part, 2 the field part.
-        if colour and not field:
-            continue
-        part = ExtractBlock(Input=reader)
-        try:
-            part.Selectors = ["/Root/Block1" if index == 2 else "/Root/Block0"]
-        except AttributeError:
-            part.BlockIndices = [index]
-        warp = WarpByVector(Input=part)
-        warp.Vectors = ["POINTS", "displacement"]
-        warp.ScaleFactor = factor
-        d = Show(warp, view)
-        if colour:
-            ColorBy(d, ("POINTS", colour))
-            lut = GetColorTransferFunction(colour)
-            lut.ApplyPreset("Viridis (matplotlib)", True)
-            d.SetScalarBarVisibility(view, True)
-            bar = GetScalarBar(lut, view)
-            unit = text_field(show, "stress_unit")
-            bar.Title = f"von Mises ({unit})" if unit else "von Mises"
-            bar.ComponentTitle = ""
-            bar.TitleColor = bar.LabelColor = [0, 0, 0]
-        else:
-            ColorBy(d, None)
-            d.AmbientColor = d.DiffuseColor = [0.0, 0.0, 0.0]
-            d.LineWidth = 2.0
-        parts.append(warp)
+    unit = text_field(show, "stress_unit")
+    if field:
+        show_part(part(reader, field[0][0]), view, factor, "von_mises", unit)
+    show_part(part(reader, boundary[0][0]), view, factor, None, unit)
     title = text_field(show, "title") or os.path.basename(run.rstrip("/"))
     label = Text(Text=f"{title}: final state, displacement x{factor:g}")
     ld = Show(label, view)
@@ -112,7 +154,9 @@ def main():
     view.CameraParallelScale = 0.62 * max(h, w * 700 / 1600) + 0.05 * size
     Render(view)
     SaveScreenshot(png, view, ImageResolution=[1600, 700])
-    print(f"view: {png}")
+    state = os.path.join(run, "vtk", "view.pvsm")
+    SaveState(state)
+    print(f"view: {png}; ParaView state {state}")
 
 
 main()

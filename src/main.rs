@@ -4,7 +4,7 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand, ValueEnum};
+use clap::{CommandFactory, Parser, Subcommand, ValueEnum};
 
 use sgbem::error::Error;
 use sgbem::input::scene::Method;
@@ -68,6 +68,10 @@ enum Command {
         /// like the file).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Print the report as JSON (bodies, boundary parts, interfaces, plan, cost) instead
+        /// of text.
+        #[arg(long)]
+        json: bool,
     },
     /// Run a scene for every combination of values and tabulate the headline results.
     Sweep {
@@ -98,6 +102,13 @@ enum Command {
         /// Directory for the VTK files.
         #[arg(long)]
         vtk: PathBuf,
+    },
+    /// Print a shell completion script, e.g. `sgbem completions bash >
+    /// ~/.local/share/bash-completion/completions/sgbem`.
+    Completions {
+        /// The shell.
+        #[arg(value_enum)]
+        shell: clap_complete::Shell,
     },
 }
 
@@ -195,7 +206,17 @@ fn main() -> ExitCode {
         }
     }
     let result = match cli.command {
-        Command::Check { scene, mesh, set } => {
+        Command::Completions { shell } => {
+            let mut script = Vec::new();
+            clap_complete::generate(shell, &mut Cli::command(), "sgbem", &mut script);
+            out(&String::from_utf8_lossy(&script))
+        }
+        Command::Check {
+            scene,
+            mesh,
+            set,
+            json,
+        } => {
             // A .geo mesh is meshed into a temporary folder, removed afterwards.
             let tmp = std::env::temp_dir().join(format!("sgbem-check-{}", std::process::id()));
             let loaded = pipeline::load_with(
@@ -208,12 +229,12 @@ fn main() -> ExitCode {
             );
             let _ = std::fs::remove_dir_all(&tmp);
             loaded.and_then(|l| {
-                out(&report::check_report(
-                    &l.scene,
-                    &l.model,
-                    &l.plan,
-                    l.mesh.binary,
-                ))
+                out(&if json {
+                    let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
+                    format!("{v:#}\n")
+                } else {
+                    report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
+                })
             })
         }
         Command::Run {

@@ -232,8 +232,9 @@ fn body_inputs<'a>(
 /// Reads, validates, solves and writes every output of a scene: the README's pipeline.
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let mut timings = Timings::default();
+    let folder = lock_run_folder(scene_path, opts)?;
     let loaded = load_for_run(scene_path, opts, &mut timings)?;
-    let folder = open_run_folder(&loaded, scene_path)?;
+    check_fits_and_keep_mesh(&loaded, scene_path, &folder)?;
     let settings = quadrature(&loaded.scene);
     let progress = Progress::new(opts.quiet);
     let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
@@ -285,13 +286,21 @@ fn load_for_run(scene_path: &Path, opts: &RunOptions, timings: &mut Timings) -> 
     Ok(loaded)
 }
 
-/// Refuses what cannot fit, then takes the run's folder: a staging folder swapped in when
-/// the run is complete (output/folder.rs).
-fn open_run_folder(loaded: &Loaded, scene_path: &Path) -> Result<RunFolder> {
-    // Refuse what cannot fit before allocating any of it.
+/// The folder's lock first, before meshing a .geo or computing anything: a second run into
+/// the same folder is refused at once, not after the first one has computed. The run writes
+/// into a staging folder, swapped in when complete (output/folder.rs). The scene is read
+/// first, so that its errors come before any folder is touched.
+fn lock_run_folder(scene_path: &Path, opts: &RunOptions) -> Result<RunFolder> {
+    let scene = crate::input::scene::read_scene_with(scene_path, &opts.sets)?;
+    let target = opts.out.clone().unwrap_or(scene.output.directory);
+    RunFolder::acquire(&target)
+}
+
+/// Refuses what cannot fit before allocating any of it; keeps the mesh a .geo scene was
+/// meshed into in the new run.
+fn check_fits_and_keep_mesh(loaded: &Loaded, scene_path: &Path, folder: &RunFolder) -> Result<()> {
     crate::estimate::estimate(&loaded.model, &loaded.scene)
         .check_fits(&loaded.model, scene_path)?;
-    let folder = RunFolder::acquire(&loaded.scene.output.directory)?;
     // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
     let meshed = loaded.scene.output.directory.join("mesh");
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
@@ -304,7 +313,7 @@ fn open_run_folder(loaded: &Loaded, scene_path: &Path) -> Result<RunFolder> {
             let _ = std::fs::copy(entry.path(), dest.join(entry.file_name()));
         }
     }
-    Ok(folder)
+    Ok(())
 }
 
 /// The quadrature of the scene's `[solve] quadrature`.
@@ -795,6 +804,7 @@ fn write_run(
     let timing_text = serde_json::to_string_pretty(&serde_json::json!({
         "created": rec.created,
         "stages": timings.json(),
+        "within": timings.within_json(),
     }))
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
     write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;

@@ -4,6 +4,8 @@
 
 use std::fmt::Write;
 
+use serde_json::{json, Value};
+
 use crate::input::model::{fmt_num, DofClass, Model};
 use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential};
 use crate::plan::Plan;
@@ -270,4 +272,122 @@ fn write_tables(o: &mut String, model: &Model) {
     for (table, groups) in by_table {
         let _ = writeln!(o, "  {table:<24} {} ({})", groups.join(", "), groups.len());
     }
+}
+
+/// A scene value that may be an expression: its number, or its text.
+fn scalar_json(s: &crate::input::expr::Scalar) -> serde_json::Value {
+    match s.as_const() {
+        Some(v) => json!(v),
+        None => json!(s.to_string()),
+    }
+}
+
+/// What `sgbem check --json` prints: the check report as data, for scripts and editors.
+/// Lengths in the scene's length unit, stresses in its force per length squared.
+pub fn check_json(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool) -> Value {
+    let cost = crate::estimate::estimate(model, scene);
+    let unknowns: usize = cost.bodies.iter().map(|b| b.n_x + b.n_x0).sum();
+    let s = &model.sizes;
+    let size = |(v, at): &(f64, String)| json!({"value": v, "at": at});
+    json!({
+        "scene": scene.path.display().to_string(),
+        "title": scene.title,
+        "overrides": scene.overrides,
+        "mesh": {
+            "path": model.mesh_path.display().to_string(),
+            "format": if mesh_binary { "binary" } else { "ascii" },
+            "gmsh_parameters": scene.mesh_parameters.iter()
+                .map(|(k, v)| (k.clone(), json!(v.to_string())))
+                .collect::<serde_json::Map<_, _>>(),
+        },
+        "plane": match scene.plane { Plane::Strain => "strain", Plane::Stress => "stress" },
+        "thickness": scene.thickness,
+        "units": {"length": scene.units.length, "force": scene.units.force},
+        "bodies": model.bodies.iter().map(body_json).collect::<Vec<_>>(),
+        "boundary_elements": {
+            "count": model.element_count(),
+            "smallest": size(&s.smallest),
+            "largest": size(&s.largest),
+            "largest_neighbour_ratio": size(&s.grading),
+        },
+        "boundary_parts": model.parts.iter().map(|p| json!({
+            "name": p.spec.name,
+            "role": p.spec.role(),
+            "condition": p.spec.describe(),
+            "in_scene": p.listed,
+            "length": p.length,
+            "elements": p.elements.iter()
+                .map(|(b, n)| (model.bodies[*b].name.clone(), json!(n)))
+                .collect::<serde_json::Map<_, _>>(),
+        })).collect::<Vec<_>>(),
+        "unused_curves": model.unused_curves,
+        "interfaces": model.interfaces.iter().map(|i| interface_json(model, i))
+            .collect::<Vec<_>>(),
+        "plan": {
+            "effects": plan.effects,
+            "problem": plan.problem.describe(),
+            "method": scene.solve.method.name(),
+            "stages": plan.stages.iter().map(|(n, what)| json!({"name": n, "does": what}))
+                .collect::<Vec<_>>(),
+            "advice": plan.advice,
+            "not_simulated": plan.omitted,
+        },
+        "cost": {
+            "unknowns": unknowns,
+            "peak_bytes": cost.peak_bytes,
+            "seconds": cost.seconds,
+            "post_seconds": cost.post_seconds,
+            "contact": cost.contact.as_ref().map(|c| json!({
+                "pairs": c.pairs,
+                "seconds": c.seconds(),
+                "bytes": c.bytes,
+                "history_bytes": c.history_bytes,
+                "states": c.states,
+            })),
+            "text": cost.line(),
+        },
+    })
+}
+
+fn body_json(b: &crate::input::model::Body) -> Value {
+    let [known, interface, free] = b.dof_counts();
+    json!({
+        "name": b.name,
+        "young": b.young,
+        "poisson": b.poisson,
+        "body_force": b.body_force,
+        "loops": b.loops.len(),
+        "holes": b.loops.iter().filter(|l| l.is_hole).count(),
+        "elements": b.elements.len(),
+        "nodes": b.nodes.len(),
+        "area": b.area,
+        "perimeter": b.perimeter(),
+        "triangles": b.triangles.len(),
+        "displacement_components": {"known": known, "interface": interface, "free": free},
+    })
+}
+
+fn interface_json(model: &Model, i: &crate::input::model::Interface) -> Value {
+    let sp = &i.spec;
+    json!({
+        "name": sp.name,
+        "model": match sp.model {
+            InterfaceModel::Bonded => "bonded",
+            InterfaceModel::Unilateral => "unilateral",
+        },
+        "initial": match sp.initial {
+            InitialState::Closed => "closed",
+            InitialState::Open => "open",
+        },
+        "cohesion": scalar_json(&sp.cohesion),
+        "gap": scalar_json(&sp.gap),
+        "tangential": sp.tangential.name(),
+        "friction": scalar_json(&sp.friction),
+        "body_a": model.bodies[i.body_a].name,
+        "body_b": model.bodies[i.body_b].name,
+        "elements": i.elements.len(),
+        "pairs": i.pairs.len(),
+        "length": i.length,
+        "matched_by_position": i.matched_by_position,
+    })
 }

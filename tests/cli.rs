@@ -444,3 +444,202 @@ fn high_contrast_advises_accurate_quadrature() {
     let (_, out, _) = check(&dir, STACKED_SCENE, &msh);
     assert!(!out.contains("advice"), "{out}");
 }
+
+#[test]
+fn completions_for_every_shell() {
+    for (shell, marker) in [
+        ("bash", "complete -F _sgbem"),
+        ("zsh", "#compdef sgbem"),
+        ("fish", "complete -c sgbem"),
+        ("elvish", "edit:completion:arg-completer[sgbem]"),
+        ("powershell", "Register-ArgumentCompleter"),
+    ] {
+        let (code, out, err) = sgbem(&["completions", shell]);
+        assert_eq!(code, 0, "{shell}: {err}");
+        assert!(out.contains(marker), "{shell}: {out}");
+        for cmd in ["run", "check", "sweep", "inspect", "export", "completions"] {
+            assert!(out.contains(cmd), "{shell} completion lacks {cmd}");
+        }
+    }
+    // The bash script loads and registers the completion of `sgbem`, and completes the
+    // subcommands and `check`'s options.
+    let dir = tmpdir("cli-completions");
+    let (_, script, _) = sgbem(&["completions", "bash"]);
+    let file = write(&dir, "sgbem.bash", &script);
+    let probe = format!(
+        "source {}; complete -p sgbem; COMP_WORDS=(sgbem ch); COMP_CWORD=1; _sgbem sgbem ch \
+         sgbem; echo \"words: ${{COMPREPLY[*]}}\"; COMP_WORDS=(sgbem check --j); COMP_CWORD=2; \
+         _sgbem sgbem --j check; echo \"options: ${{COMPREPLY[*]}}\"",
+        file.display()
+    );
+    let out = std::process::Command::new("bash")
+        .args(["-c", &probe])
+        .output()
+        .expect("bash");
+    let text = String::from_utf8_lossy(&out.stdout);
+    assert!(text.contains("-F _sgbem sgbem"), "{text}");
+    assert!(text.contains("words: check"), "{text}");
+    assert!(text.contains("options: --json"), "{text}");
+    // An unknown shell is a usage error naming the shells.
+    let (code, _, err) = sgbem(&["completions", "tcsh"]);
+    assert_eq!(code, 2);
+    assert!(
+        err.contains("tcsh") && err.contains("bash") && err.contains("zsh"),
+        "{err}"
+    );
+}
+
+#[test]
+fn check_json_is_the_report_as_data() {
+    let dir = tmpdir("cli-check-json");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let s = write(&dir, "scene.toml", STACKED_SCENE);
+    let args = [
+        "check",
+        s.to_str().unwrap(),
+        "--mesh",
+        msh.to_str().unwrap(),
+    ];
+    let (code, text, err) = sgbem(&args);
+    assert_eq!(code, 0, "{err}");
+    let (code, out, err) = sgbem(&[&args[..], &["--json"]].concat());
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).expect("check --json is JSON");
+    let names: Vec<&str> = v["bodies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["lower", "upper"]);
+    // The same figures as the text report.
+    let joint = &v["interfaces"][0];
+    assert_eq!(joint["name"], "joint");
+    assert_eq!(joint["pairs"], 5);
+    assert!(text.contains("5 pairs"), "{text}");
+    assert_eq!(joint["model"], "unilateral");
+    assert_eq!(joint["initial"], "closed");
+    assert_eq!(joint["body_a"], "lower");
+    assert_eq!(
+        v["plan"]["effects"],
+        serde_json::json!(["elastic", "detachment"])
+    );
+    assert!(text.contains("effects: elastic + detachment"), "{text}");
+    let count = v["boundary_elements"]["count"].as_u64().unwrap();
+    assert!(
+        text.contains(&format!("boundary elements {count};")),
+        "{text}"
+    );
+    let per_body: u64 = v["bodies"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|b| b["elements"].as_u64().unwrap())
+        .sum();
+    assert_eq!(per_body, count);
+    let unknowns = v["cost"]["unknowns"].as_u64().unwrap();
+    assert!(
+        text.contains(&format!("({unknowns} unknowns)")),
+        "{unknowns}: {text}"
+    );
+    let parts: Vec<&str> = v["boundary_parts"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|p| p["name"].as_str().unwrap())
+        .collect();
+    assert!(
+        parts.contains(&"base") && parts.contains(&"top"),
+        "{parts:?}"
+    );
+    // Errors stay messages on stderr, exit 2, nothing on stdout.
+    let (code, out, err) = sgbem(&[
+        "check",
+        s.to_str().unwrap(),
+        "--mesh",
+        msh.to_str().unwrap(),
+        "--json",
+        "--set",
+        "body.lower.poison=0.2",
+    ]);
+    bad(
+        (code, String::new(), err),
+        &["body.lower.poison", "poisson"],
+    );
+    assert!(out.is_empty(), "{out}");
+}
+
+/// A scene whose bodies and joint take `[defaults.body]` and `[defaults.interface]`.
+const DEFAULTS_SCENE: &str = r#"
+plane = "strain"
+[defaults.body]
+young = 1.0
+poisson = 0.3
+[defaults.interface]
+model = "unilateral"
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[boundary.top]
+ty = -1.0
+"#;
+
+#[test]
+fn set_on_a_defaulted_table_points_to_the_defaults() {
+    let dir = tmpdir("cli-set-defaults");
+    let msh = stacked_blocks(4).save(&dir, "m.msh");
+    let s = write(&dir, "scene.toml", DEFAULTS_SCENE);
+    let run = |sets: &[&str]| {
+        let mut args = vec![
+            "check",
+            s.to_str().unwrap(),
+            "--mesh",
+            msh.to_str().unwrap(),
+        ];
+        for set in sets {
+            args.extend(["--set", set]);
+        }
+        sgbem(&args)
+    };
+    let (code, out, err) = run(&[]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("joint"), "{out}");
+    let (code, out, err) = run(&["interface.joint.cohesion=0.5"]);
+    assert!(!err.contains("missing field"), "{err}");
+    bad(
+        (code, out, err.clone()),
+        &[
+            "scene.toml",
+            "--set interface.joint.cohesion=0.5",
+            "[defaults.interface]",
+            "--set defaults.interface.cohesion=0.5",
+        ],
+    );
+    let (code, out, err) = run(&["body.upper.young=2.0"]);
+    bad(
+        (code, out, err),
+        &["[defaults.body]", "--set defaults.body.young=2.0"],
+    );
+    // The fix it names works, and sets the value.
+    let (code, out, err) = run(&["defaults.interface.cohesion=0.5"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("cohesion 0.5"), "{out}");
+    // A whole new table is still accepted, and a declared one is set as before.
+    let (code, _, err) = run(&[
+        "interface.joint.model=unilateral",
+        "interface.joint.cohesion=0.5",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let declared = format!("{DEFAULTS_SCENE}[interface.joint]\nmodel = \"unilateral\"\n");
+    let s2 = write(&dir, "declared.toml", &declared);
+    let (code, out, err) = sgbem(&[
+        "check",
+        s2.to_str().unwrap(),
+        "--mesh",
+        msh.to_str().unwrap(),
+        "--set",
+        "interface.joint.cohesion=0.25",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("cohesion 0.25"), "{out}");
+}

@@ -540,9 +540,13 @@ fn export_rebuilds_identical_vtk_files() {
         names,
         [
             "boundary_0000.vtu",
+            "state_0000.vtm",
             "boundary_0001.vtu",
+            "state_0001.vtm",
             "boundary_0002.vtu",
             "field_0002.vtu",
+            "state_0002.vtm",
+            "states.pvd",
             "history.pvd"
         ]
     );
@@ -564,7 +568,7 @@ fn export_rebuilds_identical_vtk_files() {
         cli.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("5 VTK files"), "{out}");
+    assert!(out.contains("9 VTK files"), "{out}");
     assert_eq!(files(&cli), a);
 }
 
@@ -661,6 +665,31 @@ fn vtk_content() {
         ));
     }
     assert_eq!(entries, want);
+    // states.pvd: one multiblock per time, the field block only in the state that has it.
+    let series = std::fs::read_to_string(dir.join("states.pvd")).unwrap();
+    let entries: Vec<&str> = series.lines().filter(|l| l.contains("<DataSet")).collect();
+    let want: Vec<String> = t
+        .iter()
+        .enumerate()
+        .map(|(k, t)| {
+            format!(
+                "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"state_000{k}.vtm\"/>"
+            )
+        })
+        .collect();
+    assert_eq!(entries, want);
+    for k in 0..3 {
+        let vtm = std::fs::read_to_string(dir.join(format!("state_000{k}.vtm"))).unwrap();
+        let blocks: Vec<&str> = vtm.lines().filter(|l| l.contains("<DataSet")).collect();
+        let mut want = vec![format!(
+            "    <DataSet index=\"0\" name=\"boundary\" file=\"boundary_000{k}.vtu\"/>"
+        )];
+        if k == 2 {
+            want.push("    <DataSet index=\"1\" name=\"field\" file=\"field_0002.vtu\"/>".into());
+        }
+        assert_eq!(blocks, want, "state_000{k}.vtm");
+        assert!(vtm.contains("<VTKFile type=\"vtkMultiBlockDataSet\""));
+    }
     // A second write leaves no temporary files behind.
     write_vtk(&dir, &rec).expect("vtk");
     assert!(files(&dir).keys().all(|n| !n.starts_with('.')));
@@ -924,8 +953,9 @@ fn record_from_a_model() {
     let back = read_archive(&dir.join("archive.h5")).unwrap();
     assert_eq!(back.mesh.nodes, loaded.mesh.nodes);
     assert_eq!(back.scene_text, loaded.scene.text);
+    // One state without a field: its boundary, its multiblock and the two series.
     let files = write_vtk(&dir.join("vtk"), &back).unwrap();
-    assert_eq!(files.len(), 2);
+    assert_eq!(files.len(), 4);
 }
 
 /// A complete run folder (summary.json, CSV tables, archive, VTK files) from a real model

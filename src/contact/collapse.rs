@@ -43,6 +43,8 @@ impl Search<'_, '_> {
         let mut st = session.initial();
         let mut a = StepAcc::default();
         let t0 = Instant::now();
+        // The trial's stages are timed within the search, so that the total counts them once.
+        let mut inner = Timings::default();
         step_at(
             self.stepper,
             session,
@@ -51,10 +53,10 @@ impl Search<'_, '_> {
             (1.0, t),
             &mut st,
             &mut a,
-            timings,
+            &mut inner,
             reassembled,
         )?;
-        timings.add("collapse_search", t0.elapsed().as_secs_f64());
+        timings.add_within("collapse_search", t0.elapsed().as_secs_f64(), inner);
         let outcome = match a.failure {
             None => None,
             Some(e) if a.mechanism => Some(e),

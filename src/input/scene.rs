@@ -495,6 +495,9 @@ pub fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scen
             for k in 1..=sets.len() {
                 if let Err(e) = with(k) {
                     let m = e.message();
+                    if let Some(hint) = crate::input::tables::defaults_hint(&doc, &sets[k - 1]) {
+                        return Err(Error::input(path, format!("--set {}: {hint}", sets[k - 1])));
+                    }
                     if m.starts_with("--set ") {
                         return Err(e);
                     }

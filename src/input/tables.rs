@@ -355,3 +355,39 @@ mod tests {
         assert!(Glob::is_pattern("a*") && Glob::is_pattern("a?") && !Glob::is_pattern("a_1"));
     }
 }
+
+/// A hint for a `--set body.NAME.KEY=V` or `--set interface.NAME.KEY=V` that failed because it
+/// made a new, incomplete `[body.NAME]` (`[interface.NAME]`) table while the scene's bodies
+/// (interfaces) take `[defaults.body]` (`[defaults.interface]`): such a table applies whole
+/// (keys are never merged across tables), so the key belongs in the defaults. `doc` is the
+/// scene's document before the overrides.
+pub fn defaults_hint(doc: &toml::Table, set: &str) -> Option<String> {
+    let (path, value) = set.split_once('=')?;
+    let parts: Vec<&str> = path.trim().split('.').collect();
+    let [kind @ ("body" | "interface"), name, key] = parts[..] else {
+        return None;
+    };
+    let declared = doc
+        .get(kind)
+        .and_then(|t| t.as_table())
+        .is_some_and(|t| t.contains_key(name));
+    let defaults = doc
+        .get("defaults")
+        .and_then(|d| d.get(kind))
+        .is_some_and(toml::Value::is_table);
+    if declared || !defaults || name == "*" {
+        return None;
+    }
+    let value = value.trim();
+    let needs = if kind == "body" {
+        "`young` and `poisson`"
+    } else {
+        "`model` first"
+    };
+    Some(format!(
+        "the scene has no [{kind}.{name}] table: its {kind} \"{name}\" takes [defaults.{kind}], \
+         and a table applies whole (a new [{kind}.{name}] would need every key of its own, \
+         {needs}). Set the default instead: --set defaults.{kind}.{key}={value} (every {kind} \
+         that takes the defaults), or declare [{kind}.{name}] in the scene with all its keys"
+    ))
+}

@@ -8,6 +8,10 @@
 //! where they fit), each written atomically; the bytes depend on the record alone (no
 //! dates, no timings).
 //!
+//! `states.pvd` lists one multiblock per time, `state_NNNN.vtm`, with named blocks:
+//! `boundary` (the boundary file of the state) and `field` only in the states that have their
+//! interior field (the final one): the series to open in ParaView.
+//!
 //! `history.pvd` lists two parts at every time: part 0 the boundary file of the state,
 //! part 1 the field file of the latest state at or before that time that has one (the
 //! first one before it exists). ParaView's PVD reader reads a part only when it is listed at
@@ -57,6 +61,11 @@ pub fn field_name(k: usize) -> String {
     format!("field_{k:04}.vtu")
 }
 
+/// File name of the multiblock of state `k` (`states.pvd`'s entry).
+pub fn state_name(k: usize) -> String {
+    format!("state_{k:04}.vtm")
+}
+
 /// The time of every state in `history.pvd`: the states of load step s (from 1) with n
 /// recorded states at s − 1 + j/n, j = 1..n (the last state of step s at time s).
 pub fn state_times(rec: &RunRecord) -> Vec<f64> {
@@ -92,6 +101,9 @@ pub fn write_vtk_staged(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
 enum File {
     Boundary(usize),
     Field(usize),
+    /// The multiblock of a state: its boundary file and, where it has one, its field file.
+    State(usize, bool),
+    StatesPvd,
     Pvd,
 }
 
@@ -107,19 +119,22 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
     let mut field_of = Vec::with_capacity(rec.states.len());
     for (k, st) in rec.states.iter().enumerate() {
         files.push(File::Boundary(k));
-        if !st.interior.is_empty() {
+        let field = !st.interior.is_empty();
+        if field {
             files.push(File::Field(k));
-            field_of.push(Some(k));
-        } else {
-            field_of.push(None);
         }
+        files.push(File::State(k, field));
+        field_of.push(field.then_some(k));
     }
+    files.push(File::StatesPvd);
     files.push(File::Pvd);
     let paths: Vec<PathBuf> = files
         .iter()
         .map(|f| match *f {
             File::Boundary(k) => dir.join(boundary_name(k)),
             File::Field(k) => dir.join(field_name(k)),
+            File::State(k, _) => dir.join(state_name(k)),
+            File::StatesPvd => dir.join("states.pvd"),
             File::Pvd => dir.join("history.pvd"),
         })
         .collect();
@@ -128,37 +143,75 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
         Ok(match files[i] {
             File::Boundary(k) => grid_xml(boundary_grid(rec, k), &state_meta(rec, k, times[k])),
             File::Field(k) => grid_xml(field_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::State(k, field) => state_vtm(k, field).into_bytes(),
+            File::StatesPvd => states_pvd(&times).into_bytes(),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
         })
     })?;
     Ok(paths)
 }
 
+/// `state_NNNN.vtm`: the state as one multiblock with named blocks, `boundary` and, where
+/// the state has its interior field, `field` (nowhere else).
+fn state_vtm(k: usize, field: bool) -> String {
+    let mut o = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" \
+         byte_order=\"LittleEndian\">\n  <vtkMultiBlockDataSet>\n",
+    );
+    let _ = writeln!(
+        o,
+        "    <DataSet index=\"0\" name=\"boundary\" file=\"{}\"/>",
+        boundary_name(k)
+    );
+    if field {
+        let _ = writeln!(
+            o,
+            "    <DataSet index=\"1\" name=\"field\" file=\"{}\"/>",
+            field_name(k)
+        );
+    }
+    o.push_str("  </vtkMultiBlockDataSet>\n</VTKFile>\n");
+    o
+}
+
+/// `states.pvd`: one multiblock (`state_NNNN.vtm`) per time, the series to open in ParaView.
+fn states_pvd(times: &[f64]) -> String {
+    collection(
+        times
+            .iter()
+            .enumerate()
+            .map(|(k, &t)| (t, 0, state_name(k))),
+    )
+}
+
 /// `history.pvd`: at each time the boundary file of the state and the latest field at or
 /// before it, else the first one.
 fn pvd(times: &[f64], field_of: &[Option<usize>]) -> String {
-    let first_field = field_of.iter().flatten().next().copied();
+    let mut latest = field_of.iter().flatten().next().copied();
+    let mut entries = Vec::with_capacity(2 * times.len());
+    for (k, &t) in times.iter().enumerate() {
+        if field_of[k].is_some() {
+            latest = field_of[k];
+        }
+        entries.push((t, 0, boundary_name(k)));
+        if let Some(f) = latest {
+            entries.push((t, 1, field_name(f)));
+        }
+    }
+    collection(entries.into_iter())
+}
+
+/// A PVD collection of (time, part, file) entries.
+fn collection(entries: impl Iterator<Item = (f64, usize, String)>) -> String {
     let mut pvd = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\" \
          byte_order=\"LittleEndian\">\n  <Collection>\n",
     );
-    let mut latest = first_field;
-    for (k, t) in times.iter().enumerate() {
-        if field_of[k].is_some() {
-            latest = field_of[k];
-        }
+    for (t, part, file) in entries {
         let _ = writeln!(
             pvd,
-            "    <DataSet timestep=\"{t}\" group=\"\" part=\"0\" file=\"{}\"/>",
-            boundary_name(k)
+            "    <DataSet timestep=\"{t}\" group=\"\" part=\"{part}\" file=\"{file}\"/>"
         );
-        if let Some(f) = latest {
-            let _ = writeln!(
-                pvd,
-                "    <DataSet timestep=\"{t}\" group=\"\" part=\"1\" file=\"{}\"/>",
-                field_name(f)
-            );
-        }
     }
     pvd.push_str("  </Collection>\n</VTKFile>\n");
     pvd

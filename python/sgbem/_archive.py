@@ -1,0 +1,257 @@
+"""`sgbem.open`: a run folder or its `archive.h5` as Python objects (h5py, pandas, pyvista).
+
+The archive layout is documented in `src/output/archive.rs`. What this module relies on:
+`/bodies`, `/interfaces` and `/history/interfaces` carry an `order` attribute with their
+children's group names in run order, each child a `name` attribute with its real name;
+`/states/NNNN` hold every archived state with the bodies' nodes and elements and the
+interfaces' pairs concatenated, sliced by `/states/node_offset`, `element_offset` and
+`pair_offset`; `/solution/interior/<body>` holds the interior field of the final state.
+"""
+
+import json
+import pathlib
+
+import h5py
+import numpy as np
+import pandas as pd
+
+FORMAT = "sgbem-archive"
+
+# Codes of the archive's status datasets.
+_STATUS = {1: "closed", 0: "open"}
+_TANGENTIAL = {1: "stick", 2: "slip", -1: "none"}
+
+
+def _text(value):
+    """A string attribute or element as `str` (h5py gives bytes or numpy bytes for some)."""
+    if isinstance(value, (bytes, np.bytes_)):
+        return value.decode("utf-8")
+    return str(value)
+
+
+def _texts(values):
+    return [_text(v) for v in np.asarray(values).ravel()]
+
+
+def _floats(values):
+    """Float data with `-0.0` made `0.0` (adding 0.0 does exactly that)."""
+    return np.asarray(values, dtype=float) + 0.0
+
+
+def open(path):  # noqa: A001 - the package's documented name, `sgbem.open`
+    """Opens a run folder (holding archive.h5) or an archive file; see `Run`."""
+    return Run(path)
+
+
+class Run:
+    """The results of one `sgbem run`, read from its archive on demand.
+
+    Attributes read once: `folder`, `archive`, `title`, `status`, `units` (dict: length,
+    force, stress), `bodies` and `interfaces` (real names, in run order), `state_count`.
+    """
+
+    def __init__(self, path):
+        p = pathlib.Path(path)
+        if p.is_dir():
+            self.folder, self.archive = p, p / "archive.h5"
+        else:
+            self.folder, self.archive = p.parent, p
+        if not self.archive.is_file():
+            raise FileNotFoundError(
+                f"{self.archive}: no archive: give a run folder written by `sgbem run` "
+                f"(it holds archive.h5) or the path of an archive.h5")
+        with self._file() as f:
+            a = f.attrs
+            if _text(a.get("format", "")) != FORMAT:
+                raise ValueError(f"{self.archive}: not an sgbem archive (root attribute "
+                                 f"format is {_text(a.get('format', ''))!r}, not {FORMAT!r})")
+            self.title = _text(a.get("title", ""))
+            self.status = _text(a.get("status", ""))
+            self._summary_text = _text(a.get("summary", "{}"))
+            units = json.loads(_text(a.get("units", "{}")))
+            length, force = units.get("length") or "length", units.get("force") or "force"
+            self.units = {"length": length, "force": force, "stress": f"{force}/{length}^2"}
+            self._plane = _text(a.get("plane", "strain"))
+            self._bodies = self._named(f["bodies"])
+            self._interfaces = self._named(f["interfaces"])
+            self.bodies = [n for n, _ in self._bodies]
+            self.interfaces = [n for n, _ in self._interfaces]
+            states = f["states"]
+            self.state_count = int(states.attrs["count"])
+            self._node_offset = np.asarray(states["node_offset"], dtype=np.int64)
+            self._element_offset = np.asarray(states["element_offset"], dtype=np.int64)
+            self._pair_offset = np.asarray(states["pair_offset"], dtype=np.int64)
+
+    def __repr__(self):
+        return (f"<sgbem.Run {str(self.folder)!r}: {self.title!r}, {self.status}, "
+                f"{len(self.bodies)} bodies, {len(self.interfaces)} interfaces, "
+                f"{self.state_count} states>")
+
+    def _file(self):
+        # HDF5 file locking off, as sgbem itself reads: the archive is never written in place.
+        try:
+            return h5py.File(self.archive, "r", locking=False)
+        except TypeError:  # h5py < 3.5 has no `locking`
+            return h5py.File(self.archive, "r")
+
+    @staticmethod
+    def _named(group):
+        """(real name, group name) of a group's children in the order of its `order`
+        attribute (h5py itself lists them alphabetically)."""
+        out = []
+        for gname in _texts(group.attrs.get("order", [])):
+            child = group[gname]
+            out.append((_text(child.attrs.get("name", gname)), gname))
+        return out
+
+    def _interface(self, name):
+        for i, (real, gname) in enumerate(self._interfaces):
+            if real == name:
+                return i, gname
+        known = ", ".join(self.interfaces) or "none"
+        raise KeyError(f"{self.archive}: no interface {name!r} (the run has: {known})")
+
+    def _state(self, state):
+        n = self.state_count
+        k = int(state)
+        if not -n <= k < n:
+            raise IndexError(f"{self.archive}: state {state} out of range: the run archived "
+                             f"{n} states (0 ... {n - 1}, or -1 for the last)")
+        return k % n
+
+    @property
+    def summary(self):
+        """summary.json as a dict (from the archive's copy of it)."""
+        return json.loads(self._summary_text)
+
+    @property
+    def timings(self):
+        """Seconds per stage (dict, run order), as timings.json's `stages`."""
+        with self._file() as f:
+            g = f["timings"]
+            return {n: float(g[n][()]) for n in _texts(g.attrs.get("order", []))}
+
+    @property
+    def states(self):
+        """One row per archived state (the rows of `pairs(..., state=k)` and
+        `to_pyvista(k)`): iteration, load_step, load_factor."""
+        rows = []
+        with self._file() as f:
+            g = f["states"]
+            for k in range(self.state_count):
+                a = g[f"{k:04}"].attrs
+                rows.append((int(a["iteration"]), int(a["load_step"]),
+                             float(a["load_factor"]) + 0.0))
+        df = pd.DataFrame(rows, columns=["iteration", "load_step", "load_factor"])
+        df.index.name = "state"
+        df.attrs["units"] = {"iteration": "1", "load_step": "1", "load_factor": "1"}
+        return df
+
+    @property
+    def history(self):
+        """One row per recorded contact state (`/history`: with history = "full" per load
+        step its initial status, every contact iteration and the state once the outer
+        iterations settle, the rows of `states`; none without a unilateral interface):
+        load_step, iteration, load_factor, solver, and per interface NAME the columns
+        `detached_length/NAME`, `open_pairs/NAME`, `closed_pairs/NAME`."""
+        with self._file() as f:
+            h = f["history"]
+            df = pd.DataFrame({
+                "load_step": np.asarray(h["load_step"], dtype=np.int64),
+                "iteration": np.asarray(h["iteration"], dtype=np.int64),
+                "load_factor": _floats(h["load_factor"]),
+                "solver": _texts(h["solver"]),
+            })
+            units = {"load_step": "1", "iteration": "1", "load_factor": "1", "solver": ""}
+            rows = len(df)
+            detached = _floats(h["detached_length"]).reshape(rows, len(self.interfaces))
+            per = h["interfaces"]
+            for i, (name, gname) in enumerate(self._history_interfaces(per)):
+                pairs = int(self._pair_offset[i + 1] - self._pair_offset[i])
+                status = np.asarray(per[gname]["status"]).reshape(rows, pairs)
+                df[f"detached_length/{name}"] = detached[:, i]
+                df[f"open_pairs/{name}"] = (status == 0).sum(axis=1)
+                df[f"closed_pairs/{name}"] = (status == 1).sum(axis=1)
+                units[f"detached_length/{name}"] = self.units["length"]
+                units[f"open_pairs/{name}"] = "1"
+                units[f"closed_pairs/{name}"] = "1"
+        df.index.name = "row"
+        df.attrs["units"] = units
+        return df
+
+    def _history_interfaces(self, group):
+        named = self._named(group)
+        if [n for n, _ in named] != self.interfaces:
+            raise ValueError(f"{self.archive}: /history/interfaces lists "
+                             f"{[n for n, _ in named]}, /interfaces {self.interfaces}")
+        return named
+
+    def pairs(self, name, state=-1):
+        """The contact points of interface `name` at archived state `state` (default the
+        last, the final state), one row each, with the columns of interfaces/NAME.csv:
+        x, y, s, status ("closed"/"open"), normal_traction, tangential_traction (on the first
+        body, tension positive), normal_opening, tangential_slip, gap, and with friction
+        tangential_status ("stick"/"slip"/"open") and slip (accumulated path)."""
+        i, gname = self._interface(name)
+        k = self._state(state)
+        lo, hi = self._pair_offset[i], self._pair_offset[i + 1]
+        with self._file() as f:
+            it = f["interfaces"][gname]
+            st = f["states"][f"{k:04}"]
+            x = _floats(it["x"]).reshape(-1, 2)
+            status = np.asarray(st["status"][lo:hi])
+            traction = _floats(st["traction"][lo:hi]).reshape(-1, 2)
+            jump = _floats(st["jump"][lo:hi]).reshape(-1, 2)
+            df = pd.DataFrame({
+                "x": x[:, 0], "y": x[:, 1], "s": _floats(it["s"]),
+                "status": [_STATUS.get(int(v), "?") for v in status],
+                "normal_traction": traction[:, 1],
+                "tangential_traction": traction[:, 0],
+                "normal_opening": _floats(st["normal_opening"][lo:hi]),
+                "tangential_slip": jump[:, 0],
+                "gap": _floats(it["gap"]),
+            })
+            if "tangential_status" in st:
+                ts = np.asarray(st["tangential_status"][lo:hi])
+                # -1: no friction at this pair; an open friction pair is "open".
+                df["tangential_status"] = [
+                    "open" if s == 0 and t != -1 else _TANGENTIAL.get(int(t), "?")
+                    for s, t in zip(status, ts)]
+                df["slip"] = _floats(st["slip"][lo:hi])
+            a = st.attrs
+            meta = {"interface": name, "state": k, "iteration": int(a["iteration"]),
+                    "load_step": int(a["load_step"]), "load_factor": float(a["load_factor"])}
+        length, stress = self.units["length"], self.units["stress"]
+        units = {"x": length, "y": length, "s": length, "status": "",
+                 "normal_traction": stress, "tangential_traction": stress,
+                 "normal_opening": length, "tangential_slip": length, "gap": length,
+                 "tangential_status": "", "slip": length}
+        df.index.name = "pair"
+        df.attrs.update(meta)
+        df.attrs["units"] = {c: units[c] for c in df.columns}
+        return df
+
+    def to_pyvista(self, state=-1):
+        """A pyvista MultiBlock of archived state `state` (default the final one): block
+        "boundary" (every body's boundary lines at their reference positions, point data
+        displacement, traction, contact_status 1 closed 0 open -1 elsewhere,
+        normal_traction, body) and, where the run computed the interior field (`field =
+        true`, final state only), block "field" (triangles; displacement, stress xx yy xy,
+        sxx, syy, sxy, von_mises, body). Warp by `displacement` to see the strained shape."""
+        from ._mesh import boundary_grid, field_grid  # pyvista is imported on demand
+
+        k = self._state(state)
+        import pyvista
+
+        blocks = pyvista.MultiBlock()
+        with self._file() as f:
+            blocks["boundary"] = boundary_grid(self, f, k)
+            if k == self.state_count - 1 and "interior" in f.get("solution", {}):
+                blocks["field"] = field_grid(self, f)
+            a = f["states"][f"{k:04}"].attrs
+            for block in blocks:
+                block.field_data["iteration"] = [int(a["iteration"])]
+                block.field_data["load_step"] = [int(a["load_step"])]
+                block.field_data["load_factor"] = [float(a["load_factor"])]
+        return blocks
+
