@@ -1,7 +1,8 @@
 //! `make bench` (third part): whole runs with default outputs of the arch pipeline
 //! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
 //! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
-//! elements per course height) for 7 … 410 bricks (all with the full history, the default):
+//! elements per course height) for 7 … 410 bricks with the full history (the default) and
+//! 798 bricks with the final state; the solver (evolutive path or sparse) and its iterations:
 //! seconds per stage (from the run's `timings.json`), peak memory of the run, fitted
 //! exponents against the number of bodies. Writes out/bench/masonry.csv and prints a table.
 //! `SGBEM_BENCH_VOUSSOIRS=6,12` and `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` (courses x
@@ -27,13 +28,14 @@ fn fit(xs: &[f64], ys: &[f64]) -> f64 {
     sxy / sxx
 }
 
-const STAGES: [&str; 9] = [
+const STAGES: [&str; 10] = [
     "read",
     "assemble",
     "condense",
     "interface_system",
     "contact_lcp",
     "contact_active_set",
+    "contact_sparse",
     "contact_record",
     "write",
     "total",
@@ -102,13 +104,18 @@ fn one(
         .iter()
         .map(|s| timings["stages"][*s].as_f64().unwrap_or(f64::NAN))
         .collect();
+    let solver = summary["contact"]["solver"]
+        .as_str()
+        .unwrap_or("-")
+        .to_string();
+    let iterations = summary["contact"]["iterations"].as_u64().unwrap_or(0);
     let mut line = format!("{label:>5} {size:>12} {bodies:>6} {elems:>6} {pairs:>6}");
     for v in &t {
         line += &format!(" {v:>10.3}");
     }
-    println!("{line} {peak:>8.0} {status}");
+    println!("{line} {peak:>8.0} {solver:>7} {iterations:>6} {status}");
     let row = format!(
-        "{label},{size},{bodies},{elems},{pairs},{},{peak:.1},{status}\n",
+        "{label},{size},{bodies},{elems},{pairs},{},{peak:.1},{solver},{iterations},{status}\n",
         t.iter()
             .map(|v| v.to_string())
             .collect::<Vec<_>>()
@@ -153,9 +160,12 @@ fn main() {
     for s in STAGES {
         header += &format!(" {s:>10}");
     }
-    println!("{header} {:>8} status", "peak");
+    println!(
+        "{header} {:>8} {:>7} {:>6} status",
+        "peak", "solver", "iters"
+    );
     let mut csv = format!(
-        "series,size,bodies,elements,pairs,{},peak_mb,status\n",
+        "series,size,bodies,elements,pairs,{},peak_mb,solver,iterations,status\n",
         STAGES.map(|s| format!("{s}_s")).join(",")
     );
 
@@ -185,10 +195,19 @@ fn main() {
     // course height, self-weight and wind, friction 0.7), COURSESxBRICKS.
     let scene = root().join("pipelines/wall_running_bond.toml");
     let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
-    // The largest, 410 bodies, records 1195 states (2.8 GB at the peak; README, Speed).
+    // Walls of over 3000 unilateral pairs (14 x 14 on) are solved by the sparse solver, as
+    // a scene without `method` is; 28 x 28 (798 bodies) with the final state only.
     for size in sizes(
         "SGBEM_BENCH_WALLS",
-        &["2x3", "4x5", "6x8", "10x10", "14x14", "20x20"],
+        &[
+            "2x3",
+            "4x5",
+            "6x8",
+            "10x10",
+            "14x14",
+            "20x20",
+            "28x28:final",
+        ],
     ) {
         let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
         let (c, b) = dims.split_once('x').unwrap_or((dims, "1"));

@@ -27,24 +27,10 @@ pub fn solve(
         let st = inner.state(cols, &o, &sign);
         let v = inner.violations(&st);
         if v.is_empty() && refused.is_empty() {
-            return InnerOutcome {
-                state: st,
-                iterations,
-                converged: true,
-                notes: Vec::new(),
-                blocked: Vec::new(),
-                stalled: false,
-            };
+            return InnerOutcome::converged(st, iterations);
         }
         if !seen.insert(status_key(&st)) || iterations >= max_iterations || v.is_empty() {
-            return InnerOutcome {
-                state: st,
-                iterations,
-                converged: false,
-                notes: Vec::new(),
-                blocked: Vec::new(),
-                stalled: true,
-            };
+            return InnerOutcome::stalled(st, iterations, Vec::new());
         }
         open = st.open.clone();
         sign = st.sign.clone();

@@ -41,6 +41,32 @@ pub struct InnerOutcome {
     pub stalled: bool,
 }
 
+impl InnerOutcome {
+    /// A solution found after `iterations`.
+    pub fn converged(state: InnerState, iterations: usize) -> Self {
+        InnerOutcome {
+            state,
+            iterations,
+            converged: true,
+            notes: Vec::new(),
+            blocked: Vec::new(),
+            stalled: false,
+        }
+    }
+
+    /// No verdict after `iterations` (the driver hands over to the evolutive path).
+    pub fn stalled(state: InnerState, iterations: usize, notes: Vec<String>) -> Self {
+        InnerOutcome {
+            state,
+            iterations,
+            converged: false,
+            notes,
+            blocked: Vec::new(),
+            stalled: true,
+        }
+    }
+}
+
 /// The statuses a solver that does not pivot found: open rows and slip directions.
 pub struct Statuses {
     pub open: Vec<bool>,

@@ -253,14 +253,7 @@ pub fn solve(
         };
         let v = inner.violations(&st);
         if v.is_empty() && !regularised {
-            return InnerOutcome {
-                state: st,
-                iterations,
-                converged: true,
-                notes: Vec::new(),
-                blocked: Vec::new(),
-                stalled: false,
-            };
+            return InnerOutcome::converged(st, iterations);
         }
         if v.is_empty() {
             // The statuses hold only with the regularisation: a body is free.
@@ -292,14 +285,11 @@ pub fn solve(
 }
 
 fn stalled(state: InnerState, iterations: usize, why: &str) -> InnerOutcome {
-    InnerOutcome {
+    InnerOutcome::stalled(
         state,
         iterations,
-        converged: false,
-        notes: vec![format!("the sparse active set stopped: {why}")],
-        blocked: Vec::new(),
-        stalled: true,
-    }
+        vec![format!("the sparse active set stopped: {why}")],
+    )
 }
 
 /// Every row closed at its offset, with the forces of the base.
