@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 .DELETE_ON_ERROR:
 .DEFAULT_GOAL := help
-.PHONY: help setup build mesh test demo examples accuracy bench report clean view
+.PHONY: help setup build mesh test lint demo examples accuracy bench report clean view
 
 CARGO   ?= cargo
 GMSH    ?= gmsh
@@ -27,6 +27,7 @@ help:
 	@echo "  make test      set up, then run every test (what CI runs)"
 	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)), $(VENV) ($(PY_PACKAGES)) and the package sgbem (python/)"
 	@echo "  make build     cargo build --release"
+	@echo "  make lint      cargo fmt --check, clippy and rustdoc with warnings denied (part of make test)"
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
 	@echo "  make vault     the paper's vault (example 3) for five cohesions, tables in out/vault/"
@@ -58,6 +59,12 @@ setup:
 build:
 	$(CARGO) build --release
 
+# Formatting, clippy's lints and the documentation's links, warnings denied (make test runs it).
+lint:
+	$(CARGO) fmt --check
+	$(CARGO) clippy --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps
+
 mesh: $(MESHES)
 
 # The meshes depend on MESH_OPTS through a stamp file rewritten only when the options change.
@@ -81,7 +88,7 @@ demo: setup build mesh
 	@echo "  summary.json, archive.h5 (sgbem inspect), interfaces/joint.csv, sections/a-a.csv,"
 	@echo "  vtk/states.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
 
-test: setup mesh
+test: setup mesh lint
 	$(CARGO) test --release
 	$(CARGO) build --release
 	@# The Python package (python/) against real runs of the built sgbem.

@@ -902,7 +902,7 @@ fn inner_solve(
                     .map_err(|message| InnerFailure::State { message })?;
                 *system = Some(built);
             }
-            let Some(sys) = system.as_ref() else {
+            let Some(sys) = system.as_mut() else {
                 return Err(InnerFailure::State {
                     message: "the sparse contact system is missing".into(),
                 });

@@ -1112,7 +1112,7 @@ const SINGULAR_PIVOT: f64 = 1e-7;
 ///
 /// Rows are kept in insertion order; `append` adds a row and column (O(m²)), `remove`
 /// deletes one with a rank-one update of the trailing factor (O(m²)). A pivot below
-/// [`SINGULAR_PIVOT`] of the column's diagonal means A_OO is singular: opening that row would leave a
+/// `SINGULAR_PIVOT` of the column's diagonal means A_OO is singular: opening that row would leave a
 /// body free (a mechanism), and the row is refused.
 #[derive(Debug, Clone, Default)]
 pub struct Opening {

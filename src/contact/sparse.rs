@@ -40,7 +40,14 @@ pub struct SparseSystem {
     n: usize,
     h: SparseColMat<usize, f64>,
     symbolic: SymbolicLlt<usize>,
+    /// The factorisation of the last status solved, with that status (`None` where it
+    /// left a body free): the outer loop's next iterate often keeps the status and changes
+    /// only the loads (slip bounds, cohesion), which then costs two triangular solves.
+    last: Option<Factored>,
 }
+
+/// A status (open rows, regularisation) and its factorisation, if positive definite.
+type Factored = (Vec<bool>, f64, Option<Llt<usize, f64>>);
 
 impl SparseSystem {
     /// Assembles H of `problem` and analyses its pattern.
@@ -80,6 +87,7 @@ impl SparseSystem {
             n,
             h,
             symbolic,
+            last: None,
         })
     }
 
@@ -91,6 +99,28 @@ impl SparseSystem {
     /// Stored entries of H (lower triangle).
     pub fn stored(&self) -> usize {
         self.h.val().len()
+    }
+
+    /// The factorisation of H with the rows that are not `open` pinned and `reg` added to the
+    /// diagonal of the open ones; None where it is not positive definite.
+    fn factor(&self, open: &[bool], reg: f64) -> Option<Llt<usize, f64>> {
+        let ng = self.n_glued;
+        let pinned = |k: usize| k >= ng && !open[k - ng];
+        let sym = self.h.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let mut val = self.h.val().to_vec();
+        for col in 0..ng + self.n {
+            for p in cp[col]..cp[col + 1] {
+                let row = ri[p];
+                if pinned(row) || pinned(col) {
+                    val[p] = if row == col { 1.0 } else { 0.0 };
+                } else if row == col && col >= ng && reg > 0.0 {
+                    val[p] += reg * val[p].abs().max(f64::MIN_POSITIVE);
+                }
+            }
+        }
+        let m = SparseColMatRef::new(sym, &val);
+        Llt::try_new_with_symbolic(self.symbolic.clone(), m, Side::Lower).ok()
     }
 
     /// `H x` with the full symmetric H from its lower triangle.
@@ -116,7 +146,7 @@ impl SparseSystem {
     /// diagonal: a body that the status leaves free then moves far but finitely, and the
     /// iteration closes the rows it runs into (used for iterates only, never for a result).
     fn state(
-        &self,
+        &mut self,
         inner: &Inner,
         c: &[f64],
         open: &[bool],
@@ -166,22 +196,12 @@ impl SparseSystem {
                 }
             })
             .collect();
-        let pinned = |k: usize| k >= ng && !open[k - ng];
-        let sym = self.h.symbolic();
-        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-        let mut val = self.h.val().to_vec();
-        for col in 0..ng + n {
-            for p in cp[col]..cp[col + 1] {
-                let row = ri[p];
-                if pinned(row) || pinned(col) {
-                    val[p] = if row == col { 1.0 } else { 0.0 };
-                } else if row == col && col >= ng && reg > 0.0 {
-                    val[p] += reg * val[p].abs().max(f64::MIN_POSITIVE);
-                }
-            }
+        let same = matches!(&self.last, Some((o, g, _)) if *o == open && *g == reg);
+        if !same {
+            let llt = self.factor(&open, reg);
+            self.last = Some((open.clone(), reg, llt));
         }
-        let m = SparseColMatRef::new(sym, &val);
-        let llt = Llt::try_new_with_symbolic(self.symbolic.clone(), m, Side::Lower).ok()?;
+        let llt = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
         let b = Mat::<f64>::from_fn(ng + n, 1, |i, _| rhs[i]);
         let sol = llt.solve(&b);
         let w: Vec<f64> = (0..ng + n).map(|i| sol[(i, 0)]).collect();
@@ -225,7 +245,7 @@ const SINGULAR: f64 = 1e7;
 /// quarter, …), which breaks the cycles of the full step.
 pub fn solve(
     inner: &Inner,
-    sys: &SparseSystem,
+    sys: &mut SparseSystem,
     open: &[bool],
     sign: &[f64],
     max_iterations: usize,

@@ -336,26 +336,6 @@ pub fn resolve_interfaces(
     Ok((out, resolved))
 }
 
-#[cfg(test)]
-mod tests {
-    use super::Glob;
-
-    #[test]
-    fn globs_match_whole_names() {
-        let g = Glob::new("brick*");
-        assert!(g.matches("brick") && g.matches("brick_12") && !g.matches("abrick"));
-        assert!(Glob::new("*").matches("") && Glob::new("*").matches("anything"));
-        assert!(
-            Glob::new("b?ick_*2").matches("brick_12") && !Glob::new("b?ick_*2").matches("brick_13")
-        );
-        assert!(Glob::new("*a*b*").matches("xxaxxbxx") && !Glob::new("*a*b*").matches("xxbxxaxx"));
-        assert!(!Glob::new("v?").matches("v") && Glob::new("v?").matches("v1"));
-        assert_eq!(Glob::new("brick_1*").specificity(), 7);
-        assert_eq!(Glob::new("*").specificity(), 0);
-        assert!(Glob::is_pattern("a*") && Glob::is_pattern("a?") && !Glob::is_pattern("a_1"));
-    }
-}
-
 /// A hint for a `--set body.NAME.KEY=V` or `--set interface.NAME.KEY=V` that failed because it
 /// made a new, incomplete `[body.NAME]` (`[interface.NAME]`) table while the scene's bodies
 /// (interfaces) take `[defaults.body]` (`[defaults.interface]`): such a table applies whole
@@ -390,4 +370,24 @@ pub fn defaults_hint(doc: &toml::Table, set: &str) -> Option<String> {
          {needs}). Set the default instead: --set defaults.{kind}.{key}={value} (every {kind} \
          that takes the defaults), or declare [{kind}.{name}] in the scene with all its keys"
     ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Glob;
+
+    #[test]
+    fn globs_match_whole_names() {
+        let g = Glob::new("brick*");
+        assert!(g.matches("brick") && g.matches("brick_12") && !g.matches("abrick"));
+        assert!(Glob::new("*").matches("") && Glob::new("*").matches("anything"));
+        assert!(
+            Glob::new("b?ick_*2").matches("brick_12") && !Glob::new("b?ick_*2").matches("brick_13")
+        );
+        assert!(Glob::new("*a*b*").matches("xxaxxbxx") && !Glob::new("*a*b*").matches("xxbxxaxx"));
+        assert!(!Glob::new("v?").matches("v") && Glob::new("v?").matches("v1"));
+        assert_eq!(Glob::new("brick_1*").specificity(), 7);
+        assert_eq!(Glob::new("*").specificity(), 0);
+        assert!(Glob::is_pattern("a*") && Glob::is_pattern("a?") && !Glob::is_pattern("a_1"));
+    }
 }

@@ -47,7 +47,7 @@
 //! record order; a child's real name is its `name` attribute (group names have `/` replaced).
 //! Every dataset carries `description` and `units` attributes. With `output.compress = true`
 //! datasets of 4096 values or more (but the states' floats) are chunked and compressed
-//! (shuffle + deflate, level [`DEFLATE_LEVEL`]) when the HDF5 library has deflate. It is off
+//! (shuffle + deflate, level `DEFLATE_LEVEL`) when the HDF5 library has deflate. It is off
 //! by default: example 2's archive is 16 MB instead of 11 MB, and its run 0.38–0.40 s instead
 //! of 0.47 s (deflating its 13 MB of dense operators costs 0.19 s of CPU).
 //!
