@@ -25,7 +25,7 @@ use crate::output::record::{Array, InteriorRecord, RunRecord, StateRecord};
 use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
 use crate::post::{section_points, PointSampler};
-use crate::solution::History;
+use crate::solution::{History, RunStatus};
 use crate::timings::Timings;
 
 /// A scene read and validated against its mesh.
@@ -410,7 +410,7 @@ fn record_solution(
     });
     timings.add("write", t1.elapsed().as_secs_f64());
     if let Some(where_) = non_finite(model, solved) {
-        solved.status = "failed: non-finite results".into();
+        solved.status = RunStatus::NonFinite;
         if solved.failure.is_none() {
             solved.failure = Some(non_finite_error(&where_, scene));
         }
@@ -513,7 +513,7 @@ fn postprocess(
                 v.filter(|(u, sg)| !u.iter().chain(sg.iter()).all(|c| c.is_finite()))
                     .map(|_| *x)
             }) {
-                solved.status = "failed: non-finite results".into();
+                solved.status = RunStatus::NonFinite;
                 solved.failure = Some(non_finite_error(
                     &format!("section {} at ({:e}, {:e})", s.name, x[0], x[1]),
                     scene,
@@ -535,7 +535,7 @@ fn postprocess(
     if scene.output.field {
         let failed = solved.failure.is_some();
         if let Some(e) = interior_field(loaded, settings, &inputs, failed, &mut post, progress) {
-            solved.status = "failed: non-finite results".into();
+            solved.status = RunStatus::NonFinite;
             solved.failure = Some(e);
         }
     }
@@ -751,7 +751,7 @@ fn summary_of(
             })
         });
         if let Some(where_) = overflow {
-            solved.status = "failed: non-finite results".into();
+            solved.status = RunStatus::NonFinite;
             summary["status"] = serde_json::json!(solved.status);
             solved.failure = Some(non_finite_error(&where_, scene));
         }
@@ -777,7 +777,7 @@ fn write_run(
         .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?;
     let t4 = Instant::now();
     let stage = progress.spinner("archive and VTK");
-    rec.status = solved.status.clone();
+    rec.status = solved.status.as_str().to_string();
     rec.timings = timings.0.iter().map(|(s, t)| (s.to_string(), *t)).collect();
     rec.summary_json = text.clone();
     archive.send(ArchivePart::Finished {

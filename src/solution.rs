@@ -79,3 +79,34 @@ pub struct HistoryRow {
 pub struct History {
     pub rows: Vec<HistoryRow>,
 }
+
+/// How a run ended, as `summary.json`'s and the archive's `status`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum RunStatus {
+    /// One linear solve (no unilateral interface).
+    Solved,
+    /// The contact problem converged at every load step.
+    Converged,
+    /// The contact problem did not converge (the failure says why).
+    NotConverged,
+    /// A result holds numbers that are not finite.
+    NonFinite,
+}
+
+impl RunStatus {
+    /// The status as written in the outputs.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            RunStatus::Solved => "solved",
+            RunStatus::Converged => "converged",
+            RunStatus::NotConverged => "not converged",
+            RunStatus::NonFinite => "failed: non-finite results",
+        }
+    }
+}
+
+impl serde::Serialize for RunStatus {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(self.as_str())
+    }
+}

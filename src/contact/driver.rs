@@ -20,7 +20,7 @@ use crate::input::model::{fmt_num, Model};
 use crate::input::scene::{History as HistoryLevel, Method, Scene};
 use crate::output::progress::{ContactTick, Progress, Stage};
 use crate::plan::{ContactProblem, Plan};
-use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
+use crate::solution::{BodyField, History, InterfaceResult, PairStatus, RunStatus};
 use crate::timings::Timings;
 
 /// What the contact stage works on.
@@ -34,7 +34,7 @@ pub struct Case<'a> {
 
 /// Everything the contact stage computed, for post-processing and the writers.
 pub struct ContactRun {
-    pub status: String,
+    pub status: RunStatus,
     pub load_factor: f64,
     /// Pseudo-time of the final state (1 without `[solve] time`).
     pub time: f64,
@@ -220,7 +220,7 @@ fn solve_linear(
     let body_force = m.bodies.iter().map(|b| b.body_force).collect();
     drop(other);
     Ok(ContactRun {
-        status: "solved".into(),
+        status: RunStatus::Solved,
         load_factor: f,
         time,
         body_force,
@@ -311,9 +311,9 @@ fn finish(session: &Session, main: Solver, steps: usize, acc: StepAcc) -> Result
     }
     Ok(ContactRun {
         status: if converged {
-            "converged".into()
+            RunStatus::Converged
         } else {
-            "not converged".into()
+            RunStatus::NotConverged
         },
         load_factor: sol.load_factor,
         time: sol.time,
