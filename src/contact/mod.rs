@@ -165,6 +165,25 @@ struct StepLoop {
     info: serde_json::Value,
 }
 
+/// What the outer loop of a load step leaves for its result.
+struct StepEnd {
+    st: StepState,
+    /// The last inner solution and its complementarity residual.
+    last: Option<(InnerState, f64)>,
+    lp: StepLoop,
+    notes: Vec<String>,
+    /// Stick pairs kept slipping at the contact edge.
+    slipping: usize,
+    friction: bool,
+    bound_changes: Vec<f64>,
+    bound: Vec<f64>,
+    iterations: usize,
+    outer: usize,
+    converged: bool,
+    failure: Option<Error>,
+    mechanism: bool,
+}
+
 /// A contact run: the problem and the columns of its opening stiffness, shared by every
 /// solver and load step.
 pub struct Session<'a> {
@@ -284,6 +303,184 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// The slip bounds before any normal force is known: every friction row tied (an
+    /// infinite bound), which gives the normal forces of the first bounds.
+    fn first_bounds(&self) -> Vec<f64> {
+        self.problem.rows[..self.problem.n_open_rows]
+            .iter()
+            .map(|r| {
+                if r.kind == RowKind::Friction {
+                    f64::INFINITY
+                } else {
+                    0.0
+                }
+            })
+            .collect()
+    }
+
+    /// The free rows of the inner problem (untied stick rows, friction rows without a slip
+    /// bound) and the untied stick rows of open pairs, which tie as their pair closes (the
+    /// sparse solver follows that within the inner problem; the others through the outer
+    /// loop).
+    fn inner_rows(
+        &self,
+        st: &StepState,
+        bound: &[f64],
+        edge_slip: &[bool],
+    ) -> (Vec<bool>, Vec<bool>) {
+        let rows = &self.problem.rows[..self.problem.n_open_rows];
+        let free = rows
+            .iter()
+            .enumerate()
+            .map(|(r, row)| match row.kind {
+                RowKind::Stick => st.open[r],
+                RowKind::Friction => bound[r] <= 0.0,
+                _ => false,
+            })
+            .collect();
+        let tie_on_close = rows
+            .iter()
+            .enumerate()
+            .map(|(r, row)| row.kind == RowKind::Stick && st.open[r] && !edge_slip[r])
+            .collect();
+        (free, tie_on_close)
+    }
+
+    /// The message of a solver's failure, with the mechanism that the pivoting path `probe`
+    /// from the start statuses found (the rows that cannot open), and whether it found one.
+    fn explain(&self, e: &InnerFailure, probe: &InnerOutcome, inner: &Inner) -> (String, bool) {
+        if probe.blocked.is_empty() {
+            (e.to_string(), false)
+        } else {
+            let hint = self.mechanism(&probe.blocked, &probe.state, inner);
+            (format!("{e}; {hint}"), true)
+        }
+    }
+
+    /// Restarts the Tresca fixed point from Coulomb's exact solution (`coulomb_exact`): its
+    /// statuses of the normal and friction rows into `next`, its slip bounds into `bound`.
+    fn coulomb_restart(
+        &mut self,
+        base: &problem::Base,
+        st: &StepState,
+        tol: f64,
+        next: &mut StepState,
+        bound: &mut Vec<f64>,
+    ) -> Result<(), String> {
+        let (open, sign, b) = self.coulomb_exact(base, st, tol)?;
+        for r in 0..self.problem.n_open_rows {
+            if matches!(
+                self.problem.rows[r].kind,
+                RowKind::Normal | RowKind::Friction
+            ) {
+                next.open[r] = open[r];
+                next.sign[r] = sign[r];
+            }
+        }
+        *bound = b;
+        Ok(())
+    }
+
+    /// Keeps the stick rows that flip along the cycle of outer iterates that `next` closes
+    /// untied from now on (`edge_slip`, and open in `next`); how many. A cycle without such a
+    /// row, or after 200 outer iterations, is a failure.
+    fn untie_edge_cycle(
+        &self,
+        iterates: &[Vec<bool>],
+        next: &mut StepState,
+        edge_slip: &mut [bool],
+        outer: usize,
+    ) -> Result<usize, Error> {
+        let flipping = self.edge_cycle(iterates, &next.open, edge_slip);
+        if flipping.is_empty() || outer > 200 {
+            return Err(Error::numerical(format!(
+                "the stick ties cycle at the contact edge after {outer} outer iterations: \
+                 tangential = \"stick\" has no consistent state there; use tangential = \
+                 \"friction\" (or \"slide\")"
+            )));
+        }
+        for &r in &flipping {
+            edge_slip[r] = true;
+            next.open[r] = true;
+        }
+        Ok(flipping.len())
+    }
+
+    /// The stick rows that flip along the cycle of outer iterates that `next_open` closes
+    /// (not yet kept slipping).
+    fn edge_cycle(
+        &self,
+        iterates: &[Vec<bool>],
+        next_open: &[bool],
+        edge_slip: &[bool],
+    ) -> Vec<usize> {
+        let k0 = iterates.iter().position(|o| o == next_open).unwrap_or(0);
+        let cycle = &iterates[k0..];
+        (0..self.problem.n_open_rows)
+            .filter(|&r| {
+                self.problem.rows[r].kind == RowKind::Stick
+                    && !edge_slip[r]
+                    && cycle.iter().any(|o| o[r] != next_open[r])
+            })
+            .collect()
+    }
+
+    /// Coulomb's problem solved exactly for the step's base: Klarbring's friction LCP
+    /// through Lemke (`lemke::solve_coupled`): open rows, slip directions and slip bounds.
+    #[allow(clippy::type_complexity)]
+    fn coulomb_exact(
+        &mut self,
+        base: &problem::Base,
+        st: &StepState,
+        tol: f64,
+    ) -> Result<(Vec<bool>, Vec<f64>, Vec<f64>), String> {
+        let n = self.problem.n_open_rows;
+        let free: Vec<bool> = (0..n)
+            .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r])
+            .collect();
+        let exact = Inner {
+            problem: &self.problem,
+            base,
+            free,
+            tie_on_close: vec![false; n],
+            bound: vec![0.0; n],
+            tol,
+        };
+        let mu: Vec<f64> = self.problem.rows[..n]
+            .iter()
+            .map(|r| match r.kind {
+                RowKind::Friction => self.model.interfaces[r.iface].pairs[r.pair].friction,
+                _ => 0.0,
+            })
+            .collect();
+        let normal_of: Vec<Option<usize>> = self.problem.rows[..n]
+            .iter()
+            .map(|r| self.problem.row_of[r.iface][r.pair][1].filter(|&q| q < n))
+            .collect();
+        lemke::solve_coupled(&exact, &mut self.cols, &mu, &normal_of)
+    }
+
+    /// The outer loop's next state from the inner solution `state`: statuses and slip
+    /// directions, the brittle cohesion lost by the pairs that opened, stick ties where the
+    /// pair is closed (and not slipping at the contact edge).
+    fn outer_update(&self, st: &StepState, state: &InnerState, edge_slip: &[bool]) -> StepState {
+        let mut next = st.clone();
+        for r in 0..self.problem.n_open_rows {
+            let row = self.problem.rows[r];
+            let pair_open = self.pair_open(&state.open, row.iface, row.pair);
+            next.open[r] = match row.kind {
+                RowKind::Normal | RowKind::Friction => state.open[r],
+                _ => pair_open || edge_slip[r],
+            };
+            next.sign[r] = state.sign[r];
+            if row.kind == RowKind::Normal && pair_open {
+                next.cohesion[row.iface][row.pair] = 0.0;
+                next.broken[row.iface][row.pair] = true;
+            }
+        }
+        next
+    }
+
     /// Solves one load step from `start` with `method`.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
@@ -330,31 +527,9 @@ impl<'a> Session<'a> {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
             if bound.len() != n {
-                // No normal force is known yet: the first outer iteration ties every
-                // friction row (stick), which gives the normal forces of the bounds.
-                bound = self.problem.rows[..n]
-                    .iter()
-                    .map(|r| {
-                        if r.kind == RowKind::Friction {
-                            f64::INFINITY
-                        } else {
-                            0.0
-                        }
-                    })
-                    .collect();
+                bound = self.first_bounds();
             }
-            let free: Vec<bool> = (0..n)
-                .map(|r| match self.problem.rows[r].kind {
-                    RowKind::Stick => st.open[r],
-                    RowKind::Friction => bound[r] <= 0.0,
-                    _ => false,
-                })
-                .collect();
-            // Untied stick rows of open pairs tie as their pair closes (the sparse solver
-            // follows that within the inner problem; the others through this outer loop).
-            let tie_on_close = (0..n)
-                .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r] && !edge_slip[r])
-                .collect();
+            let (free, tie_on_close) = self.inner_rows(&st, &bound, &edge_slip);
             let inner = Inner {
                 problem: &self.problem,
                 base: &base,
@@ -366,48 +541,26 @@ impl<'a> Session<'a> {
             let it0 = iterations;
             lp.iterations_recorded = it0;
             let budget = max_iterations.saturating_sub(it0);
-            let outcome = match inner_solve(
+            let solved = solve_inner(
                 &inner,
-                &mut self.cols,
-                &mut self.sparse,
+                (&mut self.cols, &mut self.sparse),
                 method,
                 &st,
-                budget,
+                (budget, max_iterations),
                 &mut lp,
-            ) {
+            );
+            let outcome = match solved {
                 Ok(o) => o,
-                Err(e) => {
-                    // Name the mechanism: the pivoting path finds the rows that cannot open.
-                    let probe = evolutive::solve(
-                        &inner,
-                        &mut self.cols,
-                        &st.open,
-                        &st.sign,
-                        max_iterations,
-                        &mut |_| {},
-                    );
-                    mechanism = !probe.blocked.is_empty();
-                    let hint = if probe.blocked.is_empty() {
-                        String::new()
-                    } else {
-                        format!("; {}", self.mechanism(&probe.blocked, &probe.state, &inner))
-                    };
+                Err((e, probe)) => {
+                    let (err, blocked) = self.explain(&e, &probe, &inner);
+                    mechanism = blocked;
                     failure = Some(Error::numerical(format!(
-                        "the contact solver ({}) failed at load step {}: {e}{hint}",
+                        "the contact solver ({}) failed at load step {}: {err}",
                         method.name(),
                         load_step + 1
                     )));
                     break;
                 }
-            };
-            let outcome = if !outcome.converged
-                && !outcome.blocked.is_empty()
-                && matches!(method, Solver::Evolutive | Solver::ActiveSet)
-                && n <= RESCUE_ROWS
-            {
-                qp_rescue(&inner, &mut self.cols, method, outcome, it0, &mut lp)
-            } else {
-                outcome
             };
             iterations += outcome.iterations;
             notes.extend(outcome.notes.iter().cloned());
@@ -422,52 +575,15 @@ impl<'a> Session<'a> {
                 } else {
                     format!("; {}", self.mechanism(&outcome_blocked, &state, &inner))
                 };
-                failure = Some(Error::numerical(format!(
-                    "the contact solver ({}) did not converge at load step {} (largest \
-                     violation {residual:.1e} of its scale){}{}",
-                    method.name(),
-                    load_step + 1,
-                    if notes.is_empty() {
-                        String::new()
-                    } else {
-                        format!(": {}", notes.join("; "))
-                    },
-                    hint
-                )));
+                failure = Some(not_converged(method, load_step, residual, &notes, &hint));
                 last = Some((state, residual));
                 break;
             }
             // Outer update: brittle cohesion, stick ties, slip bounds.
-            let mut next = st.clone();
-            for r in 0..n {
-                let row = self.problem.rows[r];
-                let pair_open = self.pair_open(&state.open, row.iface, row.pair);
-                next.open[r] = match row.kind {
-                    RowKind::Normal | RowKind::Friction => state.open[r],
-                    _ => pair_open || edge_slip[r],
-                };
-                next.sign[r] = state.sign[r];
-                if row.kind == RowKind::Normal && pair_open {
-                    next.cohesion[row.iface][row.pair] = 0.0;
-                    next.broken[row.iface][row.pair] = true;
-                }
-            }
+            let mut next = self.outer_update(&st, &state, &edge_slip);
             // The Tresca fixed point: the bounds from the new normal forces.
             let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
-            let scale = bound
-                .iter()
-                .chain(&new_bound)
-                .filter(|v| v.is_finite())
-                .fold(0.0f64, |a, v| a.max(v.abs()))
-                .max(f64::MIN_POSITIVE);
-            // Relative change of the bounds (1 from the tied first iteration).
-            let change = bound.iter().zip(&new_bound).fold(0.0f64, |a, (x, y)| {
-                a.max(if x.is_finite() {
-                    (x - y).abs() / scale
-                } else {
-                    1.0
-                })
-            });
+            let change = bound_change(&bound, &new_bound);
             let settled = !friction || change <= 1e-10;
             if friction {
                 bound_changes.push(change);
@@ -477,52 +593,19 @@ impl<'a> Session<'a> {
             if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
                 // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
                 // LCP through Lemke) and restart the fixed point from its bounds.
-                let free: Vec<bool> = (0..n)
-                    .map(|r| self.problem.rows[r].kind == RowKind::Stick && st.open[r])
-                    .collect();
-                let exact = Inner {
-                    problem: &self.problem,
-                    base: &base,
-                    free,
-                    tie_on_close: vec![false; n],
-                    bound: vec![0.0; n],
-                    tol,
-                };
-                let mu: Vec<f64> = self.problem.rows[..n]
-                    .iter()
-                    .map(|r| match r.kind {
-                        RowKind::Friction => self.model.interfaces[r.iface].pairs[r.pair].friction,
-                        _ => 0.0,
-                    })
-                    .collect();
-                let normal_of: Vec<Option<usize>> = self.problem.rows[..n]
-                    .iter()
-                    .map(|r| self.problem.row_of[r.iface][r.pair][1].filter(|&q| q < n))
-                    .collect();
-                match lemke::solve_coupled(&exact, &mut self.cols, &mu, &normal_of) {
-                    Ok((open, sign, b)) => {
-                        for r in 0..n {
-                            if matches!(
-                                self.problem.rows[r].kind,
-                                RowKind::Normal | RowKind::Friction
-                            ) {
-                                next.open[r] = open[r];
-                                next.sign[r] = sign[r];
-                            }
-                        }
-                        bound = b;
-                        notes.push(format!(
-                            "the Tresca fixed point had not settled after {outer} outer \
-                             iterations (last relative change {change:.1e}): restarted from \
-                             the exact solution of Klarbring's friction LCP (Lemke)"
-                        ));
-                    }
-                    Err(e) => notes.push(format!(
+                let note = self.coulomb_restart(&base, &st, tol, &mut next, &mut bound);
+                notes.push(match note {
+                    Ok(()) => format!(
+                        "the Tresca fixed point had not settled after {outer} outer \
+                         iterations (last relative change {change:.1e}): restarted from \
+                         the exact solution of Klarbring's friction LCP (Lemke)"
+                    ),
+                    Err(e) => format!(
                         "the Tresca fixed point had not settled after {outer} outer iterations \
                          and Klarbring's friction LCP gave no solution ({e}); the fixed point \
                          continued"
-                    )),
-                }
+                    ),
+                });
             }
             iterates.push(st.open.clone());
             last = Some((state, residual));
@@ -535,14 +618,7 @@ impl<'a> Session<'a> {
                 break;
             }
             if friction && outer >= FRICTION_OUTER_LIMIT {
-                failure = Some(Error::numerical(format!(
-                    "the friction fixed point (slip bounds μλ_n from the normal forces) did not \
-                     settle in {outer} outer iterations at load step {}: the last relative \
-                     change of the bounds was {:.1e}; use smaller load steps (more values in \
-                     solve.time or load_factors)",
-                    load_step + 1,
-                    change
-                )));
+                failure = Some(unsettled(outer, load_step, change));
                 st = next;
                 break;
             }
@@ -554,34 +630,67 @@ impl<'a> Session<'a> {
                 // A stick edge cycle: a pair at the contact edge opens once tied and closes
                 // once untied. Such a pair is closed and slipping (the μ → ∞ limit of Coulomb
                 // friction where the normal force vanishes): keep it untied from now on.
-                let k0 = iterates.iter().position(|o| *o == next.open).unwrap_or(0);
-                let cycle = &iterates[k0..];
-                let flipping: Vec<usize> = (0..n)
-                    .filter(|&r| {
-                        self.problem.rows[r].kind == RowKind::Stick
-                            && !edge_slip[r]
-                            && cycle.iter().any(|o| o[r] != next.open[r])
-                    })
-                    .collect();
-                if flipping.is_empty() || outer > 200 {
-                    failure = Some(Error::numerical(format!(
-                        "the stick ties cycle at the contact edge after {outer} outer \
-                         iterations: tangential = \"stick\" has no consistent state there; use \
-                         tangential = \"friction\" (or \"slide\")"
-                    )));
-                    st = next;
-                    break;
+                match self.untie_edge_cycle(&iterates, &mut next, &mut edge_slip, outer) {
+                    Ok(k) => slipping += k,
+                    Err(e) => {
+                        failure = Some(e);
+                        st = next;
+                        break;
+                    }
                 }
-                for &r in &flipping {
-                    edge_slip[r] = true;
-                    next.open[r] = true;
-                }
-                slipping += flipping.len();
                 seen.clear();
                 iterates.clear();
             }
             st = next;
         }
+        self.finish_step(
+            start,
+            method,
+            (load_step, factor),
+            StepEnd {
+                st,
+                last,
+                lp,
+                notes,
+                slipping,
+                friction,
+                bound_changes,
+                bound,
+                iterations,
+                outer,
+                converged,
+                failure,
+                mechanism,
+            },
+        )
+    }
+
+    /// The result of a load step from what its outer loop left (`end`): the boundary
+    /// solution of the final state, the history row and recorded state, the notes.
+    fn finish_step(
+        &self,
+        start: &StepState,
+        method: Solver,
+        (load_step, factor): (usize, f64),
+        end: StepEnd,
+    ) -> ContactResult {
+        let StepEnd {
+            st,
+            last,
+            mut lp,
+            mut notes,
+            slipping,
+            friction,
+            bound_changes,
+            bound,
+            iterations,
+            outer,
+            converged,
+            failure,
+            mechanism,
+        } = end;
+        let n = self.problem.n_open_rows;
+        let record = lp.record;
         let (final_state, residual) = last.unwrap_or_else(|| (all_closed_state(n), f64::INFINITY));
         // The last outer iteration may change ties, cohesion or slip bounds without a
         // switch: then its state is not among the recorded ones, and the history must end
@@ -1014,6 +1123,87 @@ fn qp_rescue(
         }
         _ => outcome,
     }
+}
+
+/// One inner solve by `method` (`budget` iterations), and where a pivoting path stops at
+/// a row that cannot open, the QP's check of it (`qp_rescue`). A failure comes with the
+/// evolutive path's probe from the start statuses (`max_iterations`), which names the
+/// mechanism where there is one.
+fn solve_inner(
+    inner: &Inner,
+    (cols, sparse): (&mut Columns, &mut Option<sparse::SparseSystem>),
+    method: Solver,
+    st: &StepState,
+    (budget, max_iterations): (usize, usize),
+    lp: &mut StepLoop,
+) -> Result<InnerOutcome, (InnerFailure, InnerOutcome)> {
+    let it0 = lp.iterations_recorded;
+    match inner_solve(inner, cols, sparse, method, st, budget, lp) {
+        Ok(outcome)
+            if !outcome.converged
+                && !outcome.blocked.is_empty()
+                && matches!(method, Solver::Evolutive | Solver::ActiveSet)
+                && inner.n() <= RESCUE_ROWS =>
+        {
+            Ok(qp_rescue(inner, cols, method, outcome, it0, lp))
+        }
+        Ok(outcome) => Ok(outcome),
+        Err(e) => {
+            let probe =
+                evolutive::solve(inner, cols, &st.open, &st.sign, max_iterations, &mut |_| {});
+            Err((e, probe))
+        }
+    }
+}
+
+/// The failure of a friction fixed point that did not settle in `outer` iterations.
+fn unsettled(outer: usize, load_step: usize, change: f64) -> Error {
+    Error::numerical(format!(
+        "the friction fixed point (slip bounds μλ_n from the normal forces) did not settle in \
+         {outer} outer iterations at load step {}: the last relative change of the bounds was \
+         {change:.1e}; use smaller load steps (more values in solve.time or load_factors)",
+        load_step + 1,
+    ))
+}
+
+/// The failure of an inner solve that did not converge, with its notes and the mechanism
+/// `hint` (empty, or "; " and the motion).
+fn not_converged(
+    method: Solver,
+    load_step: usize,
+    residual: f64,
+    notes: &[String],
+    hint: &str,
+) -> Error {
+    Error::numerical(format!(
+        "the contact solver ({}) did not converge at load step {} (largest violation \
+         {residual:.1e} of its scale){}{hint}",
+        method.name(),
+        load_step + 1,
+        if notes.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", notes.join("; "))
+        },
+    ))
+}
+
+/// The relative change of the slip bounds, over the largest finite bound (1 from the tied
+/// first iteration).
+fn bound_change(old: &[f64], new: &[f64]) -> f64 {
+    let scale = old
+        .iter()
+        .chain(new)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |a, v| a.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    old.iter().zip(new).fold(0.0f64, |a, (x, y)| {
+        a.max(if x.is_finite() {
+            (x - y).abs() / scale
+        } else {
+            1.0
+        })
+    })
 }
 
 /// Outer iterations of the Tresca fixed point taken whole whatever happens; after them, a
