@@ -196,16 +196,16 @@ fn main() -> ExitCode {
     let result = match cli.command {
         Command::Check { scene, mesh, set } => {
             // A .geo mesh is meshed into a temporary folder, removed afterwards.
-            let tmp = std::env::temp_dir().join(format!("sgbem-check-{}", std::process::id()));
+            let tmp = sgbem::input::gmsh::Scratch::new("check");
             let loaded = pipeline::load_with(
                 &scene,
                 &pipeline::LoadOptions {
                     mesh,
                     sets: set,
-                    mesh_dir: Some(tmp.clone()),
+                    mesh_dir: Some(tmp.path().to_path_buf()),
                 },
             );
-            let _ = std::fs::remove_dir_all(&tmp);
+            drop(tmp);
             loaded.and_then(|l| {
                 out(&report::check_report(
                     &l.scene,

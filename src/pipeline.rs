@@ -978,12 +978,13 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 
     let mut timings = Timings::default();
     let t0 = Instant::now();
+    let scratch = crate::input::gmsh::Scratch::new("run");
     let mut loaded = load_with(
         scene_path,
         &LoadOptions {
             mesh: opts.mesh.clone(),
             sets: opts.sets.clone(),
-            mesh_dir: opts.out.as_ref().map(|o| o.join("mesh")),
+            mesh_dir: Some(scratch.path().to_path_buf()),
         },
     )?;
     if let Some(m) = opts.method {
@@ -998,8 +999,8 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
         .check_fits(&loaded.model, scene_path)?;
     // The run writes into a staging folder, swapped in when complete (output/folder.rs).
     let folder = crate::output::folder::RunFolder::acquire(&loaded.scene.output.directory)?;
-    // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
-    let meshed = loaded.scene.output.directory.join("mesh");
+    // A .geo scene mesh was meshed into a scratch folder: keep it in the run's mesh/.
+    let meshed = scratch.path();
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
         && meshed.is_dir()
     {

@@ -83,3 +83,29 @@ pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<Path
         .map_err(|e| Error::io(&out, format!("cannot write the mesh: {e}")))?;
     Ok(out)
 }
+
+/// A private folder under the system's temporary folder for meshing a `.geo` (so that a
+/// mesh is never written into a folder before the tool knows it may write there), removed
+/// with everything in it when dropped.
+pub struct Scratch {
+    path: PathBuf,
+}
+
+impl Scratch {
+    /// `$TMPDIR/sgbem-WHAT-PID` (not created: gmsh meshing creates it).
+    pub fn new(what: &str) -> Scratch {
+        let path = std::env::temp_dir().join(format!("sgbem-{what}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&path);
+        Scratch { path }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.path);
+    }
+}

@@ -1,0 +1,224 @@
+//! The third hostile-use round (issue 21): never delete a file the tool did not write, never
+//! hang, bounded input, clear messages, `check` and `run` agree, plausibility notes.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use support::*;
+
+fn s(p: &Path) -> &str {
+    p.to_str().expect("utf-8 path")
+}
+
+fn expect(out: &(i32, String, String), code: i32, words: &[&str]) {
+    expect_exit(out, code, words)
+}
+
+/// The files under `dir` (relative, sorted), hidden ones included.
+fn tree(dir: &Path) -> Vec<String> {
+    let mut out = Vec::new();
+    let mut stack = vec![(dir.to_path_buf(), String::new())];
+    while let Some((d, rel)) = stack.pop() {
+        for e in std::fs::read_dir(&d).into_iter().flatten().flatten() {
+            let name = format!("{rel}{}", e.file_name().to_string_lossy());
+            if e.file_type().is_ok_and(|t| t.is_dir()) {
+                stack.push((e.path(), format!("{name}/")));
+            } else {
+                out.push(name);
+            }
+        }
+    }
+    out.sort();
+    out
+}
+
+const MULTI_STEP: &str =
+    "\n[solve]\nload_factors = [0.25, 0.5, 0.75, 1.0]\n[output]\nhistory = \"full\"\n";
+
+fn stacked_scene(dir: &Path, extra: &str) -> (PathBuf, PathBuf) {
+    let msh = stacked_blocks(3).save(dir, "m.msh");
+    let scene = write(dir, "scene.toml", &format!("{STACKED_SCENE}{extra}"));
+    (scene, msh)
+}
+
+fn run(scene: &Path, mesh: &Path, out: &Path) -> (i32, String, String) {
+    run_quiet(scene, mesh, out)
+}
+
+// --- 1. Never delete what the tool did not write -----------------------------------------
+
+#[test]
+fn a_folder_without_the_tools_marker_is_never_replaced() {
+    let dir = tmpdir("h21-foreign");
+    let (sc, msh) = stacked_scene(&dir, "");
+    // `make clean mesh`, then `--out out`: out/ holds only mesh/ (a name a run writes).
+    let out = dir.join("out");
+    std::fs::create_dir_all(out.join("mesh")).unwrap();
+    std::fs::write(out.join("mesh/beam.msh"), "user mesh").unwrap();
+    let r = run(&sc, &msh, &out);
+    expect(
+        &r,
+        2,
+        &["`mesh/`", ".sgbem-run.json", "move these files away"],
+    );
+    assert_eq!(tree(&out), ["mesh/beam.msh"]);
+    // Files named like a run's outputs but without a marker: kept as well.
+    std::fs::write(out.join("summary.json"), "{}").unwrap();
+    let r = run(&sc, &msh, &out);
+    expect(&r, 2, &["`mesh/`", "`summary.json`"]);
+    assert_eq!(tree(&out), ["mesh/beam.msh", "summary.json"]);
+    // Nothing was left beside the folder either (lock, staging).
+    let mut beside: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    beside.sort();
+    assert_eq!(beside, ["m.msh", "out", "scene.toml"]);
+}
+
+#[test]
+fn a_run_folder_loses_only_the_files_its_marker_lists() {
+    let dir = tmpdir("h21-marked");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let out = dir.join("out");
+    let r = run(&sc, &msh, &out);
+    expect(&r, 0, &[]);
+    let marker = std::fs::read_to_string(out.join(".sgbem-run.json")).unwrap();
+    assert!(
+        marker.contains("\"summary.json\"") && marker.contains("\"vtk/\""),
+        "{marker}"
+    );
+    let first = tree(&out);
+    // A re-run into its own folder replaces it.
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    assert_eq!(tree(&out), first);
+    // A user's file under vtk/, a folder where the archive was, a symbolic link: each is
+    // named, and the folder is left exactly as it was.
+    let hostile: [(&str, &dyn Fn(&Path)); 3] = [
+        ("vtk/notes.txt", &|o| {
+            std::fs::write(o.join("vtk/notes.txt"), "mine").unwrap()
+        }),
+        ("archive.h5/", &|o| {
+            std::fs::remove_file(o.join("archive.h5")).unwrap();
+            std::fs::create_dir(o.join("archive.h5")).unwrap();
+            std::fs::write(o.join("archive.h5/data.bin"), "mine").unwrap();
+        }),
+        ("link.json", &|o| {
+            std::os::unix::fs::symlink(o.join("summary.json"), o.join("link.json")).unwrap()
+        }),
+    ];
+    for (name, make) in hostile {
+        let _ = std::fs::remove_dir_all(&out);
+        expect(&run(&sc, &msh, &out), 0, &[]);
+        make(&out);
+        let before = tree(&out);
+        let r = run(&sc, &msh, &out);
+        expect(&r, 2, &[&format!("`{name}`"), "did not write", "--out"]);
+        assert_eq!(tree(&out), before, "{name}");
+    }
+    // A stale file an earlier (longer) run listed is removed by the next run.
+    let _ = std::fs::remove_dir_all(&out);
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    let text = std::fs::read_to_string(out.join(".sgbem-run.json")).unwrap();
+    let text = text.replace("\"vtk/\",", "\"vtk/\",\n    \"vtk/boundary_0099.vtu\",");
+    std::fs::write(out.join(".sgbem-run.json"), text).unwrap();
+    std::fs::write(out.join("vtk/boundary_0099.vtu"), "stale").unwrap();
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    assert!(!out.join("vtk/boundary_0099.vtu").exists());
+    assert_eq!(tree(&out), first);
+}
+
+#[test]
+fn a_geo_mesh_is_not_written_into_a_folder_before_it_is_checked() {
+    let dir = tmpdir("h21-geo");
+    let geo = dir.join("two_blocks.geo");
+    std::fs::copy(root().join("geo/two_blocks.geo"), &geo).unwrap();
+    let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml"))
+        .unwrap()
+        .replace("../out/mesh/two_blocks.msh", "two_blocks.geo");
+    let sc = write(&dir, "scene.toml", &scene);
+    let out = dir.join("out");
+    std::fs::create_dir_all(out.join("mesh")).unwrap();
+    std::fs::write(out.join("mesh/two_blocks.msh"), "the user's own mesh").unwrap();
+    let r = sgbem(&["run", s(&sc), "--out", s(&out), "--quiet"]);
+    expect(&r, 2, &["`mesh/`"]);
+    assert_eq!(
+        std::fs::read_to_string(out.join("mesh/two_blocks.msh")).unwrap(),
+        "the user's own mesh"
+    );
+    // Into a new folder the mesh is kept in the run's mesh/.
+    let fresh = dir.join("fresh");
+    expect(
+        &sgbem(&["run", s(&sc), "--out", s(&fresh), "--quiet"]),
+        0,
+        &[],
+    );
+    assert!(fresh.join("mesh/two_blocks.msh").is_file());
+}
+
+// --- 5. export writes its folder whole ----------------------------------------------------
+
+#[test]
+fn export_into_a_longer_earlier_export_leaves_no_stale_file() {
+    let dir = tmpdir("h21-export");
+    let (sc, msh) = stacked_scene(&dir, MULTI_STEP);
+    let long = dir.join("long");
+    expect(&run(&sc, &msh, &long), 0, &[]);
+    let short_scene = write(&dir, "short.toml", STACKED_SCENE);
+    let short = dir.join("short");
+    expect(&run(&short_scene, &msh, &short), 0, &[]);
+    let vtk = dir.join("vtk");
+    let export = |a: &Path| sgbem(&["export", s(&a.join("archive.h5")), "--vtk", s(&vtk)]);
+    expect(&export(&long), 0, &[]);
+    let n_long = tree(&vtk).len();
+    expect(&export(&short), 0, &[]);
+    let files = tree(&vtk);
+    assert!(files.len() < n_long, "{files:?}");
+    let unmarked: Vec<&String> = files.iter().filter(|f| *f != ".sgbem-run.json").collect();
+    let run_files = tree(&short.join("vtk"));
+    assert_eq!(
+        unmarked,
+        run_files.iter().collect::<Vec<_>>(),
+        "as the run wrote"
+    );
+    // A file of the user's in the export folder: refused, kept.
+    std::fs::write(vtk.join("my_view.pvsm"), "mine").unwrap();
+    let r = export(&long);
+    expect(&r, 2, &["`my_view.pvsm`", "did not write"]);
+    assert!(vtk.join("my_view.pvsm").is_file());
+    // Into the vtk/ folder of a run: allowed (the run's marker lists it), and a later run
+    // into the run folder still replaces it.
+    let r = sgbem(&[
+        "export",
+        s(&long.join("archive.h5")),
+        "--vtk",
+        s(&short.join("vtk")),
+    ]);
+    expect(&r, 0, &[]);
+    assert_eq!(tree(&short.join("vtk")).len(), n_long - 1);
+    expect(&run(&short_scene, &msh, &short), 0, &[]);
+    assert_eq!(tree(&short.join("vtk")), run_files);
+}
+
+// --- 7. Locks the kernel releases -----------------------------------------------------------
+
+#[test]
+fn a_lock_file_of_a_live_unrelated_process_does_not_block_the_folder() {
+    let dir = tmpdir("h21-lock");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let out = dir.join("out");
+    // The lock file names a live process (pid 1) that holds no lock: not a run.
+    let lock = dir.join(".out.lock");
+    std::fs::write(&lock, "1\n").unwrap();
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    assert!(!lock.exists());
+    // A held lock (flock by this process) refuses the run, naming the lock file.
+    let f = std::fs::File::create(&lock).unwrap();
+    f.lock().unwrap();
+    let r = run(&sc, &msh, &out);
+    expect(&r, 1, &["another sgbem run", "another --out", ".out.lock"]);
+    drop(f);
+    expect(&run(&sc, &msh, &out), 0, &[]);
+}
