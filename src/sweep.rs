@@ -20,7 +20,9 @@ pub struct Axis {
 
 /// Splits `KEY=V1,V2,...` at the commas outside brackets, braces and quotes.
 pub fn parse_axis(set: &str) -> std::result::Result<Axis, String> {
-    let Some((key, values)) = set.split_once('=') else {
+    let whole = set;
+    let set = &crate::input::scene::shown_set(set);
+    let Some((key, values)) = whole.split_once('=') else {
         return Err(format!(
             "--set {set}: expected KEY=V1,V2,..., e.g. --set interface.joint.cohesion=0,1,2"
         ));

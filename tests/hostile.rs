@@ -37,9 +37,13 @@ const MULTI_STEP: &str =
     "\n[solve]\nload_factors = [0.25, 0.5, 0.75, 1.0]\n[output]\nhistory = \"full\"\n";
 
 fn stacked_scene(dir: &Path, extra: &str) -> (PathBuf, PathBuf) {
+    scene_of(dir, &format!("{STACKED_SCENE}{extra}"))
+}
+
+/// `text` as `dir/scene.toml` with the mesh of three stacked blocks.
+fn scene_of(dir: &Path, text: &str) -> (PathBuf, PathBuf) {
     let msh = stacked_blocks(3).save(dir, "m.msh");
-    let scene = write(dir, "scene.toml", &format!("{STACKED_SCENE}{extra}"));
-    (scene, msh)
+    (write(dir, "scene.toml", text), msh)
 }
 
 fn run(scene: &Path, mesh: &Path, out: &Path) -> (i32, String, String) {
@@ -221,4 +225,75 @@ fn a_lock_file_of_a_live_unrelated_process_does_not_block_the_folder() {
     expect(&r, 1, &["another sgbem run", "another --out", ".out.lock"]);
     drop(f);
     expect(&run(&sc, &msh, &out), 0, &[]);
+}
+
+// --- 2. Never hang: a collapse tolerance below floating-point resolution --------------------
+
+#[test]
+fn a_collapse_tolerance_finer_than_floating_point_is_refused_by_check_and_run() {
+    let dir = tmpdir("h21-collapse");
+    let pull = STACKED_SCENE.replace("ty = -1.0", "ty = \"1e-3*t\"");
+    for tol in ["1e-17", "1e-300", "5e-324"] {
+        let extra = format!("\n[solve]\ncollapse = {{ max = 1.0, tolerance = {tol} }}\n");
+        let (sc, msh) = scene_of(&dir, &format!("{pull}{extra}"));
+        let words = ["solve.collapse.tolerance", "never end", "at least 8.8907e-16"];
+        let c = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+        expect(&c, 2, &words);
+        let t = std::time::Instant::now();
+        let r = run(&sc, &msh, &dir.join("out"));
+        expect(&r, 2, &words);
+        assert!(t.elapsed().as_secs() < 30);
+        assert_eq!(c.2, r.2, "check and run say the same");
+    }
+    // The finest accepted tolerance ends: the block is pulled off at once (t = 0+).
+    let extra = "\n[solve]\ncollapse = { max = 1.0, tolerance = 9e-16 }\n";
+    let (sc, msh) = scene_of(&dir, &format!("{pull}{extra}"));
+    expect(&sgbem(&["check", s(&sc), "--mesh", s(&msh)]), 0, &[]);
+    let r = run(&sc, &msh, &dir.join("out"));
+    assert!(r.0 == 0 || r.0 == 3, "{}", r.2);
+    assert!(!r.2.contains("panicked"), "{}", r.2);
+}
+
+// --- 8. Bounded input ---------------------------------------------------------------------
+
+#[test]
+fn a_set_key_of_many_parts_is_refused_without_overflowing_the_stack() {
+    let dir = tmpdir("h21-set");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let deep = vec!["a"; 20_000].join(".");
+    let long = "k".repeat(600);
+    for key in [deep.as_str(), long.as_str(), "a.b.c.d.e.f.g.h.i"] {
+        let set = format!("{key}=1");
+        for cmd in ["check", "run"] {
+            let mut args = vec![cmd, s(&sc), "--mesh", s(&msh), "--set", &set];
+            let out = dir.join("out");
+            if cmd == "run" {
+                args.extend(["--out", s(&out)]);
+            }
+            let r = sgbem(&args);
+            expect(&r, 2, &["dotted parts", "at most 8 parts", "scene.toml"]);
+            assert!(
+                r.2.len() < 600,
+                "the message shows the key shortened: {}",
+                r.2
+            );
+        }
+        let r = sgbem(&[
+            "sweep",
+            s(&sc),
+            "--set",
+            &format!("{key}=1,2"),
+            "--out",
+            s(&dir.join("sweep")),
+        ]);
+        assert!(r.0 == 2, "{}", r.2);
+    }
+    // Deeply nested values end in a message too.
+    let nested = format!(
+        "solve.load_factors={}1{}",
+        "[".repeat(30_000),
+        "]".repeat(30_000)
+    );
+    let r = sgbem(&["check", s(&sc), "--mesh", s(&msh), "--set", &nested]);
+    expect(&r, 2, &["load_factors"]);
 }
