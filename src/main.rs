@@ -49,6 +49,10 @@ enum Command {
         /// No progress bars.
         #[arg(long)]
         quiet: bool,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
         /// Override a scene key: a dotted TOML path and a TOML value, e.g.
         /// `--set interface.joint.cohesion=2.0 --set solve.method=qp` (repeatable; validated
         /// like the file).
@@ -67,6 +71,10 @@ enum Command {
         /// like the file).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
     },
     /// Run a scene for every combination of values and tabulate the headline results.
     Sweep {
@@ -84,6 +92,10 @@ enum Command {
         /// sweep.csv / sweep.md.
         #[arg(long)]
         out: PathBuf,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
     },
     /// Print what an archive holds.
     Inspect {
@@ -194,7 +206,13 @@ fn main() -> ExitCode {
         }
     }
     let result = match cli.command {
-        Command::Check { scene, mesh, set } => {
+        Command::Check {
+            scene,
+            mesh,
+            set,
+            allow_geo_shell,
+        } => {
+            sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
             // A .geo mesh is meshed into a temporary folder, removed afterwards.
             let tmp = sgbem::input::gmsh::Scratch::new("check");
             let loaded = pipeline::load_with(
@@ -222,7 +240,9 @@ fn main() -> ExitCode {
             method,
             quiet,
             set,
+            allow_geo_shell,
         } => {
+            sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
             let opts = pipeline::RunOptions {
                 mesh,
                 out: out_dir,
@@ -250,18 +270,21 @@ fn main() -> ExitCode {
             set,
             jobs,
             out,
-        } => sgbem::sweep::sweep(&scene, &set, jobs, &out).and_then(|(table, failed)| {
-            println!("sweep table in {}", table.display());
-            if failed > 0 {
-                Err(sgbem::error::Error::numerical(format!(
-                    "{failed} point(s) of the sweep failed: see the exit_code and status \
+            allow_geo_shell,
+        } => sgbem::sweep::sweep(&scene, &set, jobs, &out, allow_geo_shell).and_then(
+            |(table, failed)| {
+                println!("sweep table in {}", table.display());
+                if failed > 0 {
+                    Err(sgbem::error::Error::numerical(format!(
+                        "{failed} point(s) of the sweep failed: see the exit_code and status \
                      columns of {}",
-                    table.display()
-                )))
-            } else {
-                Ok(())
-            }
-        }),
+                        table.display()
+                    )))
+                } else {
+                    Ok(())
+                }
+            },
+        ),
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
         }

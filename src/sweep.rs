@@ -126,6 +126,7 @@ pub fn sweep(
     sets: &[String],
     jobs: usize,
     out: &Path,
+    allow_geo_shell: bool,
 ) -> Result<(PathBuf, usize)> {
     if !scene_path.is_file() {
         return Err(Error::input(
@@ -144,8 +145,12 @@ pub fn sweep(
         ));
     }
     let pts = points(&axes);
+    crate::input::gmsh::allow_shell_commands(allow_geo_shell);
     for p in &pts {
-        scene::read_scene_with(scene_path, &p.sets)?;
+        let sc = scene::read_scene_with(scene_path, &p.sets)?;
+        if let Some(mesh) = sc.mesh.as_deref().filter(|m| crate::input::gmsh::is_geo(m)) {
+            crate::input::gmsh::check_commands(mesh)?;
+        }
     }
     std::fs::create_dir_all(out)
         .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
@@ -167,6 +172,9 @@ pub fn sweep(
                 cmd.arg("--set").arg(s);
             }
             cmd.arg("--out").arg(out.join(&p.name)).arg("--quiet");
+            if allow_geo_shell {
+                cmd.arg("--allow-geo-shell");
+            }
             if std::env::var_os("RAYON_NUM_THREADS").is_none() {
                 cmd.env("RAYON_NUM_THREADS", &threads);
             }

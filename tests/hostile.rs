@@ -236,7 +236,11 @@ fn a_collapse_tolerance_finer_than_floating_point_is_refused_by_check_and_run() 
     for tol in ["1e-17", "1e-300", "5e-324"] {
         let extra = format!("\n[solve]\ncollapse = {{ max = 1.0, tolerance = {tol} }}\n");
         let (sc, msh) = scene_of(&dir, &format!("{pull}{extra}"));
-        let words = ["solve.collapse.tolerance", "never end", "at least 8.8907e-16"];
+        let words = [
+            "solve.collapse.tolerance",
+            "never end",
+            "at least 8.8907e-16",
+        ];
         let c = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
         expect(&c, 2, &words);
         let t = std::time::Instant::now();
@@ -296,4 +300,119 @@ fn a_set_key_of_many_parts_is_refused_without_overflowing_the_stack() {
     );
     let r = sgbem(&["check", s(&sc), "--mesh", s(&msh), "--set", &nested]);
     expect(&r, 2, &["load_factors"]);
+}
+
+// --- 11. Messages ----------------------------------------------------------------------------
+
+#[test]
+fn duplicate_nodes_are_named_as_duplicates() {
+    let dir = tmpdir("h21-dup");
+    let mut m = stacked_blocks(3);
+    // Curve 2 starts at its own node at (1, 0), where curve 1 ends: a duplicate point.
+    let twin = m.new_node([1.0, 0.0]);
+    m.curves[1].1[0] = twin;
+    let msh = m.save(&dir, "dup.msh");
+    let sc = write(&dir, "scene.toml", STACKED_SCENE);
+    let r = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+    expect(
+        &r,
+        2,
+        &["dup.msh", "are duplicates", "(1, 0)", "merge them"],
+    );
+    assert!(!r.2.contains("is open"), "{}", r.2);
+    // A real gap is still an open boundary.
+    let mut m = stacked_blocks(3);
+    let apart = m.new_node([1.0, 0.25]);
+    m.curves[1].1[0] = apart;
+    let msh = m.save(&dir, "gap.msh");
+    let r = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+    expect(&r, 2, &["gap.msh", "is open"]);
+}
+
+#[test]
+fn expression_errors_name_the_key_and_never_the_evaluator() {
+    let dir = tmpdir("h21-expr");
+    let msh = stacked_blocks(3).save(&dir, "m.msh");
+    for (value, words) in [
+        ("min()", vec!["`min` takes two numbers", "none"]),
+        ("max(x)", vec!["`max` takes two numbers", "one"]),
+        ("sin(x, y)", vec!["`sin` takes one number"]),
+        ("x, y", vec!["2 values"]),
+        ("(x + 1", vec!["parentheses"]),
+        ("2 x", vec!["side by side"]),
+        ("y *", vec!["lacks a value"]),
+    ] {
+        let scene = STACKED_SCENE.replace("ty = -1.0", &format!("ty = \"{value}\""));
+        let sc = write(&dir, "scene.toml", &scene);
+        let r = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+        expect(&r, 2, &["scene.toml", "boundary.top", "ty"]);
+        for w in words {
+            assert!(r.2.contains(w), "{value}: {}", r.2);
+        }
+        for internal in ["Value::", "Tuple", "Empty", "Expected", "Token"] {
+            assert!(!r.2.contains(internal), "{value}: {}", r.2);
+        }
+    }
+    // The functions SPEC.md lists are all accepted.
+    let scene = STACKED_SCENE.replace(
+        "ty = -1.0",
+        "ty = \"-(atan(1) + asin(0.5) + acos(0.5) + floor(x) + ceil(0.2))\"",
+    );
+    let sc = write(&dir, "scene.toml", &scene);
+    expect(&sgbem(&["check", s(&sc), "--mesh", s(&msh)]), 0, &[]);
+}
+
+#[test]
+fn a_geo_that_runs_shell_commands_is_refused_unless_allowed() {
+    let dir = tmpdir("h21-systemcall");
+    let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml"))
+        .unwrap()
+        .replace("../out/mesh/two_blocks.msh", "two_blocks.geo");
+    let sc = write(&dir, "scene.toml", &scene);
+    let geo = std::fs::read_to_string(root().join("geo/two_blocks.geo")).unwrap();
+    let witness = dir.join("pwned");
+    let cmd = format!("touch {}", witness.display());
+    let hostile = [
+        (format!("{geo}\nSystemCall \"{cmd}\";\n"), "two_blocks.geo"),
+        (
+            format!("{geo}\nNonBlockingSystemCall \"{cmd}\";\n"),
+            "two_blocks.geo",
+        ),
+        (format!("{geo}\nInclude \"inc.geo\";\n"), "inc.geo"),
+    ];
+    write(
+        &dir,
+        "inc.geo",
+        &format!("SystemCall Sprintf(\"{cmd}\");\n"),
+    );
+    for (text, file) in &hostile {
+        write(&dir, "two_blocks.geo", text);
+        for args in [
+            vec!["check", s(&sc)],
+            vec!["run", s(&sc), "--out", s(&dir.join("out")), "--quiet"],
+            vec![
+                "sweep",
+                s(&sc),
+                "--set",
+                "title=a",
+                "--out",
+                s(&dir.join("sw")),
+            ],
+        ] {
+            let r = sgbem(&args);
+            expect(&r, 2, &[file, "SystemCall", "--allow-geo-shell"]);
+            assert!(!witness.exists(), "gmsh ran the command: {args:?}");
+        }
+    }
+    // Comments and strings that only mention it are no call.
+    write(
+        &dir,
+        "two_blocks.geo",
+        &format!("{geo}\n// SystemCall \"x\";\n/* OnelabRun */\nPrintf(\"SystemCall\");\n"),
+    );
+    expect(&sgbem(&["check", s(&sc)]), 0, &[]);
+    // Allowed explicitly: meshed, and the command ran.
+    write(&dir, "two_blocks.geo", &hostile[0].0);
+    expect(&sgbem(&["check", s(&sc), "--allow-geo-shell"]), 0, &[]);
+    assert!(witness.exists());
 }

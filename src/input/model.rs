@@ -995,6 +995,27 @@ fn build_body(
         match inc.len() {
             2 => {}
             1 => {
+                // Two nodes at one point, each ending a curve: duplicates, not a gap.
+                let twin = (0..nodes.len()).find(|&m| {
+                    m != n
+                        && incident[m].len() == 1
+                        && norm(sub(nodes[m], nodes[n])) <= 1e-12 * scale
+                });
+                if let Some(m) = twin {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "nodes {tag} and {} of body \"{name}\" are duplicates: both lie at {} \
+                             (ends of curves {} and {}), so the boundary does not join there; \
+                             merge them (gmsh: Coherence; or one Point per corner in the .geo, \
+                             or Geometry.Tolerance)",
+                            mesh.node_tags[mesh_nodes[m]],
+                            fmt_point(nodes[n]),
+                            elements[inc[0]].curve,
+                            elements[incident[m][0]].curve
+                        ),
+                    ));
+                }
                 return Err(Error::input(
                     mfile,
                     format!(
@@ -1003,7 +1024,7 @@ fn build_body(
                     fmt_point(nodes[n]),
                     elements[inc[0]].curve
                 ),
-                ))
+                ));
             }
             k => {
                 let curves: BTreeSet<i32> = inc.iter().map(|&e| elements[e].curve).collect();
