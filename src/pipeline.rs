@@ -1127,6 +1127,10 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     );
     if result.failure.is_none() {
         notes.extend(crate::post::equilibrium::unbalanced_note(model, &balances));
+        notes.extend(crate::post::plausibility::displacement_note(
+            model,
+            &result.fields,
+        ));
     }
 
     // Post-processing.

@@ -861,6 +861,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.dofs = node_dofs(body, &parts);
     }
     align_pair_frames(&bodies, &mut interfaces);
+    check_one_sided(&bodies, &interfaces, &parts, sfile)?;
     check_values(&bodies, &parts, sfile, t0)?;
     check_held(&bodies, &interfaces, sfile, scale)?;
     let sizes = size_stats(&bodies);
@@ -1893,6 +1894,72 @@ fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
             }
         }
     }
+}
+
+/// A displacement condition that reaches an interface node must hold both sides of the
+/// pair along each of the pair's directions, or neither (the assembly cannot join a known
+/// displacement on one side to an unknown one on the other): refused here, so that `check`
+/// says what `run` would.
+fn check_one_sided(
+    bodies: &[Body],
+    interfaces: &[Interface],
+    parts: &[Part],
+    sfile: &Path,
+) -> Result<()> {
+    // The share of direction e that the known components of a node cover (0 to 1).
+    let known = |b: &Body, n: usize, e: [f64; 2]| -> f64 {
+        let d = b.dofs[n];
+        (0..2)
+            .filter(|&k| d.class[k] == DofClass::Known)
+            .map(|k| dot(d.frame[k], e).powi(2))
+            .sum()
+    };
+    // The boundary conditions of a body that reach node n.
+    let held_by = |b: &Body, n: usize| -> Vec<String> {
+        let mut names: Vec<String> = b
+            .elements
+            .iter()
+            .filter(|e| e.nodes.contains(&n))
+            .flat_map(|e| constrained_directions(e, parts))
+            .map(|(_, pi, _)| parts[pi].spec.name.clone())
+            .collect();
+        names.dedup();
+        names
+    };
+    for it in interfaces {
+        let (a, b) = (&bodies[it.body_a], &bodies[it.body_b]);
+        for p in &it.pairs {
+            for (e, what) in [(p.normal, "normal"), (p.tangent, "tangential")] {
+                let (ka, kb) = (known(a, p.node_a, e), known(b, p.node_b, e));
+                let whole = |k: f64| !(1e-9..=1.0 - 1e-9).contains(&k);
+                if whole(ka) && whole(kb) && (ka > 0.5) == (kb > 0.5) {
+                    continue;
+                }
+                let (held, loose) = if ka >= kb { (a, b) } else { (b, a) };
+                let node = if ka >= kb { p.node_a } else { p.node_b };
+                let by = held_by(held, node)
+                    .iter()
+                    .map(|n| format!("`boundary.{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{}\" at {}: {by} prescribes the {what} displacement of body \
+                         \"{}\" there, but nothing prescribes it on body \"{}\" across the \
+                         interface: a displacement component at an interface node is prescribed \
+                         on both bodies or on neither; extend the condition to the other body's \
+                         boundary that ends there, or end it before the interface",
+                        it.spec.name,
+                        fmt_point(p.x),
+                        held.name,
+                        loose.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// Prescribed values must be finite at every node of their part.

@@ -28,9 +28,23 @@ fn cleanup_list() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 
 fn remove_path(p: &Path) {
     if p.is_dir() {
-        let _ = std::fs::remove_dir_all(p);
+        // A writer thread may still add a file while the folder is removed: try again.
+        for _ in 0..20 {
+            if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
     } else {
         let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Removes the staging folder and the lock file of the run in progress (a process about
+/// to end abruptly: a signal, a failed allocation); the folder itself stays as it was.
+pub fn remove_unfinished() {
+    for p in cleanup_list().iter() {
+        remove_path(p);
     }
 }
 
@@ -39,9 +53,7 @@ fn install_signal_cleanup() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let _ = ctrlc::set_handler(|| {
-            for p in cleanup_list().iter() {
-                remove_path(p);
-            }
+            remove_unfinished();
             let _ = writeln!(
                 std::io::stderr(),
                 "sgbem: interrupted: the run folder was left as it was"
