@@ -302,6 +302,8 @@ fn main() -> ExitCode {
             };
         }
     }
+    // A sweep ended by a signal: exit 130 after its table is written.
+    let mut interrupted = false;
     let result = match cli.command {
         Command::Check {
             scene,
@@ -368,20 +370,28 @@ fn main() -> ExitCode {
             jobs,
             out,
             allow_geo_shell,
-        } => sgbem::sweep::sweep(&scene, &set, jobs, &out, allow_geo_shell).and_then(
-            |(table, failed)| {
-                println!("sweep table in {}", table.display());
-                if failed > 0 {
-                    Err(sgbem::error::Error::numerical(format!(
-                        "{failed} point(s) of the sweep failed: see the exit_code and status \
+        } => sgbem::sweep::sweep(&scene, &set, jobs, &out, allow_geo_shell).and_then(|w| {
+            println!("sweep table in {}", w.table.display());
+            if w.interrupted {
+                err_line(&format!(
+                    "sgbem: interrupted: the sweep ended its runs; {} lists the points that \
+                     finished",
+                    w.table.display()
+                ));
+                interrupted = true;
+                return Ok(());
+            }
+            if w.failed > 0 {
+                Err(sgbem::error::Error::numerical(format!(
+                    "{} point(s) of the sweep failed: see the exit_code and status \
                      columns of {}",
-                        table.display()
-                    )))
-                } else {
-                    Ok(())
-                }
-            },
-        ),
+                    w.failed,
+                    w.table.display()
+                )))
+            } else {
+                Ok(())
+            }
+        }),
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
         }
@@ -396,6 +406,7 @@ fn main() -> ExitCode {
         }
     };
     match result {
+        Ok(()) if interrupted => ExitCode::from(130),
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(&e),
     }

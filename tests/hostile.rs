@@ -635,3 +635,123 @@ fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
         assert!(beside.is_empty(), "{beside:?}");
     }
 }
+
+// --- 4. Sweeps -------------------------------------------------------------------------------
+
+/// The processes whose command line holds `needle` (the sweep's children).
+fn processes_with(needle: &str) -> Vec<u32> {
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .flatten()
+        .filter_map(|e| e.file_name().to_str()?.parse::<u32>().ok())
+        .filter(|pid| {
+            std::fs::read(format!("/proc/{pid}/cmdline"))
+                .is_ok_and(|c| String::from_utf8_lossy(&c).contains(needle))
+        })
+        .collect()
+}
+
+#[test]
+fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
+    let dir = tmpdir("h21-sweep-labels");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let text = std::fs::read_to_string(&sc).unwrap();
+    let sc = write(
+        &dir,
+        "scene.toml",
+        &format!("mesh = \"{}\"\n{text}", s(&msh)),
+    );
+    let out = dir.join("sw");
+    let sweep = |values: &str| sgbem(&["sweep", s(&sc), "--set", values, "--out", s(&out)]);
+    let r = sweep("title=\"α\",\"β\",\"γ\"");
+    expect(&r, 0, &[]);
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let points: Vec<&str> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').next().unwrap())
+        .collect();
+    assert_eq!(points, ["title=___", "title=___~2", "title=___~3"], "{csv}");
+    for p in &points {
+        let summary = std::fs::read_to_string(out.join(p).join("summary.json")).unwrap();
+        assert!(summary.contains("converged"), "{p}");
+    }
+    // A re-sweep with other values removes the old points (a user's file in one is kept).
+    std::fs::write(out.join("title=___~2").join("my_notes.txt"), "mine").unwrap();
+    expect(&sweep("title=a,b"), 0, &[]);
+    let mut left: Vec<String> = std::fs::read_dir(&out)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| !n.starts_with('.'))
+        .collect();
+    left.sort();
+    assert_eq!(
+        left,
+        ["sweep.csv", "sweep.md", "title=___~2", "title=a", "title=b"]
+    );
+    assert_eq!(tree(&out.join("title=___~2")), ["my_notes.txt"]);
+    // A second sweep into the same folder while one holds its lock is refused.
+    let lock = std::fs::File::create(dir.join(".sw.lock")).unwrap();
+    lock.lock().unwrap();
+    expect(&sweep("title=c"), 1, &["another sgbem run", ".sw.lock"]);
+}
+
+#[test]
+fn a_signal_to_a_sweep_ends_its_runs_and_tabulates_what_finished() {
+    let dir = tmpdir("h21-sweep-signal");
+    let msh = gmsh(
+        &root().join("geo/two_blocks.geo"),
+        &dir,
+        "mid.msh",
+        false,
+        &["-setnumber", "n", "120"],
+    );
+    let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml"))
+        .unwrap()
+        .replace("../out/mesh/two_blocks.msh", s(&msh));
+    for (signal, k) in [("TERM", 0), ("KILL", 1)] {
+        let sc = write(&dir, &format!("scene{k}.toml"), &scene);
+        let out = dir.join(format!("sw{k}"));
+        let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_sgbem"))
+            .args(["sweep", s(&sc), "--set", "thickness=1,2,3,4,5,6,7,8"])
+            .args(["--jobs", "2", "--out", s(&out)])
+            .stderr(std::process::Stdio::null())
+            .stdout(std::process::Stdio::null())
+            .spawn()
+            .expect("sweep");
+        // Wait until the first point has finished and two more are running.
+        let t = std::time::Instant::now();
+        while std::fs::read_to_string(out.join("sweep.csv")).is_err() && t.elapsed().as_secs() < 60
+        {
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+        std::thread::sleep(std::time::Duration::from_millis(200));
+        let needle = s(&sc).to_string();
+        assert!(!processes_with(&needle).is_empty());
+        let k = std::process::Command::new("kill")
+            .args([&format!("-{signal}"), &child.id().to_string()])
+            .status()
+            .unwrap();
+        assert!(k.success());
+        let status = child.wait().unwrap();
+        if signal == "TERM" {
+            assert_eq!(status.code(), Some(130), "{signal}");
+        }
+        // Every run of the sweep ends with it.
+        let t = std::time::Instant::now();
+        while !processes_with(&needle).is_empty() && t.elapsed().as_secs() < 10 {
+            std::thread::sleep(std::time::Duration::from_millis(50));
+        }
+        assert_eq!(
+            processes_with(&needle),
+            Vec::<u32>::new(),
+            "{signal}: runs left going"
+        );
+        // The table lists every point; those that finished have their results.
+        let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+        assert_eq!(csv.lines().count(), 9, "{csv}");
+        assert!(csv.contains(",0,converged,"), "{csv}");
+        assert!(csv.contains("not finished"), "{csv}");
+    }
+}

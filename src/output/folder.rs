@@ -101,7 +101,7 @@ pub struct RunFolder {
 }
 
 /// `.NAME.SUFFIX` beside `target`.
-fn beside(target: &Path, suffix: &str) -> PathBuf {
+pub(crate) fn beside(target: &Path, suffix: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -113,13 +113,13 @@ fn beside(target: &Path, suffix: &str) -> PathBuf {
 /// it when the process ends, however it ends). The file holds the process id, for the
 /// message of a refused run only; the holder removes it before unlocking, so a run that
 /// locked a file no longer at the path tries again.
-struct Lock {
+pub(crate) struct Lock {
     path: PathBuf,
     file: Option<std::fs::File>,
 }
 
 impl Lock {
-    fn take(path: &Path, target: &Path) -> Result<Lock> {
+    pub(crate) fn take(path: &Path, target: &Path) -> Result<Lock> {
         use std::os::unix::fs::MetadataExt;
         for _ in 0..100 {
             let file = std::fs::OpenOptions::new()
