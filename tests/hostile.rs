@@ -559,18 +559,19 @@ fn implausible_results_and_inputs_are_noted_and_still_succeed() {
     assert!(!err.contains("note"), "{err}");
 }
 
+/// `geo/two_blocks.geo` meshed with `n` elements per unit length.
+fn two_blocks_mesh(dir: &Path, n: usize) -> PathBuf {
+    let n = n.to_string();
+    let geo = root().join("geo/two_blocks.geo");
+    gmsh(&geo, dir, "mid.msh", false, &["-setnumber", "n", &n])
+}
+
 // --- 3. Memory limits the process really has ---------------------------------------------------
 
 #[test]
 fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
     let dir = tmpdir("h21-ulimit");
-    let msh = gmsh(
-        &root().join("geo/two_blocks.geo"),
-        &dir,
-        "mid.msh",
-        false,
-        &["-setnumber", "n", "200"],
-    );
+    let msh = two_blocks_mesh(&dir, 200);
     let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml")).unwrap();
     let sc = write(&dir, "scene.toml", &scene);
     let out = dir.join("out");
@@ -700,13 +701,7 @@ fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
 #[test]
 fn a_signal_to_a_sweep_ends_its_runs_and_tabulates_what_finished() {
     let dir = tmpdir("h21-sweep-signal");
-    let msh = gmsh(
-        &root().join("geo/two_blocks.geo"),
-        &dir,
-        "mid.msh",
-        false,
-        &["-setnumber", "n", "120"],
-    );
+    let msh = two_blocks_mesh(&dir, 120);
     let scene = std::fs::read_to_string(root().join("pipelines/two_blocks.toml"))
         .unwrap()
         .replace("../out/mesh/two_blocks.msh", s(&msh));
