@@ -750,3 +750,52 @@ fn a_signal_to_a_sweep_ends_its_runs_and_tabulates_what_finished() {
         assert!(csv.contains("not finished"), "{csv}");
     }
 }
+
+// --- 10. Damaged archives ------------------------------------------------------------------------
+
+#[test]
+fn archives_carry_checksummed_metadata_and_damage_ends_within_a_bound_of_their_size() {
+    let dir = tmpdir("h21-archive");
+    let (sc, msh) = stacked_scene(&dir, MULTI_STEP);
+    let out = dir.join("out");
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    let good = std::fs::read(out.join("archive.h5")).unwrap();
+    // Superblock version 3: the HDF5 1.10 format, with metadata checksums.
+    assert_eq!(&good[..8], b"\x89HDF\r\n\x1a\n");
+    assert!(good[8] >= 2, "superblock version {}", good[8]);
+    let n = good.len();
+    let (mut refused, mut cases) = (0, 0);
+    for k in 0..24 {
+        // Bits flipped in the metadata near the start, and blocks further in.
+        let at = if k < 12 {
+            8 + k * 97 % 2000
+        } else {
+            (k * 7919) % n
+        };
+        let mut b = good.clone();
+        b[at] ^= 1 << (k % 8);
+        let file = dir.join("damaged.h5");
+        std::fs::write(&file, &b).unwrap();
+        let t = std::time::Instant::now();
+        let r = sgbem(&["inspect", s(&file)]);
+        let secs = t.elapsed().as_secs_f64();
+        assert!(r.0 == 0 || r.0 == 1, "byte {at}: exit {}: {}", r.0, r.2);
+        assert!(!r.2.contains("panicked"), "{}", r.2);
+        // The bound for a file of this size is 10 s (plus 0.1 s per MB).
+        assert!(
+            secs < 10.0 + 0.1 * n as f64 / 1e6 + 5.0,
+            "byte {at}: {secs} s"
+        );
+        cases += 1;
+        if r.0 == 1 {
+            assert!(
+                r.2.starts_with("sgbem: ") && r.2.contains("damaged.h5"),
+                "{}",
+                r.2
+            );
+            refused += 1;
+        }
+    }
+    eprintln!("{refused} of {cases} damaged archives refused");
+    assert!(refused >= 6, "{refused} of {cases}");
+}
