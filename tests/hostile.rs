@@ -799,3 +799,42 @@ fn archives_carry_checksummed_metadata_and_damage_ends_within_a_bound_of_their_s
     eprintln!("{refused} of {cases} damaged archives refused");
     assert!(refused >= 6, "{refused} of {cases}");
 }
+
+// --- 9. Far from the origin ------------------------------------------------------------------
+
+#[test]
+fn a_model_far_from_the_origin_is_noted_or_refused_with_the_reason() {
+    let dir = tmpdir("h21-far");
+    let sc = write(&dir, "scene.toml", STACKED_SCENE);
+    for (offset, code) in [(1e12, 0), (1e15, 2), (3e15, 2)] {
+        let mut m = stacked_blocks(4);
+        for p in m.nodes.iter_mut() {
+            p[0] += offset;
+            p[1] += offset;
+        }
+        let far = m.save(&dir, "far.msh");
+        let c = sgbem(&["check", s(&sc), "--mesh", s(&far)]);
+        let r = run(&sc, &far, &dir.join("out"));
+        for out in [&c, &r] {
+            assert_eq!(out.0, code, "{offset:e}: {}", out.2);
+            assert!(!out.2.contains("duplicate"), "{offset:e}: {}", out.2);
+        }
+        if code == 0 {
+            assert!(c.1.contains("from the origin") && c.1.contains("fewer than six digits"));
+            assert!(r
+                .2
+                .contains("sgbem: note: the model lies 1.0000e12 from the origin"));
+        } else {
+            expect(
+                &r,
+                2,
+                &[
+                    "far.msh",
+                    "from the origin",
+                    "move the model near the origin",
+                ],
+            );
+            assert_eq!(c.2, r.2, "check and run say the same");
+        }
+    }
+}

@@ -797,6 +797,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
     }
     let scale = bbox_diagonal(&all_nodes);
+    check_resolution(mesh, &body_curves, &curve_lines, mfile)?;
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(Error::input(
             mfile,
@@ -896,6 +897,63 @@ fn list_or_none(names: &[&str]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     }
+}
+
+/// How far from the origin the body lines lie (largest coordinate), the step with which
+/// floating point resolves coordinates there, and their shortest positive element.
+pub fn resolution(lines: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> (f64, f64, f64) {
+    let (mut far, mut h) = (0.0f64, f64::INFINITY);
+    for (a, b) in lines {
+        far = far
+            .max(a[0].abs())
+            .max(a[1].abs())
+            .max(b[0].abs())
+            .max(b[1].abs());
+        let l = norm(sub(b, a));
+        if l > 0.0 {
+            h = h.min(l);
+        }
+    }
+    (far, far * f64::EPSILON, h)
+}
+
+/// Refuses a mesh so far from the origin that floating point resolves its coordinates to
+/// no better than a tenth of its shortest element (nodes then round onto one another):
+/// the reason, not a symptom (zero-length elements, "duplicate points").
+fn check_resolution(
+    mesh: &Mesh,
+    body_curves: &[BTreeSet<i32>],
+    curve_lines: &HashMap<i32, Vec<usize>>,
+    mfile: &Path,
+) -> Result<()> {
+    let lines = body_curves
+        .iter()
+        .flatten()
+        .flat_map(|c| curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]))
+        .map(|&li| {
+            let n = mesh.lines[li].nodes;
+            (mesh.nodes[n[0]], mesh.nodes[n[1]])
+        });
+    let (far, step, h) = resolution(lines);
+    if !far.is_finite() || (far > 0.0 && !(step <= 0.1 * h)) {
+        let shortest = if h.is_finite() {
+            format!("a tenth of its shortest element ({})", fmt_num(h))
+        } else {
+            "the size of any element (every element has collapsed)".to_string()
+        };
+        return Err(Error::input(
+            mfile,
+            format!(
+                "the mesh lies {} from the origin, where floating point resolves coordinates \
+                 only to {}, more than {shortest}: nodes round onto one another and the \
+                 geometry is lost; move the model near the origin (e.g. Translate in the .geo, \
+                 or subtract a reference point from the coordinates) and mesh again",
+                fmt_num(far),
+                fmt_num(step)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn bbox_diagonal(points: &[[f64; 2]]) -> f64 {

@@ -92,6 +92,7 @@ pub fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
             }
         }
     }
+    notes.extend(far_note(model));
     if !loaded(model) {
         notes.push(
             "nothing loads the model: every prescribed displacement and traction is zero, no \
@@ -101,6 +102,33 @@ pub fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
         );
     }
     notes
+}
+
+/// The share of its smallest element's length to which the coordinates resolve, above
+/// which a note says so (six digits of the geometry kept).
+const RESOLUTION: f64 = 1e-6;
+
+/// A note when the model lies so far from the origin that floating point resolves its
+/// smallest element to less than [`RESOLUTION`] of its length.
+fn far_note(model: &Model) -> Option<String> {
+    let lines = model.bodies.iter().flat_map(|b| {
+        b.elements
+            .iter()
+            .map(|e| (b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
+    });
+    let (far, step, h) = crate::input::model::resolution(lines);
+    if !(h.is_finite() && h > 0.0 && step > RESOLUTION * h) {
+        return None;
+    }
+    Some(format!(
+        "the model lies {} from the origin, where floating point resolves coordinates only to \
+         {}, {:.1e} of its smallest element ({}): its geometry, hence its results, keep fewer \
+         than six digits; move the model near the origin (e.g. Translate in the .geo)",
+        fmt_num(far),
+        fmt_num(step),
+        step / h,
+        fmt_num(h)
+    ))
 }
 
 /// Whether anything loads the model: a non-zero (or varying) prescribed value, a body
