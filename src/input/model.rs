@@ -1055,25 +1055,17 @@ fn build_body(
             2 => {}
             1 => {
                 // Two nodes at one point, each ending a curve: duplicates, not a gap.
+                let ends = |m: usize| {
+                    let curve = elements[incident[m][0]].curve;
+                    (mesh.node_tags[mesh_nodes[m]], nodes[m], curve)
+                };
                 let twin = (0..nodes.len()).find(|&m| {
                     m != n
                         && incident[m].len() == 1
                         && norm(sub(nodes[m], nodes[n])) <= 1e-12 * scale
                 });
                 if let Some(m) = twin {
-                    return Err(Error::input(
-                        mfile,
-                        format!(
-                            "nodes {tag} and {} of body \"{name}\" are duplicates: both lie at {} \
-                             (ends of curves {} and {}), so the boundary does not join there; \
-                             merge them (gmsh: Coherence; or one Point per corner in the .geo, \
-                             or Geometry.Tolerance)",
-                            mesh.node_tags[mesh_nodes[m]],
-                            fmt_point(nodes[n]),
-                            elements[inc[0]].curve,
-                            elements[incident[m][0]].curve
-                        ),
-                    ));
+                    return Err(duplicate_nodes(mfile, name, ends(n), ends(m)));
                 }
                 return Err(Error::input(
                     mfile,
@@ -2064,6 +2056,28 @@ fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path, t: f64) -> Result
         }
     }
     Ok(())
+}
+
+/// The error for two nodes `(tag, point, curve)` of body `name` at one point.
+fn duplicate_nodes(
+    mfile: &Path,
+    name: &str,
+    a: (usize, [f64; 2], i32),
+    b: (usize, [f64; 2], i32),
+) -> Error {
+    Error::input(
+        mfile,
+        format!(
+            "nodes {} and {} of body \"{name}\" are duplicates: both lie at {} (ends of curves {} \
+             and {}), so the boundary does not join there; merge them (gmsh: Coherence; or one \
+             Point per corner in the .geo, or Geometry.Tolerance)",
+            a.0,
+            b.0,
+            fmt_point(a.1),
+            a.2,
+            b.2
+        ),
+    )
 }
 
 /// Every group of bodies linked by interfaces must be held against all rigid motions by its
