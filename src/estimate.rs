@@ -377,8 +377,11 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
     }
 }
 
-/// The memory a run may use: `SGBEM_MEMORY_LIMIT` (bytes) if set, else `MemAvailable` of
-/// /proc/meminfo; None when neither can be read.
+/// The memory a run may use: `SGBEM_MEMORY_LIMIT` (bytes) if set (the user's word wins),
+/// else the smallest of `MemAvailable` of /proc/meminfo, the address space left under `ulimit -v` (RLIMIT_AS) and
+/// the room left under the process's cgroup memory limit (SLURM, containers: v2
+/// `memory.max`, v1 `memory.limit_in_bytes`, of its cgroup and every parent), with where it
+/// comes from; None when none can be read.
 pub fn available_memory() -> Option<(f64, &'static str)> {
     if let Ok(v) = std::env::var("SGBEM_MEMORY_LIMIT") {
         if let Ok(b) = v.trim().parse::<f64>() {
@@ -387,17 +390,109 @@ pub fn available_memory() -> Option<(f64, &'static str)> {
             }
         }
     }
+    let mut limits: Vec<(f64, &'static str)> = Vec::new();
+    limits.extend(meminfo_available().map(|b| (b, "MemAvailable in /proc/meminfo")));
+    limits.extend(address_space_left().map(|b| (b, "the address space left under ulimit -v")));
+    limits.extend(cgroup_room().map(|b| (b, "the room left under the cgroup's memory limit")));
+    limits.into_iter().min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// A number of bytes in a `/proc` text: `VALUE kB` or `VALUE` (a bare number of bytes).
+fn kb_or_bytes(text: &str) -> Option<f64> {
+    let t = text.trim();
+    match t.strip_suffix("kB") {
+        Some(kb) => kb.trim().parse::<f64>().ok().map(|v| v * 1024.0),
+        None => t.parse::<f64>().ok(),
+    }
+}
+
+fn meminfo_available() -> Option<f64> {
     let text = std::fs::read_to_string("/proc/meminfo").ok()?;
     text.lines()
         .find_map(|l| l.strip_prefix("MemAvailable:"))
-        .and_then(|rest| {
-            rest.trim()
-                .trim_end_matches("kB")
-                .trim()
-                .parse::<f64>()
+        .and_then(kb_or_bytes)
+}
+
+/// RLIMIT_AS (the soft limit of `ulimit -v`, from /proc/self/limits) less the address
+/// space the process already maps (VmSize); None when unlimited.
+fn address_space_left() -> Option<f64> {
+    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let soft = limits
+        .lines()
+        .find_map(|l| l.strip_prefix("Max address space"))?
+        .split_whitespace()
+        .next()?
+        .parse::<f64>()
+        .ok()?;
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let used = status
+        .lines()
+        .find_map(|l| l.strip_prefix("VmSize:"))
+        .and_then(kb_or_bytes)
+        .unwrap_or(0.0);
+    // glibc reserves up to 64 MiB of address space per malloc arena, one arena per thread
+    // that allocates (the rayon workers and the main thread).
+    let threads = std::env::var("RAYON_NUM_THREADS")
+        .ok()
+        .and_then(|v| v.trim().parse::<usize>().ok())
+        .filter(|&n| n > 0)
+        .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
+    let arenas = 64.0 * 1024.0 * 1024.0 * (threads + 2) as f64;
+    // Address space is not memory in use: freed blocks, thread stacks and the libraries'
+    // buffers map more than the estimate counts (measured: about 1.3 times at the peak).
+    Some(((soft - used - arenas) / 1.5).max(0.0))
+}
+
+/// The least room (limit less usage) under the memory limits of the process's cgroup and
+/// its parents; None without a limit.
+fn cgroup_room() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/self/cgroup").ok()?;
+    let mut dirs: Vec<(std::path::PathBuf, &str, &str)> = Vec::new();
+    for line in text.lines() {
+        let mut parts = line.splitn(3, ':');
+        let (_, controllers, path) = (parts.next(), parts.next()?, parts.next()?);
+        let path = path.trim_start_matches('/');
+        let (roots, limit, usage): (&[&str], _, _) = if controllers.is_empty() {
+            (
+                &["/sys/fs/cgroup", "/sys/fs/cgroup/unified"],
+                "memory.max",
+                "memory.current",
+            )
+        } else if controllers.split(',').any(|c| c == "memory") {
+            (
+                &["/sys/fs/cgroup/memory"],
+                "memory.limit_in_bytes",
+                "memory.usage_in_bytes",
+            )
+        } else {
+            continue;
+        };
+        for root in roots {
+            // The cgroup and each parent up to the mount's root (which may itself be the
+            // process's cgroup, in a cgroup namespace).
+            let mut p = std::path::Path::new(root).join(path);
+            loop {
+                dirs.push((p.clone(), limit, usage));
+                if p == std::path::Path::new(root) || !p.pop() {
+                    break;
+                }
+            }
+        }
+    }
+    dirs.iter()
+        .filter_map(|(d, limit, usage)| {
+            let l = kb_or_bytes(&std::fs::read_to_string(d.join(limit)).ok()?)?;
+            // "max", or v1's "no limit" (a page-rounded 2^63).
+            if l >= 1e18 {
+                return None;
+            }
+            let u = std::fs::read_to_string(d.join(usage))
                 .ok()
+                .and_then(|t| kb_or_bytes(&t))
+                .unwrap_or(0.0);
+            Some((l - u).max(0.0))
         })
-        .map(|kb| (kb * 1024.0, "MemAvailable in /proc/meminfo"))
+        .min_by(|a, b| a.total_cmp(b))
 }
 
 /// "1.2 GB", "340 MB", "5.0 PB".
@@ -429,6 +524,35 @@ pub fn fmt_seconds(s: f64) -> String {
     }
 }
 
+/// True while [`probe`] reserves memory: a failure then is an answer, not an end (the
+/// program's allocator ends the process on a failed large allocation otherwise).
+pub static PROBING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
+
+/// Reserves (and frees at once, untouched) the address space of the estimate: under a
+/// limit that the figures above do not show (an `ulimit -v` set after the process started
+/// its threads, an overcommit policy) the reservation fails here, with a message (I/O
+/// error, exit 1), and not as a crash in the middle of the assembly.
+fn probe(bytes: f64, scene_file: &std::path::Path) -> Result<()> {
+    use std::sync::atomic::Ordering;
+    let n = bytes.min(usize::MAX as f64 / 2.0) as usize;
+    let mut v: Vec<u8> = Vec::new();
+    PROBING.store(true, Ordering::SeqCst);
+    let reserved = v.try_reserve_exact(n);
+    drop(v);
+    PROBING.store(false, Ordering::SeqCst);
+    reserved.map_err(|_| {
+        Error::io(
+            scene_file,
+            format!(
+                "cannot reserve the {} of memory this run needs (the system refused the \
+                 allocation: a memory limit, ulimit -v, or the overcommit policy): coarsen the \
+                 mesh, or raise the limit",
+                fmt_bytes(bytes)
+            ),
+        )
+    })
+}
+
 impl Estimate {
     /// Err (input error, exit 2) when the estimate exceeds the memory available: the
     /// message names the estimate, the memory available and the fix.
@@ -437,7 +561,7 @@ impl Estimate {
             return Ok(());
         };
         if self.peak_bytes <= avail {
-            return Ok(());
+            return probe(self.peak_bytes, scene_file);
         }
         let body = self
             .largest()

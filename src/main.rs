@@ -50,6 +50,10 @@ enum Command {
         /// No progress bars.
         #[arg(long)]
         quiet: bool,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
         /// Override a scene key: a dotted TOML path and a TOML value, e.g.
         /// `--set interface.joint.cohesion=2.0 --set solve.method=qp` (repeatable; validated
         /// like the file).
@@ -72,6 +76,10 @@ enum Command {
         /// of text.
         #[arg(long)]
         json: bool,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
     },
     /// Run a scene for every combination of values and tabulate the headline results.
     Sweep {
@@ -89,6 +97,10 @@ enum Command {
         /// sweep.csv / sweep.md.
         #[arg(long)]
         out: PathBuf,
+        /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
+        /// for a .geo you have read and trust.
+        #[arg(long)]
+        allow_geo_shell: bool,
     },
     /// Print what an archive holds.
     Inspect {
@@ -132,15 +144,24 @@ fn err_line(text: &str) {
     let _ = writeln!(std::io::stderr().lock(), "{text}");
 }
 
-/// Runs `inspect` or `export` in a child process bounded in time, so that a damaged archive
-/// that crashes or hangs the HDF5 library ends in a message, not a crash.
+/// Seconds the reader of an archive of `bytes` may take: 10 s and 0.1 s per MB (whole
+/// archives are read at about 300 MB/s: `export` of a 24 MB archive takes 0.08 s), at most
+/// 300 s.
+fn archive_time_bound(bytes: u64) -> f64 {
+    (10.0 + 0.1 * bytes as f64 / 1e6).min(300.0)
+}
+
+/// Runs `inspect` or `export` in a child process bounded in time (in proportion to the
+/// archive's size, or `SGBEM_ARCHIVE_TIMEOUT`), so that a damaged archive that crashes or
+/// hangs the HDF5 library ends in a message, not a crash.
 fn archive_in_child(archive: &std::path::Path) -> Result<u8, Error> {
     let exe = std::env::current_exe().map_err(|e| Error::io("sgbem", e))?;
+    let size = std::fs::metadata(archive).map_or(0, |m| m.len());
     let limit = std::env::var("SGBEM_ARCHIVE_TIMEOUT")
         .ok()
         .and_then(|v| v.trim().parse::<f64>().ok())
         .filter(|v| v.is_finite() && *v > 0.0)
-        .unwrap_or(300.0);
+        .unwrap_or_else(|| archive_time_bound(size));
     let mut child = std::process::Command::new(exe)
         .args(std::env::args_os().skip(1))
         .env(ARCHIVE_WORKER, "1")
@@ -181,7 +202,104 @@ fn archive_in_child(archive: &std::path::Path) -> Result<u8, Error> {
     }
 }
 
+/// The system allocator, except that a failed allocation (the matrices of a run under a
+/// memory limit: ulimit -v, a cgroup's memory.max) ends the process with a message and exit
+/// 1 instead of the abort (exit 134) or the library panic (exit 101) it would be. After a
+/// large one (1 MiB or more: small ones likely still succeed) the run's unfinished staging
+/// folder is removed; after a small one nothing more is tried (the next run removes it).
+struct Guarded;
+
+const LARGE: usize = 1 << 20;
+
+fn allocation_failed(size: usize) {
+    use std::sync::atomic::{AtomicBool, Ordering};
+    static ENDING: AtomicBool = AtomicBool::new(false);
+    if sgbem::estimate::PROBING.load(Ordering::SeqCst) {
+        return;
+    }
+    if ENDING.swap(true, Ordering::SeqCst) {
+        // Another thread is ending the process: wait for it (returning would abort).
+        loop {
+            std::thread::sleep(std::time::Duration::from_secs(1));
+        }
+    }
+    if size >= LARGE {
+        sgbem::output::folder::remove_unfinished();
+    }
+    let _ = std::io::stderr().write_all(
+        b"sgbem: out of memory: an allocation of the run failed (a memory limit: ulimit -v, \
+          the cgroup's memory.max of a container or SLURM job); the output folder was left as \
+          it was: coarsen the mesh, or raise the limit (`sgbem check` prints the memory a run \
+          needs)\n",
+    );
+    // Other threads may still be allocating: end without running anything more.
+    unsafe { exit_now(1) }
+}
+
+unsafe extern "C" {
+    /// `_exit(2)`: ends the process at once (no atexit handlers, no flushing).
+    #[link_name = "_exit"]
+    fn exit_now(code: i32) -> !;
+}
+
+// SAFETY: every call is forwarded to the system allocator with its own arguments.
+unsafe impl std::alloc::GlobalAlloc for Guarded {
+    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
+        let p = unsafe { std::alloc::System.alloc(layout) };
+        if p.is_null() {
+            allocation_failed(layout.size());
+        }
+        p
+    }
+    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
+        let p = unsafe { std::alloc::System.alloc_zeroed(layout) };
+        if p.is_null() {
+            allocation_failed(layout.size());
+        }
+        p
+    }
+    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, size: usize) -> *mut u8 {
+        let p = unsafe { std::alloc::System.realloc(ptr, layout, size) };
+        if p.is_null() {
+            allocation_failed(size);
+        }
+        p
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
+        unsafe { std::alloc::System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static ALLOCATOR: Guarded = Guarded;
+
+/// A panic that says the system refused a resource (a failed allocation reported by a
+/// library, a thread that could not start) is the same out-of-memory end: a message and
+/// exit 1. Any other panic keeps the default report.
+fn install_resource_hook() {
+    let default = std::panic::take_hook();
+    std::panic::set_hook(Box::new(move |info| {
+        let text = info
+            .payload()
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| info.payload().downcast_ref::<&str>().copied())
+            .unwrap_or("");
+        let words = [
+            "AllocError",
+            "failed to spawn",
+            "os error 12",
+            "Cannot allocate memory",
+        ];
+        if words.iter().any(|w| text.contains(w)) {
+            allocation_failed(LARGE);
+        }
+        default(info);
+    }));
+}
+
 fn main() -> ExitCode {
+    install_resource_hook();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) => {
@@ -205,6 +323,8 @@ fn main() -> ExitCode {
             };
         }
     }
+    // A sweep ended by a signal: exit 130 after its table is written.
+    let mut interrupted = false;
     let result = match cli.command {
         Command::Completions { shell } => {
             let mut script = Vec::new();
@@ -216,18 +336,20 @@ fn main() -> ExitCode {
             mesh,
             set,
             json,
+            allow_geo_shell,
         } => {
+            sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
             // A .geo mesh is meshed into a temporary folder, removed afterwards.
-            let tmp = std::env::temp_dir().join(format!("sgbem-check-{}", std::process::id()));
+            let tmp = sgbem::input::gmsh::Scratch::new("check");
             let loaded = pipeline::load_with(
                 &scene,
                 &pipeline::LoadOptions {
                     mesh,
                     sets: set,
-                    mesh_dir: Some(tmp.clone()),
+                    mesh_dir: Some(tmp.path().to_path_buf()),
                 },
             );
-            let _ = std::fs::remove_dir_all(&tmp);
+            drop(tmp);
             loaded.and_then(|l| {
                 out(&if json {
                     let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
@@ -244,7 +366,9 @@ fn main() -> ExitCode {
             method,
             quiet,
             set,
+            allow_geo_shell,
         } => {
+            sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
             let opts = pipeline::RunOptions {
                 mesh,
                 out: out_dir,
@@ -273,13 +397,24 @@ fn main() -> ExitCode {
             set,
             jobs,
             out,
-        } => sgbem::sweep::sweep(&scene, &set, jobs, &out).and_then(|(table, failed)| {
-            println!("sweep table in {}", table.display());
-            if failed > 0 {
+            allow_geo_shell,
+        } => sgbem::sweep::sweep(&scene, &set, jobs, &out, allow_geo_shell).and_then(|w| {
+            println!("sweep table in {}", w.table.display());
+            if w.interrupted {
+                err_line(&format!(
+                    "sgbem: interrupted: the sweep ended its runs; {} lists the points that \
+                     finished",
+                    w.table.display()
+                ));
+                interrupted = true;
+                return Ok(());
+            }
+            if w.failed > 0 {
                 Err(sgbem::error::Error::numerical(format!(
-                    "{failed} point(s) of the sweep failed: see the exit_code and status \
+                    "{} point(s) of the sweep failed: see the exit_code and status \
                      columns of {}",
-                    table.display()
+                    w.failed,
+                    w.table.display()
                 )))
             } else {
                 Ok(())
@@ -299,6 +434,7 @@ fn main() -> ExitCode {
         }
     };
     match result {
+        Ok(()) if interrupted => ExitCode::from(130),
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => fail(&e),
     }

@@ -233,8 +233,11 @@ fn body_inputs<'a>(
 pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let mut timings = Timings::default();
     let folder = lock_run_folder(scene_path, opts)?;
-    let loaded = load_for_run(scene_path, opts, &mut timings)?;
-    check_fits_and_keep_mesh(&loaded, scene_path, &folder)?;
+    // A .geo is meshed into a scratch folder, never into the output folder before the run
+    // owns it; the mesh then goes into the run's mesh/.
+    let scratch = crate::input::gmsh::Scratch::new("run");
+    let loaded = load_for_run(scene_path, opts, scratch.path(), &mut timings)?;
+    check_fits_and_keep_mesh(&loaded, scene_path, &folder, scratch.path())?;
     let settings = quadrature(&loaded.scene);
     let progress = Progress::new(opts.quiet);
     let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
@@ -264,14 +267,19 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
 }
 
 /// Reads the scene and the mesh with the command line's overrides.
-fn load_for_run(scene_path: &Path, opts: &RunOptions, timings: &mut Timings) -> Result<Loaded> {
+fn load_for_run(
+    scene_path: &Path,
+    opts: &RunOptions,
+    mesh_dir: &Path,
+    timings: &mut Timings,
+) -> Result<Loaded> {
     let t0 = Instant::now();
     let mut loaded = load_with(
         scene_path,
         &LoadOptions {
             mesh: opts.mesh.clone(),
             sets: opts.sets.clone(),
-            mesh_dir: opts.out.as_ref().map(|o| o.join("mesh")),
+            mesh_dir: Some(mesh_dir.to_path_buf()),
         },
     )?;
     if let Some(m) = opts.method {
@@ -297,12 +305,15 @@ fn lock_run_folder(scene_path: &Path, opts: &RunOptions) -> Result<RunFolder> {
 }
 
 /// Refuses what cannot fit before allocating any of it; keeps the mesh a .geo scene was
-/// meshed into in the new run.
-fn check_fits_and_keep_mesh(loaded: &Loaded, scene_path: &Path, folder: &RunFolder) -> Result<()> {
+/// meshed into (`meshed`, a scratch folder) in the new run's mesh/.
+fn check_fits_and_keep_mesh(
+    loaded: &Loaded,
+    scene_path: &Path,
+    folder: &RunFolder,
+    meshed: &Path,
+) -> Result<()> {
     crate::estimate::estimate(&loaded.model, &loaded.scene)
         .check_fits(&loaded.model, scene_path)?;
-    // A .geo scene mesh was meshed into the target's mesh/ folder: keep it in the new run.
-    let meshed = loaded.scene.output.directory.join("mesh");
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
         && meshed.is_dir()
     {
@@ -482,6 +493,10 @@ fn postprocess(
     );
     if solved.failure.is_none() {
         notes.extend(crate::post::equilibrium::unbalanced_note(model, &balances));
+        notes.extend(crate::post::plausibility::displacement_note(
+            model,
+            &solved.fields,
+        ));
     }
     let t2 = Instant::now();
     let mut post = Post {

@@ -447,6 +447,7 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
              \"accurate\""
         ));
     }
+    advice.extend(crate::post::plausibility::input_notes(scene, model));
     Ok(Plan {
         effects,
         problem,

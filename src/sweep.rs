@@ -3,10 +3,19 @@
 //!
 //! Place in the flow: above the pipeline; each point is `sgbem run SCENE --set ... --out
 //! DIR/<point> --quiet`, so that a point that fails (exit 3) leaves the others alone.
+//!
+//! Point folders have unique names (values that clean to the same text get `~2`, `~3`).
+//! A lock (`.DIR.lock`, flock) refuses a second sweep into the same folder. The children
+//! run in process groups of their own and end with the sweep: SIGINT or SIGTERM to the
+//! sweep ends them (SIGTERM to each group), writes the table of the points that finished
+//! and exits 130; SIGKILL to the sweep ends them through the kernel (parent-death signal).
+//! `DIR/.sgbem-sweep.json` lists the points a sweep wrote: a re-sweep removes the points of
+//! the previous one that its grid no longer has (only the files their runs listed).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
 use crate::input::scene;
@@ -20,7 +29,9 @@ pub struct Axis {
 
 /// Splits `KEY=V1,V2,...` at the commas outside brackets, braces and quotes.
 pub fn parse_axis(set: &str) -> std::result::Result<Axis, String> {
-    let Some((key, values)) = set.split_once('=') else {
+    let whole = set;
+    let set = &crate::input::scene::shown_set(set);
+    let Some((key, values)) = whole.split_once('=') else {
         return Err(format!(
             "--set {set}: expected KEY=V1,V2,..., e.g. --set interface.joint.cohesion=0,1,2"
         ));
@@ -113,18 +124,47 @@ pub fn points(axes: &[Axis]) -> Vec<Point> {
         }
         pts = next;
     }
+    // Distinct values may clean to the same text (`α`, `β` → `_`): number the repeats
+    // (`~` is never in a cleaned value, so the names stay distinct).
+    let mut seen = std::collections::HashMap::new();
+    for p in &mut pts {
+        let n = seen.entry(p.name.clone()).or_insert(0usize);
+        *n += 1;
+        if *n > 1 {
+            p.name = format!("{}~{n}", p.name);
+        }
+    }
     pts
 }
 
+/// What a sweep did: the table's path, the points that failed, and whether a signal
+/// ended it before every point ran.
+pub struct Swept {
+    pub table: PathBuf,
+    pub failed: usize,
+    pub interrupted: bool,
+}
+
+/// Set by SIGINT or SIGTERM: the sweep ends its children and writes what finished.
+static STOP: AtomicBool = AtomicBool::new(false);
+
+unsafe extern "C" {
+    fn kill(pid: i32, sig: i32) -> i32;
+    fn prctl(option: i32, ...) -> i32;
+}
+
+const SIGTERM: i32 = 15;
+const PR_SET_PDEATHSIG: i32 = 1;
+
 /// Runs the sweep: validates every point's scene first (exit 2 before any run), then runs
-/// the points `jobs` at a time and writes `out/sweep.csv` and `out/sweep.md`. Returns the
-/// table's path and the number of points that failed.
+/// the points `jobs` at a time and writes `out/sweep.csv` and `out/sweep.md`.
 pub fn sweep(
     scene_path: &Path,
     sets: &[String],
     jobs: usize,
     out: &Path,
-) -> Result<(PathBuf, usize)> {
+    allow_geo_shell: bool,
+) -> Result<Swept> {
     if !scene_path.is_file() {
         return Err(Error::input(
             scene_path,
@@ -142,38 +182,141 @@ pub fn sweep(
         ));
     }
     let pts = points(&axes);
+    crate::input::gmsh::allow_shell_commands(allow_geo_shell);
     for p in &pts {
-        scene::read_scene_with(scene_path, &p.sets)?;
+        let sc = scene::read_scene_with(scene_path, &p.sets)?;
+        if let Some(mesh) = sc.mesh.as_deref().filter(|m| crate::input::gmsh::is_geo(m)) {
+            crate::input::gmsh::check_commands(mesh)?;
+        }
     }
     std::fs::create_dir_all(out)
         .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
+    let lock_path = crate::output::folder::beside(out, "lock");
+    let _lock = crate::output::folder::Lock::take(&lock_path, out)?;
+    let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
+    remove_stale_points(out, &pts);
+    let listed: Vec<&str> = pts.iter().map(|p| p.name.as_str()).collect();
+    let marker = serde_json::json!({ "tool": "sgbem sweep", "points": listed });
+    super::output::write_atomic(&out.join(SWEEP_MARKER), format!("{marker:#}\n").as_bytes())?;
     let exe = std::env::current_exe()
         .map_err(|e| Error::io(scene_path, format!("cannot find the sgbem program: {e}")))?;
+    // The table is written after every finished point, so that whatever ends the sweep
+    // (even SIGKILL) leaves the results of the points that finished.
+    let write = |codes: &[Option<i32>]| -> Result<(PathBuf, usize)> {
+        let (csv, md, failed) = table(&axes, &pts, codes, out);
+        super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
+        let path = out.join("sweep.csv");
+        super::output::write_atomic(&path, csv.as_bytes())?;
+        Ok((path, failed))
+    };
+    let codes = run_points(&exe, scene_path, &pts, jobs, out, allow_geo_shell, &write)?;
+    let (table, failed) = write(&codes)?;
+    Ok(Swept {
+        table,
+        failed,
+        interrupted: codes.iter().any(Option::is_none),
+    })
+}
+
+/// The list of the points a sweep wrote, in its folder.
+const SWEEP_MARKER: &str = ".sgbem-sweep.json";
+
+/// Removes the point folders of the previous sweep into `out` that `pts` does not have:
+/// only the entries their run's marker lists (a folder holding anything else keeps it).
+fn remove_stale_points(out: &Path, pts: &[Point]) {
+    let Ok(text) = std::fs::read_to_string(out.join(SWEEP_MARKER)) else {
+        return;
+    };
+    let Ok(v) = serde_json::from_str::<serde_json::Value>(&text) else {
+        return;
+    };
+    let old = v["points"].as_array().cloned().unwrap_or_default();
+    for name in old.iter().filter_map(|n| n.as_str()) {
+        // Only a plain folder name of this sweep folder.
+        if name.is_empty() || name.contains('/') || name.starts_with('.') {
+            continue;
+        }
+        if pts.iter().any(|p| p.name == name) {
+            continue;
+        }
+        let dir = out.join(name);
+        if let Ok(Some(o)) = crate::output::owned::owner(&dir) {
+            if o.prefix.is_empty() {
+                crate::output::owned::remove_listed(&dir, &o.entries);
+            }
+        }
+    }
+}
+
+/// Runs the points `jobs` at a time; each point's exit code, None for a point that did not
+/// finish (a signal ended the sweep).
+fn run_points(
+    exe: &Path,
+    scene_path: &Path,
+    pts: &[Point],
+    jobs: usize,
+    out: &Path,
+    allow_geo_shell: bool,
+    write: &dyn Fn(&[Option<i32>]) -> Result<(PathBuf, usize)>,
+) -> Result<Vec<Option<i32>>> {
+    use std::os::unix::process::CommandExt;
     let jobs = jobs.max(1);
     // Each child gets its share of the cores, unless the caller chose.
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let threads = (cores / jobs).max(1).to_string();
+    let parent = std::process::id();
     let mut codes = vec![None; pts.len()];
     let mut next = 0;
     let mut running: Vec<(usize, std::process::Child)> = Vec::new();
-    while next < pts.len() || !running.is_empty() {
-        while running.len() < jobs && next < pts.len() {
+    while (next < pts.len() && !STOP.load(Ordering::SeqCst)) || !running.is_empty() {
+        while running.len() < jobs && next < pts.len() && !STOP.load(Ordering::SeqCst) {
             let p = &pts[next];
-            let mut cmd = Command::new(&exe);
+            let mut cmd = Command::new(exe);
             cmd.arg("run").arg(scene_path);
             for s in &p.sets {
                 cmd.arg("--set").arg(s);
             }
             cmd.arg("--out").arg(out.join(&p.name)).arg("--quiet");
+            if allow_geo_shell {
+                cmd.arg("--allow-geo-shell");
+            }
             if std::env::var_os("RAYON_NUM_THREADS").is_none() {
                 cmd.env("RAYON_NUM_THREADS", &threads);
+            }
+            // A process group of its own (the run and its gmsh end together), and SIGTERM
+            // when the sweep dies, even by SIGKILL.
+            cmd.process_group(0);
+            // SAFETY: prctl and getppid are async-signal-safe; nothing is allocated.
+            unsafe {
+                cmd.pre_exec(move || {
+                    prctl(PR_SET_PDEATHSIG, SIGTERM as std::ffi::c_ulong);
+                    if std::os::unix::process::parent_id() != parent {
+                        return Err(std::io::Error::other("the sweep ended"));
+                    }
+                    Ok(())
+                });
             }
             eprintln!("sweep: {} of {}: {}", next + 1, pts.len(), p.name);
             let child = cmd
                 .spawn()
-                .map_err(|e| Error::io(&exe, format!("cannot start a run: {e}")))?;
+                .map_err(|e| Error::io(exe, format!("cannot start a run: {e}")))?;
             running.push((next, child));
             next += 1;
+        }
+        if STOP.load(Ordering::SeqCst) {
+            for (_, child) in &running {
+                let pgid = i32::try_from(child.id()).unwrap_or(0);
+                if pgid > 0 {
+                    // SAFETY: a plain system call on the child's own process group.
+                    unsafe { kill(-pgid, SIGTERM) };
+                }
+            }
+            for (_, child) in &mut running {
+                let _ = child.wait();
+            }
+            running.clear();
+            eprintln!("sweep: interrupted: the points that finished are tabulated");
+            break;
         }
         let mut finished = None;
         for (i, (k, child)) in running.iter_mut().enumerate() {
@@ -186,15 +329,12 @@ pub fn sweep(
         match finished {
             Some(i) => {
                 running.remove(i);
+                write(&codes)?;
             }
             None => std::thread::sleep(std::time::Duration::from_millis(50)),
         }
     }
-    let (csv, md, failed) = table(&axes, &pts, &codes, out);
-    super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
-    let path = out.join("sweep.csv");
-    super::output::write_atomic(&path, csv.as_bytes())?;
-    Ok((path, failed))
+    Ok(codes)
 }
 
 /// The headline table: per point the swept values, exit code, status, contact iterations
@@ -207,7 +347,9 @@ fn table(
 ) -> (String, String, usize) {
     let summaries: Vec<Option<serde_json::Value>> = pts
         .iter()
-        .map(|p| {
+        .zip(codes)
+        .map(|(p, code)| {
+            code.as_ref()?;
             std::fs::read_to_string(out.join(&p.name).join("summary.json"))
                 .ok()
                 .and_then(|t| serde_json::from_str(&t).ok())
@@ -233,12 +375,19 @@ fn table(
     let mut rows = Vec::new();
     let mut failed = 0;
     for ((p, code), s) in pts.iter().zip(codes).zip(&summaries) {
-        let code = code.unwrap_or(-1);
+        let mut row = vec![p.name.clone()];
+        row.extend(p.values.iter().cloned());
+        let Some(code) = *code else {
+            // Not run yet, or ended with the sweep: no result of it is credited.
+            row.push(String::new());
+            row.push("not finished".into());
+            row.extend(std::iter::repeat_n(String::new(), 1 + 2 * names.len()));
+            rows.push(row);
+            continue;
+        };
         if code != 0 {
             failed += 1;
         }
-        let mut row = vec![p.name.clone()];
-        row.extend(p.values.iter().cloned());
         row.push(code.to_string());
         let num = |v: &serde_json::Value| v.as_f64().map(|x| format!("{x}")).unwrap_or_default();
         match s {

@@ -3,8 +3,9 @@
 //! Place in the flow: used by `scene` (parsing and validation) and later stages (evaluation
 //! at nodes and quadrature points). Expressions are parsed once by the `evalexpr` crate and
 //! evaluated through a small context of our own that knows exactly `x`, `y`, `t`, `pi` and the
-//! functions docs/scene.md §9 lists (`sqrt sin cos tan exp ln abs atan2 min max`), so any other
-//! name is refused when the scene is read, not in the middle of a solve.
+//! functions docs/scene.md §9 lists (`sqrt sin cos tan asin acos atan atan2 exp ln abs min max floor
+//! ceil`), so any other name is refused when the scene is read, not in the middle of a solve.
+//! Messages are the tool's own: the evaluator's internal names never reach the user.
 //!
 //! Integer literals are read as floating-point numbers: `"1/2*x"` means 0.5·x, as an engineer
 //! would expect, not integer division.
@@ -15,11 +16,16 @@ use evalexpr::{
 };
 
 /// Functions an expression may call, with their number of arguments.
-pub const FUNCTIONS: [(&str, usize); 10] = [
+pub const FUNCTIONS: [(&str, usize); 15] = [
     ("sqrt", 1),
     ("sin", 1),
     ("cos", 1),
     ("tan", 1),
+    ("asin", 1),
+    ("acos", 1),
+    ("atan", 1),
+    ("floor", 1),
+    ("ceil", 1),
     ("exp", 1),
     ("ln", 1),
     ("abs", 1),
@@ -105,7 +111,7 @@ impl Expr {
         }
         check_size(text)?;
         let tree = build_operator_tree::<DefaultNumericTypes>(&floats_for_integers(text))
-            .map_err(|e| format!("it does not parse ({e})"))?;
+            .map_err(|e| format!("it does not parse: {}", problem(&e)))?;
         let depth = tree_depth(&tree);
         if depth > MAX_TREE_DEPTH {
             return Err(format!(
@@ -162,8 +168,15 @@ impl Expr {
         match self.tree.eval_with_context(&ctx) {
             Ok(Value::Float(v)) => Ok(v),
             Ok(Value::Int(v)) => Ok(v as f64),
-            Ok(other) => Err(format!("it gives {other:?}, not a number")),
-            Err(e) => Err(format!("it cannot be evaluated ({e})")),
+            Ok(Value::Tuple(v)) => Err(format!(
+                "it gives {} values separated by commas, not one number: a comma belongs \
+                 only between the arguments of atan2, min or max",
+                v.len()
+            )),
+            Ok(Value::Empty) => Err("it gives no value (empty parentheses?)".into()),
+            Ok(_) => Err("it does not give a number".into()),
+            Err(EvalexprError::CustomMessage(m)) => Err(m),
+            Err(e) => Err(format!("it cannot be evaluated: {}", problem(&e))),
         }
     }
 }
@@ -215,6 +228,27 @@ fn check_size(text: &str) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// What is wrong with a text that does not parse or evaluate, in the tool's words.
+fn problem(e: &EvalexprError<DefaultNumericTypes>) -> String {
+    match e {
+        EvalexprError::UnmatchedLBrace | EvalexprError::UnmatchedRBrace => {
+            "its parentheses do not match: every `(` needs a `)`".into()
+        }
+        EvalexprError::MissingOperatorOutsideOfBrace | EvalexprError::AppendedToLeafNode => {
+            "two values stand side by side: write the operator between them (2*x, not 2x \
+             or 2 x)"
+                .into()
+        }
+        EvalexprError::WrongOperatorArgumentAmount { .. } => {
+            "an operator lacks a value on one side (e.g. `x +` or `* y`)".into()
+        }
+        _ => format!(
+            "write arithmetic in x, y, t and pi (+ - * / ^, parentheses) with the functions {}",
+            function_list()
+        ),
+    }
 }
 
 /// Depth of a parsed tree, without recursion.
@@ -308,28 +342,60 @@ impl Context for PointContext {
     }
 
     fn call_function(&self, identifier: &str, argument: &Value) -> EvalexprResult<Value> {
-        let one = |f: fn(f64) -> f64| -> EvalexprResult<Value> {
-            Ok(Value::Float(f(argument.as_number()?)))
+        // The arguments as numbers; a wrong count or a non-number is named in our words.
+        let wanted = FUNCTIONS
+            .iter()
+            .find(|(f, _)| *f == identifier)
+            .map(|(_, n)| *n)
+            .ok_or_else(|| EvalexprError::FunctionIdentifierNotFound(identifier.to_string()))?;
+        let given: Vec<&Value> = match argument {
+            Value::Empty => Vec::new(),
+            Value::Tuple(v) => v.iter().collect(),
+            v => vec![v],
         };
-        let two = |f: fn(f64, f64) -> f64| -> EvalexprResult<Value> {
-            let args = argument.as_fixed_len_tuple(2)?;
-            Ok(Value::Float(f(args[0].as_number()?, args[1].as_number()?)))
+        let args: Option<Vec<f64>> = given.iter().map(|v| v.as_number().ok()).collect();
+        let args = match args {
+            Some(a) if a.len() == wanted => a,
+            _ => {
+                let what = if wanted == 1 {
+                    "one number"
+                } else {
+                    "two numbers"
+                };
+                return Err(EvalexprError::CustomMessage(format!(
+                    "`{identifier}` takes {what}{}, e.g. {identifier}({}); it was given {}",
+                    if wanted == 2 {
+                        " separated by a comma"
+                    } else {
+                        ""
+                    },
+                    if wanted == 1 { "x" } else { "x, y" },
+                    match given.len() {
+                        0 => "none".to_string(),
+                        1 => "one".to_string(),
+                        n => n.to_string(),
+                    }
+                )));
+            }
         };
-        match identifier {
-            "sqrt" => one(f64::sqrt),
-            "sin" => one(f64::sin),
-            "cos" => one(f64::cos),
-            "tan" => one(f64::tan),
-            "exp" => one(f64::exp),
-            "ln" => one(f64::ln),
-            "abs" => one(f64::abs),
-            "atan2" => two(f64::atan2),
-            "min" => two(f64::min),
-            "max" => two(f64::max),
-            _ => Err(EvalexprError::FunctionIdentifierNotFound(
-                identifier.to_string(),
-            )),
-        }
+        let v = match identifier {
+            "sqrt" => args[0].sqrt(),
+            "sin" => args[0].sin(),
+            "cos" => args[0].cos(),
+            "tan" => args[0].tan(),
+            "asin" => args[0].asin(),
+            "acos" => args[0].acos(),
+            "atan" => args[0].atan(),
+            "floor" => args[0].floor(),
+            "ceil" => args[0].ceil(),
+            "exp" => args[0].exp(),
+            "ln" => args[0].ln(),
+            "abs" => args[0].abs(),
+            "atan2" => args[0].atan2(args[1]),
+            "min" => args[0].min(args[1]),
+            _ => args[0].max(args[1]),
+        };
+        Ok(Value::Float(v))
     }
 
     fn are_builtin_functions_disabled(&self) -> bool {
@@ -433,6 +499,60 @@ mod tests {
         assert_eq!(ev("atan2(y, x)", [0.0, 1.0]), std::f64::consts::FRAC_PI_2);
         assert_eq!(ev("min(x, y) + max(x, y)", [2.0, 5.0]), 7.0);
         assert_eq!(ev("-(x+y)^2", [1.0, 1.0]), -4.0);
+    }
+
+    /// The inverse trigonometric and rounding functions SPEC.md lists, against closed values.
+    #[test]
+    fn inverse_trigonometry_and_rounding() {
+        use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_6, PI};
+        let close = |text: &str, want: f64| {
+            let v = ev(text, [0.5, 1.0]);
+            assert!(
+                (v - want).abs() <= 4.0 * f64::EPSILON,
+                "{text} = {v}, want {want}"
+            );
+        };
+        close("atan(1)", FRAC_PI_4);
+        close("atan(y)", FRAC_PI_4);
+        close("atan(-1)", -FRAC_PI_4);
+        close("asin(x)", FRAC_PI_6);
+        close("asin(1)", FRAC_PI_2);
+        close("acos(x)", PI / 3.0);
+        close("acos(-1)", PI);
+        close("acos(0)", FRAC_PI_2);
+        close("floor(2.7) + ceil(2.2)", 5.0);
+        close("floor(-2.5)", -3.0);
+        close("ceil(-2.5)", -2.0);
+        close("floor(x) + ceil(x)", 1.0);
+        close("4*atan(1) - pi", 0.0);
+        // Outside its domain a function is not a number (the scene check refuses it).
+        assert!(ev("asin(2)", [0.0, 0.0]).is_nan());
+    }
+
+    /// Wrong argument counts, tuples and parse errors are told in the tool's words.
+    #[test]
+    fn messages_name_the_function_and_never_the_evaluator() {
+        let cases = [
+            ("min()", "`min` takes two numbers"),
+            ("min(x)", "it was given one"),
+            ("max(x, y, t)", "it was given 3"),
+            ("sin()", "`sin` takes one number"),
+            ("sqrt(x, y)", "it was given 2"),
+            ("atan(1, 2)", "`atan` takes one number"),
+            ("x, y", "2 values separated by commas"),
+            ("(x + 1", "parentheses do not match"),
+            ("x + 1)", "parentheses do not match"),
+            ("2 x", "side by side"),
+            ("x +", "lacks a value"),
+            ("()", "no value"),
+        ];
+        for (text, want) in cases {
+            let e = Expr::parse(text).unwrap_err();
+            assert!(e.contains(want), "{text}: {e}");
+            for internal in ["Value::", "Tuple", "Empty", "Expected", "Node", "token"] {
+                assert!(!e.contains(internal), "{text}: {e}");
+            }
+        }
     }
 
     #[test]

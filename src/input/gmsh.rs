@@ -5,6 +5,7 @@
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::sync::atomic::{AtomicBool, Ordering};
 
 use crate::error::{Error, Result};
 
@@ -24,6 +25,7 @@ pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<Path
             "no such .geo file: check the scene's `mesh`",
         ));
     }
+    check_commands(geo)?;
     std::fs::create_dir_all(dir)
         .map_err(|e| Error::io(dir, format!("cannot create the mesh folder: {e}")))?;
     let stem = geo
@@ -82,4 +84,119 @@ pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<Path
     std::fs::rename(&tmp, &out)
         .map_err(|e| Error::io(&out, format!("cannot write the mesh: {e}")))?;
     Ok(out)
+}
+
+/// A private folder under the system's temporary folder for meshing a `.geo` (so that a
+/// mesh is never written into a folder before the tool knows it may write there), removed
+/// with everything in it when dropped.
+pub struct Scratch {
+    path: PathBuf,
+}
+
+impl Scratch {
+    /// `$TMPDIR/sgbem-WHAT-PID` (not created: gmsh meshing creates it).
+    pub fn new(what: &str) -> Scratch {
+        let path = std::env::temp_dir().join(format!("sgbem-{what}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&path);
+        Scratch { path }
+    }
+
+    pub fn path(&self) -> &Path {
+        &self.path
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.path);
+    }
+}
+
+/// Whether a `.geo` may run commands (`--allow-geo-shell`).
+static SHELL_ALLOWED: AtomicBool = AtomicBool::new(false);
+
+/// Lets `.geo` files that run commands be meshed (the user allowed it explicitly).
+pub fn allow_shell_commands(allowed: bool) {
+    SHELL_ALLOWED.store(allowed, Ordering::Relaxed);
+}
+
+/// gmsh commands of a `.geo` that run other programs.
+const COMMANDS: [&str; 2] = ["SystemCall", "OnelabRun"];
+
+/// The text of a `.geo` without its comments (`// ...` and `/* ... */`), lines kept; with
+/// `blank`, without the contents of its strings too.
+fn without_comments(text: &str, blank: bool) -> String {
+    let (mut out, mut chars) = (String::with_capacity(text.len()), text.chars().peekable());
+    let (mut line, mut block, mut quoted) = (false, false, false);
+    while let Some(c) = chars.next() {
+        let next = chars.peek().copied();
+        if line {
+            if c == '\n' {
+                line = false;
+                out.push(c);
+            }
+        } else if block {
+            if c == '*' && next == Some('/') {
+                block = false;
+                chars.next();
+            } else if c == '\n' {
+                out.push(c);
+            }
+        } else if !quoted && c == '/' && next == Some('/') {
+            line = true;
+        } else if !quoted && c == '/' && next == Some('*') {
+            block = true;
+            chars.next();
+        } else {
+            quoted ^= c == '"';
+            if !(blank && quoted && c != '"') {
+                out.push(c);
+            }
+        }
+    }
+    out
+}
+
+/// Refuses, unless allowed ([`allow_shell_commands`]), a `.geo` (or a file it includes)
+/// that calls a command of [`COMMANDS`]: gmsh would run it as a shell command while meshing.
+pub fn check_commands(geo: &Path) -> Result<()> {
+    if SHELL_ALLOWED.load(Ordering::Relaxed) {
+        return Ok(());
+    }
+    let mut files = vec![geo.to_path_buf()];
+    let mut i = 0;
+    // Includes, followed to a bounded number of files.
+    while i < files.len() && i < 64 {
+        let file = files[i].clone();
+        i += 1;
+        let Ok(text) = std::fs::read_to_string(&file) else {
+            continue;
+        };
+        let (code, text) = (
+            without_comments(&text, true),
+            without_comments(&text, false),
+        );
+        for (n, (c, l)) in code.lines().zip(text.lines()).enumerate() {
+            if let Some(cmd) = COMMANDS.iter().find(|k| c.contains(*k)) {
+                let shown: String = l.trim().chars().take(120).collect();
+                return Err(Error::input(
+                    &file,
+                    format!(
+                        "line {}: `{shown}`: this .geo runs a program through gmsh's {cmd} \
+                         (a shell command, run with your rights while meshing); sgbem refuses \
+                         it unless you allow it: read the file, and if you trust it, give \
+                         --allow-geo-shell (or mesh it yourself and name the .msh)",
+                        n + 1
+                    ),
+                ));
+            }
+            if let Some(rest) = l.trim_start().strip_prefix("Include") {
+                if let Some(name) = rest.split('"').nth(1) {
+                    let dir = file.parent().unwrap_or(Path::new("."));
+                    files.push(dir.join(name));
+                }
+            }
+        }
+    }
+    Ok(())
 }

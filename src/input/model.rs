@@ -806,6 +806,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
     }
     let scale = bbox_diagonal(&all_nodes);
+    check_resolution(mesh, &body_curves, &curve_lines, mfile)?;
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(Error::input(
             mfile,
@@ -870,6 +871,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.dofs = node_dofs(body, &parts);
     }
     align_pair_frames(&bodies, &mut interfaces);
+    check_one_sided(&bodies, &interfaces, &parts, sfile)?;
     check_values(&bodies, &parts, sfile, t0)?;
     check_held(&bodies, &interfaces, sfile, scale)?;
     let sizes = size_stats(&bodies);
@@ -904,6 +906,63 @@ fn list_or_none(names: &[&str]) -> String {
             .collect::<Vec<_>>()
             .join(", ")
     }
+}
+
+/// How far from the origin the body lines lie (largest coordinate), the step with which
+/// floating point resolves coordinates there, and their shortest positive element.
+pub fn resolution(lines: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> (f64, f64, f64) {
+    let (mut far, mut h) = (0.0f64, f64::INFINITY);
+    for (a, b) in lines {
+        far = far
+            .max(a[0].abs())
+            .max(a[1].abs())
+            .max(b[0].abs())
+            .max(b[1].abs());
+        let l = norm(sub(b, a));
+        if l > 0.0 {
+            h = h.min(l);
+        }
+    }
+    (far, far * f64::EPSILON, h)
+}
+
+/// Refuses a mesh so far from the origin that floating point resolves its coordinates to
+/// no better than a tenth of its shortest element (nodes then round onto one another):
+/// the reason, not a symptom (zero-length elements, "duplicate points").
+fn check_resolution(
+    mesh: &Mesh,
+    body_curves: &[BTreeSet<i32>],
+    curve_lines: &HashMap<i32, Vec<usize>>,
+    mfile: &Path,
+) -> Result<()> {
+    let lines = body_curves
+        .iter()
+        .flatten()
+        .flat_map(|c| curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]))
+        .map(|&li| {
+            let n = mesh.lines[li].nodes;
+            (mesh.nodes[n[0]], mesh.nodes[n[1]])
+        });
+    let (far, step, h) = resolution(lines);
+    if !far.is_finite() || (far > 0.0 && !(step <= 0.1 * h)) {
+        let shortest = if h.is_finite() {
+            format!("a tenth of its shortest element ({})", fmt_num(h))
+        } else {
+            "the size of any element (every element has collapsed)".to_string()
+        };
+        return Err(Error::input(
+            mfile,
+            format!(
+                "the mesh lies {} from the origin, where floating point resolves coordinates \
+                 only to {}, more than {shortest}: nodes round onto one another and the \
+                 geometry is lost; move the model near the origin (e.g. Translate in the .geo, \
+                 or subtract a reference point from the coordinates) and mesh again",
+                fmt_num(far),
+                fmt_num(step)
+            ),
+        ));
+    }
+    Ok(())
 }
 
 fn bbox_diagonal(points: &[[f64; 2]]) -> f64 {
@@ -1004,6 +1063,19 @@ fn build_body(
         match inc.len() {
             2 => {}
             1 => {
+                // Two nodes at one point, each ending a curve: duplicates, not a gap.
+                let ends = |m: usize| {
+                    let curve = elements[incident[m][0]].curve;
+                    (mesh.node_tags[mesh_nodes[m]], nodes[m], curve)
+                };
+                let twin = (0..nodes.len()).find(|&m| {
+                    m != n
+                        && incident[m].len() == 1
+                        && norm(sub(nodes[m], nodes[n])) <= 1e-12 * scale
+                });
+                if let Some(m) = twin {
+                    return Err(duplicate_nodes(mfile, name, ends(n), ends(m)));
+                }
                 return Err(Error::input(
                     mfile,
                     format!(
@@ -1012,7 +1084,7 @@ fn build_body(
                     fmt_point(nodes[n]),
                     elements[inc[0]].curve
                 ),
-                ))
+                ));
             }
             k => {
                 let curves: BTreeSet<i32> = inc.iter().map(|&e| elements[e].curve).collect();
@@ -1883,6 +1955,72 @@ fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
     }
 }
 
+/// A displacement condition that reaches an interface node must hold both sides of the
+/// pair along each of the pair's directions, or neither (the assembly cannot join a known
+/// displacement on one side to an unknown one on the other): refused here, so that `check`
+/// says what `run` would.
+fn check_one_sided(
+    bodies: &[Body],
+    interfaces: &[Interface],
+    parts: &[Part],
+    sfile: &Path,
+) -> Result<()> {
+    // The share of direction e that the known components of a node cover (0 to 1).
+    let known = |b: &Body, n: usize, e: [f64; 2]| -> f64 {
+        let d = b.dofs[n];
+        (0..2)
+            .filter(|&k| d.class[k] == DofClass::Known)
+            .map(|k| dot(d.frame[k], e).powi(2))
+            .sum()
+    };
+    // The boundary conditions of a body that reach node n.
+    let held_by = |b: &Body, n: usize| -> Vec<String> {
+        let mut names: Vec<String> = b
+            .elements
+            .iter()
+            .filter(|e| e.nodes.contains(&n))
+            .flat_map(|e| constrained_directions(e, parts))
+            .map(|(_, pi, _)| parts[pi].spec.name.clone())
+            .collect();
+        names.dedup();
+        names
+    };
+    for it in interfaces {
+        let (a, b) = (&bodies[it.body_a], &bodies[it.body_b]);
+        for p in &it.pairs {
+            for (e, what) in [(p.normal, "normal"), (p.tangent, "tangential")] {
+                let (ka, kb) = (known(a, p.node_a, e), known(b, p.node_b, e));
+                let whole = |k: f64| !(1e-9..=1.0 - 1e-9).contains(&k);
+                if whole(ka) && whole(kb) && (ka > 0.5) == (kb > 0.5) {
+                    continue;
+                }
+                let (held, loose) = if ka >= kb { (a, b) } else { (b, a) };
+                let node = if ka >= kb { p.node_a } else { p.node_b };
+                let by = held_by(held, node)
+                    .iter()
+                    .map(|n| format!("`boundary.{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{}\" at {}: {by} prescribes the {what} displacement of body \
+                         \"{}\" there, but nothing prescribes it on body \"{}\" across the \
+                         interface: a displacement component at an interface node is prescribed \
+                         on both bodies or on neither; extend the condition to the other body's \
+                         boundary that ends there, or end it before the interface",
+                        it.spec.name,
+                        fmt_point(p.x),
+                        held.name,
+                        loose.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Prescribed values must be finite at every node of their part.
 fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path, t: f64) -> Result<()> {
     for body in bodies {
@@ -1927,6 +2065,28 @@ fn check_values(bodies: &[Body], parts: &[Part], sfile: &Path, t: f64) -> Result
         }
     }
     Ok(())
+}
+
+/// The error for two nodes `(tag, point, curve)` of body `name` at one point.
+fn duplicate_nodes(
+    mfile: &Path,
+    name: &str,
+    a: (usize, [f64; 2], i32),
+    b: (usize, [f64; 2], i32),
+) -> Error {
+    Error::input(
+        mfile,
+        format!(
+            "nodes {} and {} of body \"{name}\" are duplicates: both lie at {} (ends of curves {} \
+             and {}), so the boundary does not join there; merge them (gmsh: Coherence; or one \
+             Point per corner in the .geo, or Geometry.Tolerance)",
+            a.0,
+            b.0,
+            fmt_point(a.1),
+            a.2,
+            b.2
+        ),
+    )
 }
 
 /// Every group of bodies linked by interfaces must be held against all rigid motions by its

@@ -370,12 +370,27 @@ pub fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
 /// value (number, string, boolean, array, inline table); anything that is not one is taken
 /// as a bare string, so `--set solve.method=qp` works without quotes.
 pub fn parse_set(set: &str) -> std::result::Result<(Vec<String>, toml::Value), String> {
-    let Some((key, value)) = set.split_once('=') else {
+    let whole = set;
+    let set = &shown_set(set);
+    let Some((key, value)) = whole.split_once('=') else {
         return Err(format!(
             "--set {set}: expected KEY=VALUE, e.g. --set interface.joint.cohesion=2.0"
         ));
     };
     let key = key.trim();
+    // Every key of a scene is at most four levels deep (defaults.interface.NAME.KEY);
+    // bounding the path keeps a hostile key from exhausting the stack or memory.
+    const MAX_PARTS: usize = 8;
+    const MAX_KEY: usize = 512;
+    if key.len() > MAX_KEY || key.split('.').count() > MAX_PARTS {
+        return Err(format!(
+            "--set {set}: the key has {} characters and {} dotted parts; a scene key has \
+             at most {MAX_PARTS} parts and {MAX_KEY} characters (e.g. \
+             interface.joint.cohesion=2.0)",
+            key.len(),
+            key.split('.').count()
+        ));
+    }
     let path: Vec<String> = key.split('.').map(|k| k.trim().to_string()).collect();
     if path.iter().any(|k| k.is_empty()) {
         return Err(format!(
@@ -405,7 +420,16 @@ fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result<(), String
             doc.insert("mesh".into(), toml::Value::Table(t));
         }
     }
-    set_path(doc, &path, 0, &value, set)
+    set_path(doc, &path, 0, &value, &shown_set(set))
+}
+
+/// A `--set` as messages show it: whole up to 100 characters, else its start and length.
+pub fn shown_set(set: &str) -> String {
+    if set.chars().count() <= 100 {
+        return set.to_string();
+    }
+    let start: String = set.chars().take(80).collect();
+    format!("{start}… ({} characters)", set.len())
 }
 
 /// Sets `path[i..]` below `table` (the keys before `i` already walked). A `*` segment stands
@@ -501,7 +525,10 @@ pub fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scen
                     if m.starts_with("--set ") {
                         return Err(e);
                     }
-                    return Err(Error::input(path, format!("--set {}: {m}", sets[k - 1])));
+                    return Err(Error::input(
+                        path,
+                        format!("--set {}: {m}", shown_set(&sets[k - 1])),
+                    ));
                 }
             }
             Err(e)
@@ -1445,6 +1472,19 @@ fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
                 return Err(err(format!(
                     "`solve.collapse.tolerance` = {tol} must be positive and below max = {}",
                     c.max
+                )));
+            }
+            // Bisection halves [lo, hi] within [0, max]; below a few units in the last place
+            // of max, the midpoint is lo or hi again and the search would never end.
+            let finest = 4.0 * f64::EPSILON * c.max;
+            if tol < finest {
+                return Err(err(format!(
+                    "`solve.collapse.tolerance` = {} is finer than floating point can \
+                     resolve a load multiplier up to max = {} (the bisection would never end): \
+                     give a tolerance of at least {}",
+                    crate::input::model::fmt_num(tol),
+                    crate::input::model::fmt_num(c.max),
+                    crate::input::model::fmt_num(finest * 1.001)
                 )));
             }
             Some(Collapse {

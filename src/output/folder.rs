@@ -1,14 +1,17 @@
-//! The run folder: always exactly one whole run.
+//! The run folder: always exactly one whole run, and never a file the tool did not write.
 //!
 //! A run writes into a staging folder beside the target (`.NAME.staging-PID`) and, when
-//! every file is complete, syncs it once (all files at a time) and swaps it in place of the target (the old folder is renamed
-//! aside, then removed), so an interrupted run leaves the previous folder untouched and a
-//! re-run leaves no stale file of an older one. An existing folder holding anything a run
-//! does not write is refused (input error), never replaced. A lock file beside the target
-//! (`.NAME.lock`, holding the process id) refuses a second run into the same folder while
-//! the first is alive; a lock whose process is gone is taken over, and the staging folders
-//! such a process left (SIGKILL) are removed. SIGINT and SIGTERM
-//! remove the staging folder and the lock before the process ends (exit 130).
+//! every file is complete, marks it as the tool's (`.sgbem-run.json` lists every file
+//! written: [`super::owned`]), syncs it once (all files at a time) and swaps it in place of
+//! the target (the old folder is renamed aside, then loses the files its own marker lists),
+//! so an interrupted run leaves the previous folder untouched and a re-run leaves no stale
+//! file of an older one. An existing folder holding anything its marker does not list (or
+//! anything at all, without a marker) is refused (input error, naming those files), never
+//! replaced. A lock beside the target (`.NAME.lock`, locked with `flock`, so the kernel
+//! releases it whenever the process ends) refuses a second run into the same folder while
+//! the first is alive; the staging folders a killed run left are removed by the next one.
+//! SIGINT and SIGTERM remove the staging folder and the lock file before the process ends
+//! (exit 130).
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -25,9 +28,23 @@ fn cleanup_list() -> std::sync::MutexGuard<'static, Vec<PathBuf>> {
 
 fn remove_path(p: &Path) {
     if p.is_dir() {
-        let _ = std::fs::remove_dir_all(p);
+        // A writer thread may still add a file while the folder is removed: try again.
+        for _ in 0..20 {
+            if std::fs::remove_dir_all(p).is_ok() || !p.exists() {
+                break;
+            }
+            std::thread::sleep(std::time::Duration::from_millis(10));
+        }
     } else {
         let _ = std::fs::remove_file(p);
+    }
+}
+
+/// Removes the staging folder and the lock file of the run in progress (a process about
+/// to end abruptly: a signal, a failed allocation); the folder itself stays as it was.
+pub fn remove_unfinished() {
+    for p in cleanup_list().iter() {
+        remove_path(p);
     }
 }
 
@@ -36,9 +53,7 @@ fn install_signal_cleanup() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
         let _ = ctrlc::set_handler(|| {
-            for p in cleanup_list().iter() {
-                remove_path(p);
-            }
+            remove_unfinished();
             let _ = writeln!(
                 std::io::stderr(),
                 "sgbem: interrupted: the run folder was left as it was"
@@ -48,31 +63,9 @@ fn install_signal_cleanup() {
     });
 }
 
-/// Names a run writes into its folder.
-const RUN_ENTRIES: [&str; 7] = [
-    "summary.json",
-    "timings.json",
-    "archive.h5",
-    "vtk",
-    "interfaces",
-    "sections",
-    "mesh",
-];
-
-/// The first entry of an existing `target` that a run does not write (so the folder is not
-/// a run folder, and replacing it would lose data); None for a new, empty or run folder.
-fn foreign_entry(target: &Path) -> Option<String> {
-    let entries = std::fs::read_dir(target).ok()?;
-    entries
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .find(|n| {
-            !(RUN_ENTRIES.contains(&n.as_str()) || (n.starts_with('.') && n.ends_with(".tmp")))
-        })
-}
-
-/// Removes the staging and set-aside folders of runs into `target` whose process is gone
-/// (killed with SIGKILL, or the machine stopped); the caller holds the lock.
+/// Removes the staging and set-aside folders that runs into `target` left (killed with
+/// SIGKILL, or the machine stopped): the caller holds the lock, so no live run owns any.
+/// A set-aside folder loses only what its marker lists.
 fn remove_leftovers(target: &Path, parent: &Path) {
     let name = target
         .file_name()
@@ -83,14 +76,18 @@ fn remove_leftovers(target: &Path, parent: &Path) {
     };
     for entry in entries.flatten() {
         let file = entry.file_name().to_string_lossy().into_owned();
-        let pid = [".staging-", ".old-"].iter().find_map(|kind| {
-            file.strip_prefix(&format!(".{name}{kind}"))
-                .and_then(|p| p.parse::<u32>().ok())
-        });
-        if let Some(pid) = pid {
-            if pid == std::process::id() || !process_alive(pid) {
-                remove_path(&entry.path());
-            }
+        let kind = |k: &str| {
+            file.strip_prefix(&format!(".{name}.{k}-"))
+                .is_some_and(|p| p.parse::<u32>().is_ok())
+        };
+        if kind("staging") {
+            remove_path(&entry.path());
+        } else if kind("old") {
+            let listed = match super::owned::owner(&entry.path()) {
+                Ok(Some(o)) if o.prefix.is_empty() => o.entries,
+                _ => continue,
+            };
+            super::owned::remove_listed(&entry.path(), &listed);
         }
     }
 }
@@ -99,12 +96,12 @@ fn remove_leftovers(target: &Path, parent: &Path) {
 pub struct RunFolder {
     target: PathBuf,
     staging: PathBuf,
-    lock: PathBuf,
+    lock: Lock,
     committed: bool,
 }
 
 /// `.NAME.SUFFIX` beside `target`.
-fn beside(target: &Path, suffix: &str) -> PathBuf {
+pub(crate) fn beside(target: &Path, suffix: &str) -> PathBuf {
     let name = target
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())
@@ -112,12 +109,81 @@ fn beside(target: &Path, suffix: &str) -> PathBuf {
     target.with_file_name(format!(".{name}.{suffix}"))
 }
 
-fn process_alive(pid: u32) -> bool {
-    Path::new("/proc").join(pid.to_string()).exists()
+/// The lock of a folder: `.NAME.lock` beside it, locked with `flock` (the kernel releases
+/// it when the process ends, however it ends). The file holds the process id, for the
+/// message of a refused run only; the holder removes it before unlocking, so a run that
+/// locked a file no longer at the path tries again.
+pub(crate) struct Lock {
+    path: PathBuf,
+    file: Option<std::fs::File>,
+}
+
+impl Lock {
+    pub(crate) fn take(path: &Path, target: &Path) -> Result<Lock> {
+        use std::os::unix::fs::MetadataExt;
+        for _ in 0..100 {
+            let file = std::fs::OpenOptions::new()
+                .read(true)
+                .write(true)
+                .create(true)
+                .truncate(false)
+                .open(path)
+                .map_err(|e| Error::io(path, format!("cannot create the lock file: {e}")))?;
+            match file.try_lock() {
+                Ok(()) => {}
+                Err(std::fs::TryLockError::WouldBlock) => {
+                    let holder = std::fs::read_to_string(path)
+                        .map(|t| format!(" (process {})", t.trim()))
+                        .unwrap_or_default();
+                    return Err(Error::io(
+                        target,
+                        format!(
+                            "another sgbem run{holder} is writing this folder: wait for it \
+                             to finish, or give this run another --out (lock file {})",
+                            path.display()
+                        ),
+                    ));
+                }
+                Err(std::fs::TryLockError::Error(e)) => {
+                    return Err(Error::io(path, format!("cannot lock the folder: {e}")))
+                }
+            }
+            // The file locked must still be the one at the path (a holder removes it).
+            let same = match (file.metadata(), std::fs::metadata(path)) {
+                (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
+                _ => false,
+            };
+            if same {
+                let _ = file.set_len(0);
+                let _ = (&file).write_all(format!("{}\n", std::process::id()).as_bytes());
+                return Ok(Lock {
+                    path: path.to_path_buf(),
+                    file: Some(file),
+                });
+            }
+        }
+        Err(Error::io(
+            path,
+            "cannot take the lock file: it keeps being replaced; is another program \
+             writing it?",
+        ))
+    }
+}
+
+impl Drop for Lock {
+    fn drop(&mut self) {
+        if self.file.is_some() {
+            let _ = std::fs::remove_file(&self.path);
+        }
+        // Closing the file releases the lock.
+        self.file = None;
+    }
 }
 
 impl RunFolder {
-    /// Takes the lock of `target` and creates an empty staging folder beside it.
+    /// Takes the lock of `target`, checks that the tool may replace it (new, empty, or
+    /// holding only what its marker lists: [`super::owned`]), and creates an empty staging
+    /// folder beside it.
     pub fn acquire(target: &Path) -> Result<RunFolder> {
         let target = if target.file_name().is_none() {
             // "out/" or "." : name the folder itself.
@@ -131,16 +197,7 @@ impl RunFolder {
                 "the output path is a file, not a folder: remove it or choose another --out",
             ));
         }
-        if let Some(stranger) = foreign_entry(&target) {
-            return Err(Error::input(
-                &target,
-                format!(
-                    "the output folder exists and holds `{stranger}`, which no sgbem run \
-                     writes: a run replaces its whole folder, so give --out (or \
-                     output.directory) a new or former run folder"
-                ),
-            ));
-        }
+        check_replaceable(&target)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
@@ -148,59 +205,11 @@ impl RunFolder {
         std::fs::create_dir_all(&parent)
             .map_err(|e| Error::io(&parent, format!("cannot create the folder: {e}")))?;
         install_signal_cleanup();
-        let pid = std::process::id();
-        let lock = beside(&target, "lock");
-        let mut taken = false;
-        for _ in 0..2 {
-            match std::fs::OpenOptions::new()
-                .write(true)
-                .create_new(true)
-                .open(&lock)
-            {
-                Ok(mut f) => {
-                    let _ = writeln!(f, "{pid}");
-                    taken = true;
-                    break;
-                }
-                Err(e) if e.kind() == std::io::ErrorKind::AlreadyExists => {
-                    let holder = std::fs::read_to_string(&lock)
-                        .ok()
-                        .and_then(|t| t.trim().parse::<u32>().ok());
-                    match holder {
-                        Some(p) if p != pid && process_alive(p) => {
-                            return Err(Error::io(
-                                &target,
-                                format!(
-                                    "another sgbem run (process {p}) is writing this folder: \
-                                     wait for it to finish, or give this run another --out \
-                                     (lock file {})",
-                                    lock.display()
-                                ),
-                            ));
-                        }
-                        // The process that held it is gone: the lock is stale.
-                        _ => {
-                            let _ = std::fs::remove_file(&lock);
-                        }
-                    }
-                }
-                Err(e) => {
-                    return Err(Error::io(
-                        &lock,
-                        format!("cannot create the lock file: {e}"),
-                    ))
-                }
-            }
-        }
-        if !taken {
-            return Err(Error::io(
-                &lock,
-                "cannot take the lock file: remove it if no sgbem run is writing this folder",
-            ));
-        }
-        cleanup_list().push(lock.clone());
+        let lock_path = beside(&target, "lock");
+        let lock = Lock::take(&lock_path, &target)?;
+        cleanup_list().push(lock_path);
         remove_leftovers(&target, &parent);
-        let staging = beside(&target, &format!("staging-{pid}"));
+        let staging = beside(&target, &format!("staging-{}", std::process::id()));
         remove_path(&staging);
         cleanup_list().push(staging.clone());
         let folder = RunFolder {
@@ -224,10 +233,24 @@ impl RunFolder {
         &self.target
     }
 
-    /// Syncs the complete staging folder (every file and folder, many at a time:
-    /// [`super::sync_tree`]) and swaps it in place of the target, then syncs the parent
-    /// folder so that the swap itself is durable.
+    /// Marks the staging folder as the tool's, syncs it (every file and folder, many at a
+    /// time: [`super::sync_tree`]) and swaps it in place of the target (checked again: the
+    /// user may have added a file meanwhile), then syncs the parent folder so that the swap
+    /// itself is durable. Of the previous folder only the entries its marker lists are
+    /// removed.
     pub fn commit(mut self) -> Result<()> {
+        use super::owned;
+        let written = owned::listing(&self.staging);
+        let previous = check_replaceable(&self.target)?;
+        // A folder owned through its parent's marker (an export into a run's vtk/) is
+        // listed there; any other gets a marker of its own.
+        let in_parent = previous.as_ref().filter(|o| !o.prefix.is_empty());
+        if in_parent.is_none() {
+            super::write_staged(
+                &self.staging.join(owned::MARKER),
+                owned::marker_text(&written).as_bytes(),
+            )?;
+        }
         super::sync_tree(&self.staging).map_err(|(p, e)| {
             Error::io(
                 &p,
@@ -255,6 +278,16 @@ impl RunFolder {
             ));
         }
         self.committed = true;
+        if let Some(o) = in_parent {
+            let mut entries: std::collections::BTreeSet<String> = o
+                .entries
+                .iter()
+                .filter(|e| !e.starts_with(&o.prefix) || **e == o.prefix)
+                .cloned()
+                .collect();
+            entries.extend(written.iter().map(|w| format!("{}{w}", o.prefix)));
+            super::write_atomic(&o.marker, owned::marker_text(&entries).as_bytes())?;
+        }
         // The new folder is in place; syncing its parent makes the rename durable. A failure
         // here leaves a complete run whose swap a crash might undo: not worth an error.
         if let Some(parent) = self.target.parent() {
@@ -266,9 +299,26 @@ impl RunFolder {
             let _ = super::sync_paths(&[parent.to_path_buf()]);
         }
         if had_old {
-            remove_path(&old);
+            let listed = previous.map(|o| o.inside()).unwrap_or_default();
+            owned::remove_listed(&old, &listed);
         }
         Ok(())
+    }
+}
+
+/// Refuses (input error, naming them) a `target` holding entries its marker does not
+/// list; returns that marker's owner (None for a new or empty folder).
+fn check_replaceable(target: &Path) -> Result<Option<super::owned::Owner>> {
+    use super::owned;
+    let owner = owned::owner(target)?;
+    if !target.is_dir() {
+        return Ok(owner);
+    }
+    let strangers = owned::foreign(target, owner.as_ref());
+    if strangers.is_empty() {
+        Ok(owner)
+    } else {
+        Err(owned::refusal(target, &strangers, owner.is_some()))
     }
 }
 
@@ -277,7 +327,6 @@ impl Drop for RunFolder {
         if !self.committed {
             remove_path(&self.staging);
         }
-        remove_path(&self.lock);
-        cleanup_list().retain(|p| *p != self.staging && *p != self.lock);
+        cleanup_list().retain(|p| *p != self.staging && *p != self.lock.path);
     }
 }

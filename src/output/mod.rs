@@ -13,6 +13,7 @@
 pub mod archive;
 pub mod csv;
 pub mod folder;
+pub mod owned;
 pub mod progress;
 pub mod record;
 pub mod summary;

@@ -220,7 +220,17 @@ fn collection(entries: impl Iterator<Item = (f64, usize, String)>) -> String {
 /// `sgbem export`: reads an archive and writes its VTK files into `dir`.
 pub fn export(archive: &Path, dir: &Path) -> Result<Vec<PathBuf>> {
     let rec = super::archive::read_archive(archive)?;
-    write_vtk(dir, &rec)
+    // The folder is written whole, as a run folder is: no file of a longer earlier export
+    // is left, and nothing the tool did not write is replaced (output/folder.rs).
+    let folder = super::folder::RunFolder::acquire(dir)?;
+    let files = write_vtk_staged(folder.staging(), &rec)?;
+    let files = files
+        .iter()
+        .filter_map(|f| f.file_name())
+        .map(|n| folder.target().join(n))
+        .collect();
+    folder.commit()?;
+    Ok(files)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -43,6 +43,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod equilibrium;
+pub mod plausibility;
 
 use std::collections::HashMap;
 

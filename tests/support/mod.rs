@@ -322,3 +322,24 @@ pub fn peak_kb() -> u64 {
 pub fn reset_peak() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
+
+/// `sgbem run SCENE --mesh MESH --out OUT --quiet`.
+pub fn run_quiet(scene: &Path, mesh: &Path, out: &Path) -> (i32, String, String) {
+    let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let (scene, mesh, out) = (s(scene), s(mesh), s(out));
+    sgbem(&["run", &scene, "--mesh", &mesh, "--out", &out, "--quiet"])
+}
+
+/// Asserts an exit status, no panic, and (on failure) a message on stderr that starts
+/// with `sgbem: ` and names every word.
+pub fn expect_exit(out: &(i32, String, String), code: i32, words: &[&str]) {
+    let (c, _, err) = out;
+    assert_eq!(*c, code, "exit status; stderr: {err}");
+    assert!(!err.contains("panicked"), "{err}");
+    if code != 0 {
+        assert!(err.starts_with("sgbem: "), "{err}");
+    }
+    for w in words {
+        assert!(err.contains(w), "message should say {w:?}: {err}");
+    }
+}
