@@ -524,7 +524,7 @@ pub fn fmt_seconds(s: f64) -> String {
     }
 }
 
-/// True while [`probe`] reserves memory: a failure then is an answer, not an end (the
+/// True while `probe` reserves memory: a failure then is an answer, not an end (the
 /// program's allocator ends the process on a failed large allocation otherwise).
 pub static PROBING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
 

@@ -320,7 +320,7 @@ fn check_fits_and_keep_mesh(
         let dest = folder.staging().join("mesh");
         std::fs::create_dir_all(&dest)
             .map_err(|e| Error::io(&dest, format!("cannot create the mesh folder: {e}")))?;
-        for entry in std::fs::read_dir(&meshed).into_iter().flatten().flatten() {
+        for entry in std::fs::read_dir(meshed).into_iter().flatten().flatten() {
             let _ = std::fs::copy(entry.path(), dest.join(entry.file_name()));
         }
     }

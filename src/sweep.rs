@@ -250,6 +250,7 @@ fn remove_stale_points(out: &Path, pts: &[Point]) {
 
 /// Runs the points `jobs` at a time; each point's exit code, None for a point that did not
 /// finish (a signal ended the sweep).
+#[allow(clippy::type_complexity)]
 fn run_points(
     exe: &Path,
     scene_path: &Path,

@@ -100,7 +100,8 @@ fn a_run_folder_loses_only_the_files_its_marker_lists() {
     assert_eq!(tree(&out), first);
     // A user's file under vtk/, a folder where the archive was, a symbolic link: each is
     // named, and the folder is left exactly as it was.
-    let hostile: [(&str, &dyn Fn(&Path)); 3] = [
+    type Spoil<'a> = (&'a str, &'a dyn Fn(&Path));
+    let hostile: [Spoil; 3] = [
         ("vtk/notes.txt", &|o| {
             std::fs::write(o.join("vtk/notes.txt"), "mine").unwrap()
         }),

@@ -1136,7 +1136,7 @@ fn solve_inner(
     st: &StepState,
     (budget, max_iterations): (usize, usize),
     lp: &mut StepLoop,
-) -> Result<InnerOutcome, (InnerFailure, InnerOutcome)> {
+) -> Result<InnerOutcome, (InnerFailure, Box<InnerOutcome>)> {
     let it0 = lp.iterations_recorded;
     match inner_solve(inner, cols, sparse, method, st, budget, lp) {
         Ok(outcome)
@@ -1151,7 +1151,7 @@ fn solve_inner(
         Err(e) => {
             let probe =
                 evolutive::solve(inner, cols, &st.open, &st.sign, max_iterations, &mut |_| {});
-            Err((e, probe))
+            Err((e, Box::new(probe)))
         }
     }
 }

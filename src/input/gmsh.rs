@@ -158,7 +158,7 @@ fn without_comments(text: &str, blank: bool) -> String {
 }
 
 /// Refuses, unless allowed ([`allow_shell_commands`]), a `.geo` (or a file it includes)
-/// that calls a command of [`COMMANDS`]: gmsh would run it as a shell command while meshing.
+/// that calls a command of `COMMANDS`: gmsh would run it as a shell command while meshing.
 pub fn check_commands(geo: &Path) -> Result<()> {
     if SHELL_ALLOWED.load(Ordering::Relaxed) {
         return Ok(());

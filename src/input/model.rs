@@ -944,7 +944,7 @@ fn check_resolution(
             (mesh.nodes[n[0]], mesh.nodes[n[1]])
         });
     let (far, step, h) = resolution(lines);
-    if !far.is_finite() || (far > 0.0 && !(step <= 0.1 * h)) {
+    if !far.is_finite() || (far > 0.0 && (step > 0.1 * h || step.is_nan())) {
         let shortest = if h.is_finite() {
             format!("a tenth of its shortest element ({})", fmt_num(h))
         } else {
