@@ -483,8 +483,9 @@ fn a_locked_folder_refuses_the_run_before_meshing() {
     let s = scene.to_str().unwrap();
     let out = dir.join("run");
     let lock = dir.join(".run.lock");
-    // A live process (this test) holds the lock.
-    std::fs::write(&lock, format!("{}\n", std::process::id())).unwrap();
+    // A live process (this test) holds the lock: an flock on the lock file.
+    let held = std::fs::File::create(&lock).unwrap();
+    held.lock().unwrap();
     // A fine mesh: meshing and building the model would take a while.
     let start = std::time::Instant::now();
     let (code, _, err) = run(&[s, "--out", out.to_str().unwrap(), "--set", "mesh.n=200"]);
@@ -509,15 +510,17 @@ fn a_locked_folder_refuses_the_run_before_meshing() {
     eprintln!("refused after {seconds:.3} s");
     // The scene's own folder (output.directory) is locked the same way.
     let own = geo_scene(&dir, "[output]\ndirectory = \"own\"\n");
-    std::fs::write(dir.join(".own.lock"), format!("{}\n", std::process::id())).unwrap();
+    let held_own = std::fs::File::create(dir.join(".own.lock")).unwrap();
+    held_own.lock().unwrap();
     let (code, _, err) = run(&[own.to_str().unwrap()]);
     assert_eq!(code, 1, "{err}");
     assert!(
         err.contains(".own.lock") && !dir.join("own").exists(),
         "{err}"
     );
-    // Once the lock is gone the same run goes through and meshes into its folder.
-    std::fs::remove_file(&lock).unwrap();
+    // Once the lock is released the same run goes through and meshes into its folder.
+    drop(held);
+    drop(held_own);
     let (code, _, err) = run(&[s, "--out", out.to_str().unwrap()]);
     assert_eq!(code, 0, "{err}");
     assert!(out.join("mesh").join("two_blocks.msh").is_file());

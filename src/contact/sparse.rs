@@ -198,6 +198,8 @@ impl SparseSystem {
             .collect();
         let same = matches!(&self.last, Some((o, g, _)) if *o == open && *g == reg);
         if !same {
+            // The old factor goes first: two at once would double the peak memory.
+            self.last = None;
             let llt = self.factor(&open, reg);
             self.last = Some((open.clone(), reg, llt));
         }
