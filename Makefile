@@ -95,6 +95,8 @@ test: setup mesh lint
 	@# (with ParaView installed also view.py and the VTK series in pvpython; skipped otherwise)
 	$(PY) -m pytest -q -rs python/tests
 	$(PY) pipelines/check_meshes.py $(SGBEM) $(MESHES)
+	@# out/test/ is this target's own scratch folder: its runs start afresh.
+	rm -rf out/test
 	$(SGBEM) run pipelines/clamped_beam_joint.toml --out out/test/clamped_beam_joint --quiet
 	$(PY) pipelines/check_outputs.py out/test/clamped_beam_joint
 	@# A multi-body, multi-step, frictional run: history, VTK and archive agree at every step.
