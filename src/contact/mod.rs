@@ -1017,6 +1017,16 @@ fn inner_solve(
                 });
             };
             let mut out = sparse::solve(inner, sys, &st.open, &st.sign, budget);
+            if out.stalled && inner.n() > EVOLUTIVE_FALLBACK_ROWS {
+                // The evolutive path's columns cost the square of the rows: at this size the
+                // step ends here, not converged, with the reason in its notes.
+                out.notes.push(format!(
+                    "the evolutive path does not take over above {EVOLUTIVE_FALLBACK_ROWS} rows \
+                     ({} here)",
+                    inner.n()
+                ));
+                return Ok(out);
+            }
             Ok(if out.stalled {
                 // The evolutive path starts again from the step's statuses, with the whole
                 // budget: the sparse iterates may have gone far from a solution.
@@ -1205,6 +1215,10 @@ fn bound_change(old: &[f64], new: &[f64]) -> f64 {
         })
     })
 }
+
+/// Rows above which the evolutive path does not take over where the sparse active set stops
+/// (its dense columns would cost about 8 n² bytes and hours).
+const EVOLUTIVE_FALLBACK_ROWS: usize = 40_000;
 
 /// Outer iterations of the Tresca fixed point taken whole whatever happens; after them, a
 /// change of the bounds that does not fall (an oscillating fixed point: large μ, where the
