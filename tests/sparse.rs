@@ -256,3 +256,31 @@ fn collapse_multipliers_grow_with_friction_towards_stick() {
         "{multipliers:?}"
     );
 }
+
+/// A scene without `method` is solved by the sparse solver above 3000 unilateral pairs (the
+/// 203-brick wall: 3 871) and by the evolutive path below (the 105-brick wall: 1 925); a
+/// `method` given wins. `sgbem check` says which.
+#[test]
+fn the_method_follows_the_size_unless_given() {
+    let scene = root().join("pipelines/wall_running_bond.toml");
+    let s = scene.to_str().unwrap();
+    let method = |sets: &[&str]| -> String {
+        let mut args = vec!["check", s];
+        for x in sets {
+            args.push("--set");
+            args.push(x);
+        }
+        let (code, out, err) = sgbem(&args);
+        assert_eq!(code, 0, "{err}");
+        out.lines()
+            .find_map(|l| l.trim().strip_prefix("method:"))
+            .map(|m| m.trim().to_string())
+            .unwrap_or_else(|| panic!("no method line in {out}"))
+    };
+    assert_eq!(method(&[]), "lcp");
+    assert_eq!(method(&["mesh.courses=14", "mesh.bricks=14"]), "sparse");
+    assert_eq!(
+        method(&["mesh.courses=14", "mesh.bricks=14", "solve.method=lcp"]),
+        "lcp"
+    );
+}
