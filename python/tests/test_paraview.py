@@ -28,8 +28,15 @@ print("time", GetAnimationScene().AnimationTime, GetActiveView().ViewTime)
 
 
 def pvpython(*args):
-    proc = subprocess.run(["xvfb-run", "-a", "pvpython", *map(str, args)], capture_output=True,
-                          text=True, timeout=300, check=False)
+    # xvfb-run -a can hand two servers started close together the same display; ParaView then
+    # aborts creating its window before it reads anything. That failure of the X server (and
+    # only that one) is tried again, once, with a new server.
+    for _ in range(2):
+        proc = subprocess.run(["xvfb-run", "-a", "pvpython", *map(str, args)],
+                              capture_output=True, text=True, timeout=300, check=False)
+        no_window = "CreateAWindow" in proc.stderr or "cannot open display" in proc.stderr
+        if proc.returncode == 0 or not no_window:
+            break
     assert proc.returncode == 0, f"pvpython {args}: exit {proc.returncode}\n{proc.stderr[-3000:]}"
     return proc.stdout
 

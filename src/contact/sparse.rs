@@ -12,14 +12,14 @@
 //!
 //! with `U_b = T_b w` plus the closed gaps (`Problem::dof_unknowns`), `c` the gradient at
 //! w = 0 with the rows' cohesion terms (`Problem::linear_term`). H is sparse (bodies couple
-//! only through their rows) and its pattern does not depend on the statuses. A status is
-//! solved by one sparse Cholesky factorisation of H with the closed rows pinned (their rows
-//! and columns replaced by the identity, their openings fixed at the offset): the pattern,
-//! hence the symbolic factorisation, is the same for every status.
+//! only through their rows). A status is solved by one sparse Cholesky factorisation of H
+//! over the glued displacements and the openings of its open rows, the closed rows' openings
+//! fixed at their offsets and left out of the factor (on a wall most rows are closed, and
+//! their couplings would only add fill).
 //!
 //! The statuses are found by the primal–dual active set iteration (semismooth Newton,
 //! Hintermüller–Ito–Kunisch): every violated row switches at once. It usually ends in a few
-//! iterations; a repeated status or a status that leaves a body free (the pinned H is not
+//! iterations; a repeated status or a status that leaves a body free (the reduced H is not
 //! positive definite) ends it without a verdict (`stalled`), and the driver hands over to
 //! the evolutive iteration.
 
@@ -27,7 +27,7 @@ use std::collections::HashSet;
 
 use faer::linalg::solvers::Solve;
 use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
 use faer::{Mat, Side};
 
 use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState};
@@ -39,7 +39,6 @@ pub struct SparseSystem {
     /// Rows that can open.
     n: usize,
     h: SparseColMat<usize, f64>,
-    symbolic: SymbolicLlt<usize>,
     /// The factorisation of the last status solved, with that status (`None` where it
     /// left a body free): the outer loop's next iterate often keeps the status and changes
     /// only the loads (slip bounds, cohesion), which then costs two triangular solves.
@@ -47,7 +46,14 @@ pub struct SparseSystem {
 }
 
 /// A status (open rows, regularisation) and its factorisation, if positive definite.
-type Factored = (Vec<bool>, f64, Option<Llt<usize, f64>>);
+type Factored = (Vec<bool>, f64, Option<Reduced>);
+
+/// The factor of H over the unknowns a status leaves free: the glued displacements and the
+/// openings of its open rows (`kept`, in order); the closed rows' openings are fixed.
+struct Reduced {
+    kept: Vec<usize>,
+    llt: Llt<usize, f64>,
+}
 
 impl SparseSystem {
     /// Assembles H of `problem` and analyses its pattern.
@@ -76,17 +82,14 @@ impl SparseSystem {
                 }
             }
         }
-        // Every diagonal entry exists, so that a pinned row keeps its place in the pattern.
+        // Every diagonal entry exists, so that every unknown has its place in the pattern.
         trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
             .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
-        let symbolic = SymbolicLlt::try_new(h.symbolic(), Side::Lower)
-            .map_err(|e| format!("analysing the sparse contact system: {e:?}"))?;
         Ok(SparseSystem {
             n_glued,
             n,
             h,
-            symbolic,
             last: None,
         })
     }
@@ -101,26 +104,43 @@ impl SparseSystem {
         self.h.val().len()
     }
 
-    /// The factorisation of H with the rows that are not `open` pinned and `reg` added to the
-    /// diagonal of the open ones; None where it is not positive definite.
-    fn factor(&self, open: &[bool], reg: f64) -> Option<Llt<usize, f64>> {
+    /// The factorisation of H over the glued displacements and the `open` rows, with `reg`
+    /// added to the diagonal of the open rows; None where it is not positive definite. The
+    /// closed rows are left out (not pinned in place), so that their couplings add no fill:
+    /// on walls most rows are closed. The pattern is analysed for each status.
+    fn factor(&self, open: &[bool], reg: f64) -> Option<Reduced> {
         let ng = self.n_glued;
-        let pinned = |k: usize| k >= ng && !open[k - ng];
+        let size = ng + self.n;
+        let keep = |k: usize| k < ng || open[k - ng];
+        let kept: Vec<usize> = (0..size).filter(|&k| keep(k)).collect();
+        let mut index = vec![usize::MAX; size];
+        for (i, &k) in kept.iter().enumerate() {
+            index[k] = i;
+        }
         let sym = self.h.symbolic();
-        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
-        let mut val = self.h.val().to_vec();
-        for col in 0..ng + self.n {
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), self.h.val());
+        let (mut col_ptr, mut row_idx, mut values) = (vec![0usize], Vec::new(), Vec::new());
+        for &col in &kept {
             for p in cp[col]..cp[col + 1] {
                 let row = ri[p];
-                if pinned(row) || pinned(col) {
-                    val[p] = if row == col { 1.0 } else { 0.0 };
-                } else if row == col && col >= ng && reg > 0.0 {
-                    val[p] += reg * val[p].abs().max(f64::MIN_POSITIVE);
+                if index[row] == usize::MAX {
+                    continue;
                 }
+                let mut v = val[p];
+                if row == col && col >= ng && reg > 0.0 {
+                    v += reg * v.abs().max(f64::MIN_POSITIVE);
+                }
+                row_idx.push(index[row]);
+                values.push(v);
             }
+            col_ptr.push(row_idx.len());
         }
-        let m = SparseColMatRef::new(sym, &val);
-        Llt::try_new_with_symbolic(self.symbolic.clone(), m, Side::Lower).ok()
+        let m = kept.len();
+        let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
+        let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).ok()?;
+        let mat = SparseColMatRef::new(pattern.as_ref(), &values);
+        let llt = Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).ok()?;
+        Some(Reduced { kept, llt })
     }
 
     /// `H x` with the full symmetric H from its lower triangle.
@@ -203,10 +223,13 @@ impl SparseSystem {
             let llt = self.factor(&open, reg);
             self.last = Some((open.clone(), reg, llt));
         }
-        let llt = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
-        let b = Mat::<f64>::from_fn(ng + n, 1, |i, _| rhs[i]);
-        let sol = llt.solve(&b);
-        let w: Vec<f64> = (0..ng + n).map(|i| sol[(i, 0)]).collect();
+        let red = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
+        let b = Mat::<f64>::from_fn(red.kept.len(), 1, |i, _| rhs[red.kept[i]]);
+        let sol = red.llt.solve(&b);
+        let mut w = x;
+        for (i, &k) in red.kept.iter().enumerate() {
+            w[k] = sol[(i, 0)];
+        }
         // A factorisation can pass on a matrix that is singular up to roundoff (a body left
         // free): its displacements then run to about 1/ε of the loaded state's.
         let size = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
