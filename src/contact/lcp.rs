@@ -90,18 +90,6 @@ pub enum InnerFailure {
     State { message: String },
 }
 
-impl InnerFailure {
-    /// Whether the failure proves that no equilibrium exists.
-    pub fn is_mechanism(&self) -> bool {
-        matches!(
-            self,
-            InnerFailure::LeavesBodyFree
-                | InnerFailure::SecondaryRay { .. }
-                | InnerFailure::Unbounded
-        )
-    }
-}
-
 impl std::fmt::Display for InnerFailure {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {

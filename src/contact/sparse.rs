@@ -94,16 +94,6 @@ impl SparseSystem {
         })
     }
 
-    /// Number of unknowns w.
-    pub fn size(&self) -> usize {
-        self.n_glued + self.n
-    }
-
-    /// Stored entries of H (lower triangle).
-    pub fn stored(&self) -> usize {
-        self.h.val().len()
-    }
-
     /// The factorisation of H over the glued displacements and the `open` rows, with `reg`
     /// added to the diagonal of the open rows; None where it is not positive definite. The
     /// closed rows are left out (not pinned in place), so that their couplings add no fill:
