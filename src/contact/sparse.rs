@@ -18,10 +18,17 @@
 //! their couplings would only add fill).
 //!
 //! The statuses are found by the primal–dual active set iteration (semismooth Newton,
-//! Hintermüller–Ito–Kunisch): every violated row switches at once. It usually ends in a few
-//! iterations; a repeated status or a status that leaves a body free (the reduced H is not
-//! positive definite) ends it without a verdict (`stalled`), and the driver hands over to
-//! the evolutive iteration.
+//! Hintermüller–Ito–Kunisch): every violated row switches at once. A status met on the way
+//! can leave a body free (on a wall with little friction, a top brick whose bed joint slips
+//! everywhere: its place is fixed only by the one row that should stick). Such an iterate
+//! gets a proximal spring `ε H_rr (s_r − s̄_r)` on its open rows, anchored at the last
+//! iterate s̄: the free body moves a finite step towards what stops it, and the rows it
+//! reaches switch. While the statuses hold the weight ε falls tenfold per iterate (from
+//! 1e-2), so a body under a small unbalanced force reaches its stop in a few iterates; a
+//! state whose spring forces are within the tolerance is a solution (the free body's place
+//! is then not unique). A repeated status halves the step; the iteration limit or a repeated
+//! status ends it without a verdict (`stalled`), and the driver hands over to the evolutive
+//! iteration.
 
 use std::collections::HashSet;
 
@@ -30,7 +37,7 @@ use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
 use faer::{Mat, Side};
 
-use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState};
+use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState, Violation};
 use crate::contact::problem::Problem;
 
 /// H over w = (v, s) (lower triangle) and its symbolic factorisation.
@@ -39,6 +46,8 @@ pub struct SparseSystem {
     /// Rows that can open.
     n: usize,
     h: SparseColMat<usize, f64>,
+    /// The diagonal of H.
+    diag: Vec<f64>,
     /// The factorisation of the last status solved, with that status (`None` where it
     /// left a body free): the outer loop's next iterate often keeps the status and changes
     /// only the loads (slip bounds, cohesion), which then costs two triangular solves.
@@ -86,10 +95,20 @@ impl SparseSystem {
         trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
             .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
+        let diag = (0..size)
+            .map(|k| {
+                let sym = h.symbolic();
+                let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+                (cp[k]..cp[k + 1])
+                    .find(|&p| ri[p] == k)
+                    .map_or(0.0, |p| h.val()[p])
+            })
+            .collect();
         Ok(SparseSystem {
             n_glued,
             n,
             h,
+            diag,
             last: None,
         })
     }
@@ -152,17 +171,19 @@ impl SparseSystem {
 
     /// The state of the status `open` (free rows open whatever `open` says) with the slip
     /// directions `sign` of slipping friction rows; None when the status leaves a body free.
-    /// With `reg > 0` every open row gets that fraction of its own stiffness added to its
-    /// diagonal: a body that the status leaves free then moves far but finitely, and the
-    /// iteration closes the rows it runs into (used for iterates only, never for a result).
+    /// With a proximal term `(ε, s̄)` every open row r gets the spring `ε H_rr (s_r − s̄_r)`:
+    /// a body that the status leaves free then moves by a finite step from s̄ towards what
+    /// stops it (iterates only: a result is a state without it, or one whose spring force is
+    /// within the tolerance).
     fn state(
         &mut self,
         inner: &Inner,
         c: &[f64],
         open: &[bool],
         sign: &[f64],
-        reg: f64,
+        prox: Option<(f64, &[f64])>,
     ) -> Option<InnerState> {
+        let reg = prox.map_or(0.0, |p| p.0);
         let (ng, n) = (self.n_glued, self.n);
         let rows = &inner.problem.rows;
         let row_of = &inner.problem.row_of;
@@ -201,7 +222,13 @@ impl SparseSystem {
                 if k >= ng && !open[k - ng] {
                     x[k]
                 } else {
-                    let t = if k >= ng { target(k - ng) } else { 0.0 };
+                    let t = match (k >= ng, prox) {
+                        (false, _) => 0.0,
+                        (true, None) => target(k - ng),
+                        (true, Some((eps, centre))) => {
+                            target(k - ng) + eps * self.diag[k].abs() * centre[k - ng]
+                        }
+                    };
                     t - c[k] - hx[k]
                 }
             })
@@ -243,8 +270,10 @@ impl SparseSystem {
     }
 }
 
-/// Relative diagonal added to the open rows of an iterate that leaves a body free.
-const REGULARISATION: f64 = 1e-8;
+/// Relative proximal weight on the open rows of an iterate that leaves a body free, and the
+/// lightest it is made while the statuses hold and the free bodies still drift.
+const REGULARISATION: f64 = 1e-2;
+const REGULARISATION_MIN: f64 = 1e-10;
 
 /// Iterations of one inner solve, and halvings of the step after repeated statuses, before
 /// the evolutive path takes over (the active set ends in a few where it converges).
@@ -257,7 +286,8 @@ const SINGULAR: f64 = 1e7;
 /// Solves the inner problem from the statuses `open` and slip directions `sign` by the
 /// primal–dual active set iteration on the sparse system. Every violated row switches at
 /// once; after a repeated status only the larger half of the violations switch (then a
-/// quarter, …), which breaks the cycles of the full step.
+/// quarter, …), which breaks the cycles of the full step; a status that leaves a body free
+/// is passed through with a proximal spring (module header).
 pub fn solve(
     inner: &Inner,
     sys: &mut SparseSystem,
@@ -274,25 +304,49 @@ pub fn solve(
     let mut iterations = 0;
     let mut damping = 0u32;
     let mut last: Option<InnerState> = None;
+    // The proximal weight of the next iterate that leaves a body free.
+    let mut reg = REGULARISATION;
     loop {
-        let exact = sys.state(inner, &c, &open, &sign, 0.0);
+        let exact = sys.state(inner, &c, &open, &sign, None);
+        let mut center = Vec::new();
         let (st, regularised) = match exact {
             Some(st) => (st, false),
-            None => match sys.state(inner, &c, &open, &sign, REGULARISATION) {
-                Some(st) => (st, true),
-                None => {
-                    let state = last.unwrap_or_else(|| closed_state(inner));
-                    return stalled(state, iterations, "a status leaves a body free");
+            None => {
+                center = last.as_ref().map_or(&inner.base.offset, |st| &st.s).clone();
+                match sys.state(inner, &c, &open, &sign, Some((reg, &center))) {
+                    Some(st) => (st, true),
+                    None => {
+                        let state = last.unwrap_or_else(|| closed_state(inner));
+                        return stalled(state, iterations, "a status leaves a body free");
+                    }
                 }
-            },
+            }
         };
         let v = inner.violations(&st);
         if v.is_empty() && !regularised {
             return InnerOutcome::converged(st, iterations);
         }
         if v.is_empty() {
-            // The statuses hold only with the regularisation: a body is free.
-            return stalled(st, iterations, "a status leaves a body free");
+            // The statuses hold with the proximal term: where its force is within the
+            // tolerance the state solves the problem (a free body's place is not unique),
+            // else the next iterate starts from this one.
+            let (fs, _) = inner.scales(&st);
+            let prox = (0..inner.n())
+                .filter(|&r| st.open[r])
+                .map(|r| reg * sys.diag[sys.n_glued + r].abs() * (st.s[r] - center[r]).abs())
+                .fold(0.0f64, f64::max);
+            if prox <= inner.tol * fs {
+                return InnerOutcome::converged(st, iterations);
+            }
+            if iterations >= max_iterations.min(MAX_ITERATIONS) {
+                return stalled(st, iterations, "a status leaves a body free");
+            }
+            // The free bodies drift by a step inversely proportional to the proximal weight:
+            // a lighter weight lets them reach what stops them sooner.
+            reg = (reg * 0.1).max(REGULARISATION_MIN);
+            last = Some(st);
+            iterations += 1;
+            continue;
         }
         if iterations >= max_iterations.min(MAX_ITERATIONS) {
             return stalled(st, iterations, "the iteration limit");
@@ -303,20 +357,27 @@ pub fn solve(
                 return stalled(st, iterations, "a repeated status");
             }
         }
-        open = st.open.clone();
-        sign = st.sign.clone();
         let take = if damping == 0 {
             v.len()
         } else {
             (v.len() >> damping.min(31)).max(1)
         };
-        for x in &v[..take] {
-            open[x.row] = !open[x.row];
-            sign[x.row] = if open[x.row] { x.sign } else { 0.0 };
-        }
+        (open, sign) = switched(&st, &v[..take]);
+        reg = REGULARISATION;
         last = Some(st);
         iterations += 1;
     }
+}
+
+/// The statuses of `st` with the rows of `v` switched (a sticking friction row to slipping
+/// in the direction of its violation).
+fn switched(st: &InnerState, v: &[Violation]) -> (Vec<bool>, Vec<f64>) {
+    let (mut open, mut sign) = (st.open.clone(), st.sign.clone());
+    for x in v {
+        open[x.row] = !open[x.row];
+        sign[x.row] = if open[x.row] { x.sign } else { 0.0 };
+    }
+    (open, sign)
 }
 
 fn stalled(state: InnerState, iterations: usize, why: &str) -> InnerOutcome {
