@@ -2,9 +2,9 @@
 //! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
 //! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
 //! elements per course height) for 7 … 410 bricks with the full history (the default) and
-//! 798 bricks with the final state; the solver (evolutive path or sparse) and its iterations:
-//! seconds per stage (from the run's `timings.json`), peak memory of the run, fitted
-//! exponents against the number of bodies. Writes out/bench/masonry.csv and prints a table.
+//! 798 and 2 048 bricks with the final state; the solver (evolutive path or sparse) and its
+//! iterations: seconds per stage (from the run's `timings.json`), peak memory of the run,
+//! fitted exponents against the number of bodies (all walls, and those of 200 bodies on). Writes out/bench/masonry.csv and prints a table.
 //! `SGBEM_BENCH_VOUSSOIRS=6,12` and `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` (courses x
 //! bricks, optionally `:final` for history = "final") select sizes.
 
@@ -196,7 +196,8 @@ fn main() {
     let scene = root().join("pipelines/wall_running_bond.toml");
     let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
     // Walls of over 3000 unilateral pairs (14 x 14 on) are solved by the sparse solver, as
-    // a scene without `method` is; 28 x 28 (798 bodies) with the final state only.
+    // a scene without `method` is; 28 x 28 (798 bodies) and 45 x 45 (2 048) with the final
+    // state only (64 x 64, 4 160 bodies: `SGBEM_BENCH_WALLS=64x64:final`).
     for size in sizes(
         "SGBEM_BENCH_WALLS",
         &[
@@ -207,6 +208,7 @@ fn main() {
             "14x14",
             "20x20",
             "28x28:final",
+            "45x45:final",
         ],
     ) {
         let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
@@ -227,6 +229,15 @@ fn main() {
         peaks.push(p);
     }
     exponents("wall", &xs, &totals, &peaks);
+    // The sparse solver's range alone (over 3000 unilateral pairs: 14 x 14 on).
+    let big: Vec<usize> = (0..xs.len()).filter(|&i| xs[i] >= 200.0).collect();
+    let pick = |v: &[f64]| big.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    exponents(
+        "wall, 200 bodies and more",
+        &pick(&xs),
+        &pick(&totals),
+        &pick(&peaks),
+    );
 
     let out = std::path::Path::new("out/bench");
     std::fs::create_dir_all(out).expect("out/bench");
