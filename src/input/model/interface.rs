@@ -28,6 +28,82 @@ pub(super) fn build_interface(
     let sfile = scene.path.as_path();
     let name = spec.name.as_str();
     let t0 = first_time(scene);
+    let (ba, bb) = interface_bodies(name, curves, bodies, curve_bodies, sfile, mfile)?;
+    let (a, b) = (&bodies[ba], &bodies[bb]);
+    let on_interface = |body: &Body| -> Vec<usize> {
+        (0..body.elements.len())
+            .filter(|&e| body.elements[e].role == Role::Interface(k))
+            .collect()
+    };
+    let sides = Sides {
+        name,
+        a,
+        b,
+        elems_a: on_interface(a),
+        elems_b: on_interface(b),
+        mfile,
+    };
+    let (a_to_b, by_position) = sides.match_nodes(mesh)?;
+    let (order, s_of) = sides.curve_order(a_to_b.len())?;
+    let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
+
+    // Pairs with averaged normals of A.
+    let mut normals = vec![[0.0f64; 2]; order.len()];
+    for &e in &sides.elems_a {
+        let el = &a.elements[e];
+        for n in el.nodes {
+            let j = pair_of[&n];
+            normals[j][0] += el.normal[0];
+            normals[j][1] += el.normal[1];
+        }
+    }
+    let mut pairs = Vec::with_capacity(order.len());
+    for (j, &na) in order.iter().enumerate() {
+        let normal = unit(normals[j]);
+        let x = a.nodes[na];
+        let (gap, cohesion, friction) = pair_values(spec, x, t0).map_err(|m| {
+            Error::input(
+                sfile,
+                format!("{m} (node {})", mesh.node_tags[a.mesh_nodes[na]]),
+            )
+        })?;
+        pairs.push(Pair {
+            node_a: na,
+            node_b: a_to_b[&na],
+            x,
+            normal,
+            tangent: [-normal[1], normal[0]],
+            s: s_of[j],
+            gap,
+            cohesion,
+            friction,
+        });
+    }
+
+    let elements = sides.elements(&a_to_b, &pair_of)?;
+    let length = sides.elems_a.iter().map(|&e| a.elements[e].length).sum();
+    Ok(Interface {
+        spec: spec.clone(),
+        group: group.to_string(),
+        body_a: ba,
+        body_b: bb,
+        pairs,
+        elements,
+        length,
+        matched_by_position: by_position,
+    })
+}
+
+/// The two bodies an interface joins, lower index first: every curve of the interface
+/// bounds at most two bodies, and all its curves together exactly two.
+fn interface_bodies(
+    name: &str,
+    curves: &BTreeSet<i32>,
+    bodies: &[Body],
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    sfile: &Path,
+    mfile: &Path,
+) -> Result<(usize, usize)> {
     let mut involved: BTreeSet<usize> = BTreeSet::new();
     for c in curves {
         let on = curve_bodies.get(c).cloned().unwrap_or_default();
@@ -62,233 +138,210 @@ pub(super) fn build_interface(
         ));
     }
     let mut it = involved.iter();
-    let (ba, bb) = match (it.next(), it.next()) {
-        (Some(&a), Some(&b)) => (a.min(b), a.max(b)),
-        _ => {
-            return Err(Error::input(
-                sfile,
-                format!("[interface.{name}]: needs two bodies"),
-            ))
-        }
-    };
-    let (a, b) = (&bodies[ba], &bodies[bb]);
-    let on_interface = |body: &Body| -> Vec<usize> {
-        (0..body.elements.len())
-            .filter(|&e| body.elements[e].role == Role::Interface(k))
-            .collect()
-    };
-    let elems_a = on_interface(a);
-    let elems_b = on_interface(b);
-
-    // Match B's interface nodes to A's: same mesh node, else same position.
-    let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
-    for &e in &elems_b {
-        for n in b.elements[e].nodes {
-            b_by_mesh.insert(b.mesh_nodes[n], n);
-        }
+    match (it.next(), it.next()) {
+        (Some(&a), Some(&b)) => Ok((a.min(b), a.max(b))),
+        _ => Err(Error::input(
+            sfile,
+            format!("[interface.{name}]: needs two bodies"),
+        )),
     }
-    let min_len = elems_a
-        .iter()
-        .map(|&e| a.elements[e].length)
-        .chain(elems_b.iter().map(|&e| b.elements[e].length))
-        .fold(f64::INFINITY, f64::min);
-    let tol = 1e-6 * min_len;
-    let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
-    let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
-    let mut by_position = false;
-    for &e in &elems_a {
-        for n in a.elements[e].nodes {
-            if a_to_b.contains_key(&n) {
-                continue;
+}
+
+/// The two sides of one interface: its bodies A and B and their elements on it.
+struct Sides<'a> {
+    name: &'a str,
+    a: &'a Body,
+    b: &'a Body,
+    elems_a: Vec<usize>,
+    elems_b: Vec<usize>,
+    mfile: &'a Path,
+}
+
+impl Sides<'_> {
+    /// Matches B's interface nodes to A's: same mesh node, else same position. Returns A's
+    /// node → B's node, and whether any pair was matched by position.
+    fn match_nodes(&self, mesh: &Mesh) -> Result<(BTreeMap<usize, usize>, bool)> {
+        let (name, a, b, mfile) = (self.name, self.a, self.b, self.mfile);
+        let (elems_a, elems_b) = (&self.elems_a, &self.elems_b);
+        let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
+        for &e in elems_b {
+            for n in b.elements[e].nodes {
+                b_by_mesh.insert(b.mesh_nodes[n], n);
             }
-            let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
-                Some(&m) => m,
-                None => {
-                    by_position = true;
-                    let x = a.nodes[n];
-                    match b_nodes
-                        .iter()
-                        .copied()
-                        .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
-                    {
-                        Some(m) => m,
-                        None => {
-                            return Err(Error::input(
-                                mfile,
-                                format!(
-                                    "interface \"{name}\": node {} {} of body \"{}\" has no \
-                                     matching node on body \"{}\": the two sides must be meshed \
-                                     with the same nodes; use one curve shared by both surfaces \
-                                     (or the same Transfinite count on both)",
-                                    mesh.node_tags[a.mesh_nodes[n]],
-                                    fmt_point(x),
-                                    a.name,
-                                    b.name
-                                ),
-                            ))
+        }
+        let min_len = elems_a
+            .iter()
+            .map(|&e| a.elements[e].length)
+            .chain(elems_b.iter().map(|&e| b.elements[e].length))
+            .fold(f64::INFINITY, f64::min);
+        let tol = 1e-6 * min_len;
+        let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
+        let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
+        let mut by_position = false;
+        for &e in elems_a {
+            for n in a.elements[e].nodes {
+                if a_to_b.contains_key(&n) {
+                    continue;
+                }
+                let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
+                    Some(&m) => m,
+                    None => {
+                        by_position = true;
+                        let x = a.nodes[n];
+                        match b_nodes
+                            .iter()
+                            .copied()
+                            .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
+                        {
+                            Some(m) => m,
+                            None => {
+                                return Err(Error::input(
+                                    mfile,
+                                    format!(
+                                        "interface \"{name}\": node {} {} of body \"{}\" has no \
+                                         matching node on body \"{}\": the two sides must be \
+                                         meshed with the same nodes; use one curve shared by \
+                                         both surfaces (or the same Transfinite count on both)",
+                                        mesh.node_tags[a.mesh_nodes[n]],
+                                        fmt_point(x),
+                                        a.name,
+                                        b.name
+                                    ),
+                                ))
+                            }
                         }
                     }
-                }
-            };
-            a_to_b.insert(n, partner);
-        }
-    }
-    if a_to_b.len() != b_nodes.len() {
-        return Err(Error::input(
-            mfile,
-            format!(
-                "interface \"{name}\": body \"{}\" has {} interface nodes but body \"{}\" has {}: \
-                 mesh the joint as one curve shared by both surfaces",
-                a.name,
-                a_to_b.len(),
-                b.name,
-                b_nodes.len()
-            ),
-        ));
-    }
-
-    // Order A's interface elements along the curve direction as drawn (mesh order).
-    let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
-    let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
-    for &e in &elems_a {
-        let el = &a.elements[e];
-        let (s, t) = if !el.reversed {
-            (el.nodes[0], el.nodes[1])
-        } else {
-            (el.nodes[1], el.nodes[0])
-        };
-        next_of.insert(s, (e, t));
-        has_incoming.insert(t);
-    }
-    let mut starts: Vec<usize> = next_of
-        .keys()
-        .copied()
-        .filter(|n| !has_incoming.contains(n))
-        .collect();
-    starts.sort_by_key(|&n| a.mesh_nodes[n]);
-    if starts.is_empty() {
-        // A closed interface (a whole inclusion): start anywhere.
-        if let Some(&n) = next_of.keys().min() {
-            starts.push(n);
-        }
-    }
-    let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
-    let mut s_of: Vec<f64> = Vec::new();
-    let mut seen: BTreeSet<usize> = BTreeSet::new();
-    let mut s_acc = 0.0;
-    for &s0 in &starts {
-        let mut n = s0;
-        if seen.insert(n) {
-            order.push(n);
-            s_of.push(s_acc);
-        }
-        while let Some(&(e, t)) = next_of.get(&n) {
-            s_acc += a.elements[e].length;
-            if !seen.insert(t) {
-                break;
+                };
+                a_to_b.insert(n, partner);
             }
-            order.push(t);
-            s_of.push(s_acc);
-            n = t;
         }
-    }
-    if order.len() != a_to_b.len() {
-        return Err(Error::input(
-            mfile,
-            format!(
-                "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
-                 (a node joins more than two interface elements)",
-                a.name
-            ),
-        ));
-    }
-    let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
-
-    // Pairs with averaged normals of A.
-    let mut normals = vec![[0.0f64; 2]; order.len()];
-    for &e in &elems_a {
-        let el = &a.elements[e];
-        for n in el.nodes {
-            let j = pair_of[&n];
-            normals[j][0] += el.normal[0];
-            normals[j][1] += el.normal[1];
-        }
-    }
-    let mut pairs = Vec::with_capacity(order.len());
-    for (j, &na) in order.iter().enumerate() {
-        let normal = unit(normals[j]);
-        let x = a.nodes[na];
-        let (gap, cohesion, friction) = pair_values(spec, x, t0).map_err(|m| {
-            Error::input(
-                sfile,
-                format!("{m} (node {})", mesh.node_tags[a.mesh_nodes[na]]),
-            )
-        })?;
-        pairs.push(Pair {
-            node_a: na,
-            node_b: a_to_b[&na],
-            x,
-            normal,
-            tangent: [-normal[1], normal[0]],
-            s: s_of[j],
-            gap,
-            cohesion,
-            friction,
-        });
-    }
-
-    // Interface elements: A's element and B's element on the same node pair.
-    let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
-    for &e in &elems_b {
-        let [s, t] = b.elements[e].nodes;
-        b_elem_of.insert((s.min(t), s.max(t)), e);
-    }
-    let mut elements = Vec::with_capacity(elems_a.len());
-    for &e in &elems_a {
-        let [s, t] = a.elements[e].nodes;
-        let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
-        let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
-            Some(&eb) => eb,
-            None => {
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "interface \"{name}\": element {} of body \"{}\" has no counterpart on \
-                         body \"{}\" joining the same nodes",
-                        a.elements[e].tag, a.name, b.name
-                    ),
-                ))
-            }
-        };
-        let ea = &a.elements[e];
-        let eb = &b.elements[elem_b];
-        if dot(ea.normal, eb.normal) > -0.999 {
+        if a_to_b.len() != b_nodes.len() {
             return Err(Error::input(
                 mfile,
                 format!(
-                    "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of element \
-                     {}: the bodies overlap there",
-                    a.name, b.name, ea.tag
+                    "interface \"{name}\": body \"{}\" has {} interface nodes but body \"{}\" has \
+                     {}: mesh the joint as one curve shared by both surfaces",
+                    a.name,
+                    a_to_b.len(),
+                    b.name,
+                    b_nodes.len()
                 ),
             ));
         }
-        elements.push(InterfaceElement {
-            elem_a: e,
-            elem_b,
-            pairs: [pair_of[&s], pair_of[&t]],
-        });
+        Ok((a_to_b, by_position))
     }
-    let length = elems_a.iter().map(|&e| a.elements[e].length).sum();
-    Ok(Interface {
-        spec: spec.clone(),
-        group: group.to_string(),
-        body_a: ba,
-        body_b: bb,
-        pairs,
-        elements,
-        length,
-        matched_by_position: by_position,
-    })
+
+    /// Orders A's interface nodes along the curve direction as drawn (mesh order), with
+    /// their arc length; all `matched` nodes must lie on simple chains.
+    fn curve_order(&self, matched: usize) -> Result<(Vec<usize>, Vec<f64>)> {
+        let (name, a, mfile) = (self.name, self.a, self.mfile);
+        let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
+        let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
+        for &e in &self.elems_a {
+            let el = &a.elements[e];
+            let (s, t) = if !el.reversed {
+                (el.nodes[0], el.nodes[1])
+            } else {
+                (el.nodes[1], el.nodes[0])
+            };
+            next_of.insert(s, (e, t));
+            has_incoming.insert(t);
+        }
+        let mut starts: Vec<usize> = next_of
+            .keys()
+            .copied()
+            .filter(|n| !has_incoming.contains(n))
+            .collect();
+        starts.sort_by_key(|&n| a.mesh_nodes[n]);
+        if starts.is_empty() {
+            // A closed interface (a whole inclusion): start anywhere.
+            if let Some(&n) = next_of.keys().min() {
+                starts.push(n);
+            }
+        }
+        let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
+        let mut s_of: Vec<f64> = Vec::new();
+        let mut seen: BTreeSet<usize> = BTreeSet::new();
+        let mut s_acc = 0.0;
+        for &s0 in &starts {
+            let mut n = s0;
+            if seen.insert(n) {
+                order.push(n);
+                s_of.push(s_acc);
+            }
+            while let Some(&(e, t)) = next_of.get(&n) {
+                s_acc += a.elements[e].length;
+                if !seen.insert(t) {
+                    break;
+                }
+                order.push(t);
+                s_of.push(s_acc);
+                n = t;
+            }
+        }
+        if order.len() != matched {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
+                     (a node joins more than two interface elements)",
+                    a.name
+                ),
+            ));
+        }
+        Ok((order, s_of))
+    }
+
+    /// Interface elements: A's element and B's element on the same node pair, which must
+    /// lie on opposite sides.
+    fn elements(
+        &self,
+        a_to_b: &BTreeMap<usize, usize>,
+        pair_of: &HashMap<usize, usize>,
+    ) -> Result<Vec<InterfaceElement>> {
+        let (name, a, b, mfile) = (self.name, self.a, self.b, self.mfile);
+        let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
+        for &e in &self.elems_b {
+            let [s, t] = b.elements[e].nodes;
+            b_elem_of.insert((s.min(t), s.max(t)), e);
+        }
+        let mut elements = Vec::with_capacity(self.elems_a.len());
+        for &e in &self.elems_a {
+            let [s, t] = a.elements[e].nodes;
+            let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
+            let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
+                Some(&eb) => eb,
+                None => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "interface \"{name}\": element {} of body \"{}\" has no counterpart \
+                             on body \"{}\" joining the same nodes",
+                            a.elements[e].tag, a.name, b.name
+                        ),
+                    ))
+                }
+            };
+            let ea = &a.elements[e];
+            let eb = &b.elements[elem_b];
+            if dot(ea.normal, eb.normal) > -0.999 {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of \
+                         element {}: the bodies overlap there",
+                        a.name, b.name, ea.tag
+                    ),
+                ));
+            }
+            elements.push(InterfaceElement {
+                elem_a: e,
+                elem_b,
+                pairs: [pair_of[&s], pair_of[&t]],
+            });
+        }
+        Ok(elements)
+    }
 }
 
 /// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
