@@ -11,15 +11,50 @@ use super::{cross, fmt_point, norm, sub, Body};
 /// Elements of different bodies (or non-neighbouring elements of one body) must not cross,
 /// and no body may lie inside another.
 pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
-    struct Seg {
-        body: usize,
-        elem: usize,
-        a: [f64; 2],
-        b: [f64; 2],
-        ma: usize,
-        mb: usize,
-        xmin: f64,
+    let segs = segments(bodies);
+    let grid = segment_grid(&segs, scale);
+    if let Some((i, j)) = first_crossing(&segs, &grid) {
+        {
+            let (s, t) = (&segs[i], &segs[j]);
+            {
+                let (b1, b2) = (&bodies[s.body], &bodies[t.body]);
+                let (e1, e2) = (&b1.elements[s.elem], &b2.elements[t.elem]);
+                let what = if s.body == t.body {
+                    format!("the boundary of body \"{}\" crosses itself", b1.name)
+                } else {
+                    format!("bodies \"{}\" and \"{}\" overlap", b1.name, b2.name)
+                };
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "{what}: element {} (curve {}) crosses element {} (curve {}); fix the \
+                         geometry so that bodies meet only along shared curves",
+                        e1.tag, e1.curve, e2.tag, e2.curve
+                    ),
+                ));
+            }
+        }
     }
+    for body in bodies {
+        check_crossing_at_coincident_nodes(body, mfile, scale)?;
+    }
+    check_nesting(bodies, mfile)
+}
+
+/// A boundary element as a segment, for the crossing search.
+struct Seg {
+    body: usize,
+    elem: usize,
+    a: [f64; 2],
+    b: [f64; 2],
+    /// The mesh nodes of its ends.
+    ma: usize,
+    mb: usize,
+    xmin: f64,
+}
+
+/// Every boundary element of every body as a segment, sorted by smallest x (the sweep order).
+fn segments(bodies: &[Body]) -> Vec<Seg> {
     let mut segs: Vec<Seg> = Vec::new();
     for (bi, body) in bodies.iter().enumerate() {
         for (ei, e) in body.elements.iter().enumerate() {
@@ -37,9 +72,12 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
         }
     }
     segs.sort_by(|p, q| p.xmin.total_cmp(&q.xmin));
-    // Candidate pairs from a uniform grid of cells about one mean element long (a sweep
-    // along x alone is quadratic for a column of vertical elements); the first crossing in
-    // sweep order is reported.
+    segs
+}
+
+/// Candidate pairs from a uniform grid of cells about one mean element long (a sweep along x
+/// alone is quadratic for a column of vertical elements): cell → the segments that reach it.
+fn segment_grid(segs: &[Seg], scale: f64) -> HashMap<(i64, i64), Vec<usize>> {
     let n = segs.len();
     let mean = segs.iter().map(|g| norm(sub(g.b, g.a))).sum::<f64>() / n.max(1) as f64;
     let h = mean.max(1e-12 * scale).max(f64::MIN_POSITIVE);
@@ -89,6 +127,11 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
             grid.entry(c).or_default().push(i);
         }
     }
+    grid
+}
+
+/// The first pair of crossing segments in sweep order that share no mesh node, if any.
+fn first_crossing(segs: &[Seg], grid: &HashMap<(i64, i64), Vec<usize>>) -> Option<(usize, usize)> {
     let mut first: Option<(usize, usize)> = None;
     for members in grid.values() {
         for (k, &i) in members.iter().enumerate() {
@@ -107,32 +150,11 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
             }
         }
     }
-    if let Some((i, j)) = first {
-        {
-            let (s, t) = (&segs[i], &segs[j]);
-            {
-                let (b1, b2) = (&bodies[s.body], &bodies[t.body]);
-                let (e1, e2) = (&b1.elements[s.elem], &b2.elements[t.elem]);
-                let what = if s.body == t.body {
-                    format!("the boundary of body \"{}\" crosses itself", b1.name)
-                } else {
-                    format!("bodies \"{}\" and \"{}\" overlap", b1.name, b2.name)
-                };
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "{what}: element {} (curve {}) crosses element {} (curve {}); fix the \
-                         geometry so that bodies meet only along shared curves",
-                        e1.tag, e1.curve, e2.tag, e2.curve
-                    ),
-                ));
-            }
-        }
-    }
-    for body in bodies {
-        check_crossing_at_coincident_nodes(body, mfile, scale)?;
-    }
-    // A body entirely inside another: probe a point just inside each body.
+    first
+}
+
+/// A body entirely inside another: probe a point just inside each body.
+fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
     for (bi, body) in bodies.iter().enumerate() {
         let outer = match body.loops.iter().find(|l| !l.is_hole) {
             Some(l) => l,
