@@ -519,6 +519,15 @@ impl RunRecord {
     /// Checks every size and cross-reference the writers rely on, so that writing a record
     /// read from a damaged archive fails with a message instead of a panic.
     pub fn validate(&self) -> std::result::Result<(), String> {
+        self.validate_mesh()?;
+        self.validate_bodies()?;
+        self.validate_interfaces()?;
+        self.validate_states()?;
+        self.validate_history()
+    }
+
+    /// The mesh: per-node, per-line and per-triangle arrays of one length, indices in range.
+    fn validate_mesh(&self) -> std::result::Result<(), String> {
         let m = &self.mesh;
         let nm = m.nodes.len();
         let ng = m.group_names.len();
@@ -560,7 +569,13 @@ impl RunRecord {
             ng,
             "groups",
         )?;
-        let nb = self.bodies.len();
+        Ok(())
+    }
+
+    /// The bodies: their nodes in the mesh, their elements and triangles in range, and the
+    /// shapes of their operators.
+    fn validate_bodies(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
         for b in &self.bodies {
             let w = |s: &str| format!("body \"{}\" {s}", b.name);
             let nn = b.nodes.len();
@@ -592,6 +607,12 @@ impl RunRecord {
                 same_len(&w("Z0"), op.z0.len(), "interface unknowns", n0)?;
             }
         }
+        Ok(())
+    }
+
+    /// The interfaces: two existing bodies, one value per pair, nodes and elements in range.
+    fn validate_interfaces(&self) -> std::result::Result<(), String> {
+        let nb = self.bodies.len();
         for it in &self.interfaces {
             let w = |s: &str| format!("interface \"{}\" {s}", it.name);
             if it.body_a >= nb || it.body_b >= nb {
@@ -617,6 +638,14 @@ impl RunRecord {
             in_range(&w("node_b"), it.node_b.iter(), nbn, "nodes of body B")?;
             in_range(&w("elements"), it.elements.iter().flatten(), np, "pairs")?;
         }
+        Ok(())
+    }
+
+    /// The recorded states: increasing iterations, one field per body and one result per
+    /// interface of the right sizes, interior values at every triangle node.
+    fn validate_states(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
+        let nb = self.bodies.len();
         let mut last: Option<usize> = None;
         for (k, st) in self.states.iter().enumerate() {
             let w = |s: &str| format!("state {k} {s}");
@@ -680,6 +709,11 @@ impl RunRecord {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The history rows: one value per interface and per pair.
+    fn validate_history(&self) -> std::result::Result<(), String> {
         let ni = self.interfaces.len();
         for (k, row) in self.history.rows.iter().enumerate() {
             let w = |s: &str| format!("history row {k} {s}");
