@@ -770,18 +770,7 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         None => stem.clone(),
     };
     let (mesh, mesh_parameters) = mesh_spec(doc.get("mesh"), &dir, path)?;
-    let plane = match doc.get("plane") {
-        None => {
-            return Err(err(
-                "`plane` is missing: add plane = \"strain\" or plane = \"stress\"".into(),
-            ))
-        }
-        Some(v) => match typed::<String>(v, "plane", path)?.as_str() {
-            "strain" => Plane::Strain,
-            "stress" => Plane::Stress,
-            other => return Err(err(choice_error("plane", other, &["strain", "stress"]))),
-        },
-    };
+    let plane = plane(&doc, path)?;
     let thickness = match doc.get("thickness") {
         Some(v) => typed::<f64>(v, "thickness", path)?,
         None => 1.0,
@@ -802,38 +791,8 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         None => Units::default(),
     };
 
-    let mut bodies = Vec::new();
     let mut tables = Tables::default();
-    for (name, v) in sub_tables(&doc, "body", path)? {
-        if Glob::is_pattern(name) {
-            let key = pattern_key("body", name, path)?;
-            let spec = body_spec(name, v, &key, plane, path)?;
-            tables.bodies.push(Pattern {
-                glob: Glob::new(name),
-                spec,
-                raw: v.clone(),
-            });
-            continue;
-        }
-        let key = format!("body.{name}");
-        if let Some(problem) = file_name_problem(name) {
-            return Err(err(format!(
-                "[{key}]: {problem}; a body's name becomes a group name in the archive: \
-                 name the Physical Surface (and this table) with letters, digits, . _ - only"
-            )));
-        }
-        bodies.push(body_spec(name, v, &key, plane, path)?);
-    }
-    if let Some(v) = defaults_table(&doc, "body", path)? {
-        tables.default_body = Some(body_spec("", v, "defaults.body", plane, path)?);
-    }
-    if bodies.is_empty() && tables.bodies.is_empty() && tables.default_body.is_none() {
-        return Err(err(
-            "no bodies: add a [body.NAME] table (young, poisson) for each Physical Surface, \
-             or [body.\"PATTERN*\"] / [defaults.body] tables for many"
-                .into(),
-        ));
-    }
+    let bodies = body_tables(&doc, plane, &mut tables, path)?;
 
     let mut boundaries = Vec::new();
     for (name, v) in sub_tables(&doc, "boundary", path)? {
@@ -842,33 +801,7 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         boundaries.push(boundary_spec(name, raw, &key, path)?);
     }
 
-    let mut interfaces = Vec::new();
-    for (name, v) in sub_tables(&doc, "interface", path)? {
-        if Glob::is_pattern(name) {
-            let key = pattern_key("interface", name, path)?;
-            let raw: RawInterface = typed(v, &key, path)?;
-            tables.interfaces.push(Pattern {
-                glob: Glob::new(name),
-                spec: interface_spec(name, raw, &key, path)?,
-                raw: v.clone(),
-            });
-            continue;
-        }
-        let key = format!("interface.{name}");
-        if let Some(problem) = file_name_problem(name) {
-            return Err(err(format!(
-                "[{key}]: {problem}; an interface's name becomes a file name \
-                 (interfaces/NAME.csv): name the Physical Curve (and this table) with letters, \
-                 digits, . _ - only"
-            )));
-        }
-        let raw: RawInterface = typed(v, &key, path)?;
-        interfaces.push(interface_spec(name, raw, &key, path)?);
-    }
-    if let Some(v) = defaults_table(&doc, "interface", path)? {
-        let raw: RawInterface = typed(v, "defaults.interface", path)?;
-        tables.default_interface = Some(interface_spec("", raw, "defaults.interface", path)?);
-    }
+    let interfaces = interface_tables(&doc, &mut tables, path)?;
     for b in &boundaries {
         if interfaces.iter().any(|i| i.name == b.name) {
             return Err(err(format!(
@@ -907,6 +840,105 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         solve,
         output,
     })
+}
+
+/// `plane`: "strain" or "stress", required.
+fn plane(doc: &toml::Table, path: &Path) -> Result<Plane> {
+    let err = |msg: String| Error::input(path, msg);
+    let plane = match doc.get("plane") {
+        None => {
+            return Err(err(
+                "`plane` is missing: add plane = \"strain\" or plane = \"stress\"".into(),
+            ))
+        }
+        Some(v) => match typed::<String>(v, "plane", path)?.as_str() {
+            "strain" => Plane::Strain,
+            "stress" => Plane::Stress,
+            other => return Err(err(choice_error("plane", other, &["strain", "stress"]))),
+        },
+    };
+    Ok(plane)
+}
+
+/// The `[body.NAME]` tables, with the glob tables and `[defaults.body]` into `tables`; a
+/// scene needs at least one of them.
+fn body_tables(
+    doc: &toml::Table,
+    plane: Plane,
+    tables: &mut Tables,
+    path: &Path,
+) -> Result<Vec<BodySpec>> {
+    let err = |msg: String| Error::input(path, msg);
+    let mut bodies = Vec::new();
+    for (name, v) in sub_tables(doc, "body", path)? {
+        if Glob::is_pattern(name) {
+            let key = pattern_key("body", name, path)?;
+            let spec = body_spec(name, v, &key, plane, path)?;
+            tables.bodies.push(Pattern {
+                glob: Glob::new(name),
+                spec,
+                raw: v.clone(),
+            });
+            continue;
+        }
+        let key = format!("body.{name}");
+        if let Some(problem) = file_name_problem(name) {
+            return Err(err(format!(
+                "[{key}]: {problem}; a body's name becomes a group name in the archive: \
+                 name the Physical Surface (and this table) with letters, digits, . _ - only"
+            )));
+        }
+        bodies.push(body_spec(name, v, &key, plane, path)?);
+    }
+    if let Some(v) = defaults_table(doc, "body", path)? {
+        tables.default_body = Some(body_spec("", v, "defaults.body", plane, path)?);
+    }
+    if bodies.is_empty() && tables.bodies.is_empty() && tables.default_body.is_none() {
+        return Err(err(
+            "no bodies: add a [body.NAME] table (young, poisson) for each Physical Surface, \
+             or [body.\"PATTERN*\"] / [defaults.body] tables for many"
+                .into(),
+        ));
+    }
+    Ok(bodies)
+}
+
+/// The `[interface.NAME]` tables, with the glob tables and `[defaults.interface]` into
+/// `tables`.
+fn interface_tables(
+    doc: &toml::Table,
+    tables: &mut Tables,
+    path: &Path,
+) -> Result<Vec<InterfaceSpec>> {
+    let err = |msg: String| Error::input(path, msg);
+    let mut interfaces = Vec::new();
+    for (name, v) in sub_tables(doc, "interface", path)? {
+        if Glob::is_pattern(name) {
+            let key = pattern_key("interface", name, path)?;
+            let raw: RawInterface = typed(v, &key, path)?;
+            tables.interfaces.push(Pattern {
+                glob: Glob::new(name),
+                spec: interface_spec(name, raw, &key, path)?,
+                raw: v.clone(),
+            });
+            continue;
+        }
+        let key = format!("interface.{name}");
+        if let Some(problem) = file_name_problem(name) {
+            return Err(err(format!(
+                "[{key}]: {problem}; an interface's name becomes a file name \
+                 (interfaces/NAME.csv): name the Physical Curve (and this table) with letters, \
+                 digits, . _ - only"
+            )));
+        }
+        let raw: RawInterface = typed(v, &key, path)?;
+        interfaces.push(interface_spec(name, raw, &key, path)?);
+    }
+    if let Some(v) = defaults_table(doc, "interface", path)? {
+        let raw: RawInterface = typed(v, "defaults.interface", path)?;
+        tables.default_interface = Some(interface_spec("", raw, "defaults.interface", path)?);
+    }
+    Ok(interfaces)
 }
 
 /// The key of a glob table in messages (`body."brick*"`), after checking that the pattern
