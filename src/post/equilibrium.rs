@@ -354,30 +354,6 @@ fn diagonal(body: &Body) -> f64 {
     (hi[0] - lo[0]).hypot(hi[1] - lo[1])
 }
 
-/// The `equilibrium` object of `summary.json`: per body the point, each load's `fx fy m`,
-/// the imbalance and its relative size.
-pub fn summary(balances: &[BodyBalance]) -> serde_json::Value {
-    let wrench = |w: &Wrench| serde_json::json!({"fx": w.fx, "fy": w.fy, "m": w.m});
-    let mut m = serde_json::Map::new();
-    for b in balances {
-        let loads: serde_json::Map<String, serde_json::Value> = b
-            .loads
-            .iter()
-            .map(|(n, w)| (n.clone(), wrench(w)))
-            .collect();
-        m.insert(
-            b.body.clone(),
-            serde_json::json!({
-                "moments_about": b.point,
-                "loads": loads,
-                "imbalance": wrench(&b.imbalance),
-                "relative_imbalance": b.relative,
-            }),
-        );
-    }
-    serde_json::Value::Object(m)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
