@@ -21,7 +21,7 @@ use crate::input::scene::{self, Scene};
 use crate::output::archive::{ArchivePart, ArchiveWriter};
 use crate::output::folder::RunFolder;
 use crate::output::progress::Progress;
-use crate::output::record::{Array, InteriorRecord, RunRecord, StateRecord};
+use crate::output::record::{Array, InteriorRecord, IterateRecord, RunRecord};
 use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
 use crate::post::{section_points, PointSampler};
@@ -389,14 +389,14 @@ fn record_solution(
             )
         })
         .collect();
-    let mut states: Vec<StateRecord> = Vec::new();
+    let mut states: Vec<IterateRecord> = Vec::new();
     if scene.output.history == HistoryLevel::Full {
         let recorded = solved.states.len().saturating_sub(1);
         for st in std::mem::take(&mut solved.states)
             .into_iter()
             .take(recorded)
         {
-            states.push(StateRecord::new(
+            states.push(IterateRecord::new(
                 states.len(),
                 st.load_step,
                 st.load_factor,
@@ -405,7 +405,7 @@ fn record_solution(
             ));
         }
     }
-    states.push(StateRecord::new(
+    states.push(IterateRecord::new(
         states.len(),
         final_step,
         solved.load_factor,
@@ -413,7 +413,7 @@ fn record_solution(
         solved.interfaces.clone(),
     ));
     rec.states = states;
-    // The archive's thread gets the states' fields shared, not copied (StateRecord); the
+    // The archive's thread gets the states' fields shared, not copied (IterateRecord); the
     // history goes there alone (the VTK files do not need it).
     archive.send(ArchivePart::Solved {
         contact_operators,

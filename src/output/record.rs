@@ -369,10 +369,11 @@ impl InteriorRecord {
     }
 }
 
-/// One solved state: the boundary solution of every body and the interface results after
-/// one contact iteration (or the final state).
+/// One solved state, the record of an iterate (`contact::RecordedState`): the boundary
+/// solution of every body and the interface results after one contact iteration (or the
+/// final state).
 #[derive(Debug, Clone, Default)]
-pub struct StateRecord {
+pub struct IterateRecord {
     /// Iteration number counted over the whole run (strictly increasing from state to
     /// state): the time of the state in `vtk/history.pvd`.
     pub iteration: usize,
@@ -388,15 +389,15 @@ pub struct StateRecord {
     pub interior: Vec<InteriorRecord>,
 }
 
-impl StateRecord {
+impl IterateRecord {
     pub fn new(
         iteration: usize,
         load_step: usize,
         load_factor: f64,
         fields: Vec<BodyField>,
         interfaces: Vec<InterfaceResult>,
-    ) -> StateRecord {
-        StateRecord {
+    ) -> IterateRecord {
+        IterateRecord {
             iteration,
             load_step,
             load_factor,
@@ -427,7 +428,7 @@ pub struct RunRecord {
     pub bodies: Vec<BodyRecord>,
     pub interfaces: Vec<InterfaceRecord>,
     /// Solved states in order; the last one is the final solution.
-    pub states: Vec<StateRecord>,
+    pub states: Vec<IterateRecord>,
     pub history: History,
     /// Interface operators of the final status (`K00` and its blocks, `Ktilde_urur`,
     /// `Ktilde_fvfv`, loads), by name, in the order given.

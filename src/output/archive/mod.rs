@@ -68,7 +68,7 @@ use std::path::Path;
 
 use hdf5_metno as h5;
 
-use super::record::{Array, InteriorRecord, RunRecord, StateRecord, FORMAT_VERSION};
+use super::record::{Array, InteriorRecord, IterateRecord, RunRecord, FORMAT_VERSION};
 use crate::error::{Error, Result};
 use crate::solution::History;
 
@@ -171,7 +171,7 @@ pub enum ArchivePart {
     Solved {
         contact_operators: Option<Vec<(String, Array)>>,
         history: History,
-        states: Vec<StateRecord>,
+        states: Vec<IterateRecord>,
     },
     /// The end of the run: the interior field of the final state, the status, the timings
     /// and the text of summary.json.

@@ -6,8 +6,8 @@ use hdf5_metno as h5;
 
 use crate::input::scene::{Plane, Units};
 use crate::output::record::{
-    Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord, RunRecord,
-    StateRecord,
+    Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, IterateRecord, MeshRecord,
+    RunRecord,
 };
 use crate::solution::{BodyField, History, HistoryRow, InterfaceResult, PairResult, PairStatus};
 
@@ -404,7 +404,7 @@ fn read_state_compact(
     g: &Group,
     rec: &RunRecord,
     (nodes, elements, pairs): (&[usize], &[usize], &[usize]),
-) -> R<StateRecord> {
+) -> R<IterateRecord> {
     let (mut fields, mut interfaces) = (Vec::new(), Vec::new());
     let (nn, ne, np) = (
         nodes[nodes.len() - 1],
@@ -449,7 +449,7 @@ fn read_state_compact(
             .collect();
         interfaces.push(InterfaceResult { pairs });
     }
-    Ok(StateRecord::new(
+    Ok(IterateRecord::new(
         attr_usize(g, "iteration")?,
         attr_usize(g, "load_step")?,
         attr_f64(g, "load_factor")?,
@@ -458,7 +458,7 @@ fn read_state_compact(
     ))
 }
 
-fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
+fn read_state(g: &Group, rec: &RunRecord) -> R<IterateRecord> {
     let (mut fields, mut interfaces) = (Vec::new(), Vec::new());
     let gb = open_group(g, "bodies")?;
     for b in &rec.bodies {
@@ -507,7 +507,7 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<StateRecord> {
         }
         interfaces.push(InterfaceResult { pairs });
     }
-    let mut st = StateRecord::new(
+    let mut st = IterateRecord::new(
         attr_usize(g, "iteration")?,
         attr_usize(g, "load_step")?,
         attr_f64(g, "load_factor")?,

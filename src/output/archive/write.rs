@@ -8,8 +8,8 @@ use ndarray::{ArrayViewD, IxDyn};
 
 use crate::input::scene::Units;
 use crate::output::record::{
-    plane_name, Array, BodyOperators, BodyRecord, InterfaceRecord, MeshRecord, RunRecord,
-    StateRecord, FORMAT_VERSION,
+    plane_name, Array, BodyOperators, BodyRecord, InterfaceRecord, IterateRecord, MeshRecord,
+    RunRecord, FORMAT_VERSION,
 };
 use crate::solution::{History, HistoryRow, PairResult, PairStatus};
 
@@ -263,7 +263,7 @@ pub(super) fn write_solved(file: &h5::File, rec: &RunRecord) -> R<()> {
 /// quantity, concatenated in `/bodies` and `/interfaces` order (see `node_offset`,
 /// `element_offset`, `pair_offset`): a few datasets per state whatever the number of
 /// bodies, so that the full history of a wall of hundreds of bricks stays small and quick.
-fn write_state_compact(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
+fn write_state_compact(g: &Group, st: &IterateRecord, rec: &RunRecord, u: &U) -> R<()> {
     put_attr(g, "iteration", st.iteration as i64)?;
     put_attr(g, "load_step", st.load_step as i64)?;
     put_attr(g, "load_factor", st.load_factor)?;
@@ -714,7 +714,7 @@ fn write_history(g: &Group, h: &History, rec: &RunRecord, u: &U) -> R<()> {
     Ok(())
 }
 
-fn write_state(g: &Group, st: &StateRecord, rec: &RunRecord, u: &U) -> R<()> {
+fn write_state(g: &Group, st: &IterateRecord, rec: &RunRecord, u: &U) -> R<()> {
     put_attr(g, "iteration", st.iteration as i64)?;
     put_attr(g, "load_step", st.load_step as i64)?;
     put_attr(g, "load_factor", st.load_factor)?;
