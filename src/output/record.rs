@@ -369,10 +369,11 @@ impl InteriorRecord {
     }
 }
 
-/// One solved state: the boundary solution of every body and the interface results after
-/// one contact iteration (or the final state).
+/// One solved state, the record of an iterate (`contact::RecordedState`): the boundary
+/// solution of every body and the interface results after one contact iteration (or the
+/// final state).
 #[derive(Debug, Clone, Default)]
-pub struct StateRecord {
+pub struct IterateRecord {
     /// Iteration number counted over the whole run (strictly increasing from state to
     /// state): the time of the state in `vtk/history.pvd`.
     pub iteration: usize,
@@ -388,15 +389,15 @@ pub struct StateRecord {
     pub interior: Vec<InteriorRecord>,
 }
 
-impl StateRecord {
+impl IterateRecord {
     pub fn new(
         iteration: usize,
         load_step: usize,
         load_factor: f64,
         fields: Vec<BodyField>,
         interfaces: Vec<InterfaceResult>,
-    ) -> StateRecord {
-        StateRecord {
+    ) -> IterateRecord {
+        IterateRecord {
             iteration,
             load_step,
             load_factor,
@@ -427,7 +428,7 @@ pub struct RunRecord {
     pub bodies: Vec<BodyRecord>,
     pub interfaces: Vec<InterfaceRecord>,
     /// Solved states in order; the last one is the final solution.
-    pub states: Vec<StateRecord>,
+    pub states: Vec<IterateRecord>,
     pub history: History,
     /// Interface operators of the final status (`K00` and its blocks, `Ktilde_urur`,
     /// `Ktilde_fvfv`, loads), by name, in the order given.
@@ -519,6 +520,15 @@ impl RunRecord {
     /// Checks every size and cross-reference the writers rely on, so that writing a record
     /// read from a damaged archive fails with a message instead of a panic.
     pub fn validate(&self) -> std::result::Result<(), String> {
+        self.validate_mesh()?;
+        self.validate_bodies()?;
+        self.validate_interfaces()?;
+        self.validate_states()?;
+        self.validate_history()
+    }
+
+    /// The mesh: per-node, per-line and per-triangle arrays of one length, indices in range.
+    fn validate_mesh(&self) -> std::result::Result<(), String> {
         let m = &self.mesh;
         let nm = m.nodes.len();
         let ng = m.group_names.len();
@@ -560,7 +570,13 @@ impl RunRecord {
             ng,
             "groups",
         )?;
-        let nb = self.bodies.len();
+        Ok(())
+    }
+
+    /// The bodies: their nodes in the mesh, their elements and triangles in range, and the
+    /// shapes of their operators.
+    fn validate_bodies(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
         for b in &self.bodies {
             let w = |s: &str| format!("body \"{}\" {s}", b.name);
             let nn = b.nodes.len();
@@ -592,6 +608,12 @@ impl RunRecord {
                 same_len(&w("Z0"), op.z0.len(), "interface unknowns", n0)?;
             }
         }
+        Ok(())
+    }
+
+    /// The interfaces: two existing bodies, one value per pair, nodes and elements in range.
+    fn validate_interfaces(&self) -> std::result::Result<(), String> {
+        let nb = self.bodies.len();
         for it in &self.interfaces {
             let w = |s: &str| format!("interface \"{}\" {s}", it.name);
             if it.body_a >= nb || it.body_b >= nb {
@@ -617,6 +639,14 @@ impl RunRecord {
             in_range(&w("node_b"), it.node_b.iter(), nbn, "nodes of body B")?;
             in_range(&w("elements"), it.elements.iter().flatten(), np, "pairs")?;
         }
+        Ok(())
+    }
+
+    /// The recorded states: increasing iterations, one field per body and one result per
+    /// interface of the right sizes, interior values at every triangle node.
+    fn validate_states(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
+        let nb = self.bodies.len();
         let mut last: Option<usize> = None;
         for (k, st) in self.states.iter().enumerate() {
             let w = |s: &str| format!("state {k} {s}");
@@ -680,6 +710,11 @@ impl RunRecord {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The history rows: one value per interface and per pair.
+    fn validate_history(&self) -> std::result::Result<(), String> {
         let ni = self.interfaces.len();
         for (k, row) in self.history.rows.iter().enumerate() {
             let w = |s: &str| format!("history row {k} {s}");
