@@ -126,7 +126,7 @@ pub struct RunReport {
 }
 
 /// Assembles and condenses every body (the bem stage), with a bar per body.
-pub fn prepare_bodies(
+pub(crate) fn prepare_bodies(
     loaded: &Loaded,
     settings: &QuadratureSettings,
     timings: &mut Timings,
@@ -151,7 +151,7 @@ pub fn prepare_bodies(
 }
 
 /// The contact stage (or one linear solve) on the bodies' operators, for every load step.
-pub fn solve_contact(
+pub(crate) fn solve_contact(
     loaded: &Loaded,
     settings: &QuadratureSettings,
     ops: &Operators,

@@ -89,7 +89,7 @@ impl Plan {
 }
 
 /// The prescribed values that depend on the pseudo-time `t`, as key paths.
-pub fn time_dependent(scene: &Scene) -> Vec<String> {
+pub(crate) fn time_dependent(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
     // Exact tables, glob tables and defaults (named as in the scene).
     let t = &scene.tables;
@@ -163,7 +163,7 @@ pub fn time_dependent(scene: &Scene) -> Vec<String> {
 }
 
 /// Whether any prescribed value depends on the pseudo-time `t`.
-pub fn uses_time(scene: &Scene) -> bool {
+pub(crate) fn uses_time(scene: &Scene) -> bool {
     !time_dependent(scene).is_empty()
 }
 

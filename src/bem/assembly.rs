@@ -814,7 +814,7 @@ pub fn check_single_layer(sys: &BodySystem, body: &str) -> Result<f64> {
 }
 
 /// The physical segment of element `ei`.
-pub fn body_segment(body: &Body, ei: usize) -> Segment {
+pub(crate) fn body_segment(body: &Body, ei: usize) -> Segment {
     let e = &body.elements[ei];
     Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
 }

@@ -189,7 +189,7 @@ impl BodyOperators {
 }
 
 /// A readable description of one unknown, e.g. `F1 element 3 end 0 dir (1, 0)`.
-pub fn describe_unknown(u: &Unknown) -> String {
+pub(crate) fn describe_unknown(u: &Unknown) -> String {
     let d = |v: [f64; 2]| format!("({}, {})", fmt_num(v[0]), fmt_num(v[1]));
     match *u {
         Unknown::Traction1 { elem, end, dir } => {
@@ -883,7 +883,7 @@ fn or_dash(s: &str) -> &str {
 }
 
 /// "strain" | "stress".
-pub fn plane_name(p: Plane) -> &'static str {
+pub(crate) fn plane_name(p: Plane) -> &'static str {
     match p {
         Plane::Strain => "strain",
         Plane::Stress => "stress",
@@ -942,7 +942,7 @@ fn array_shape(what: &str, a: &Array, shape: &[usize]) -> std::result::Result<()
 // Time stamp and SHA-256, written here to avoid two dependencies for two small functions.
 
 /// The current UTC time, ISO 8601 to the second.
-pub fn utc_now() -> String {
+pub(crate) fn utc_now() -> String {
     let secs = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
@@ -951,7 +951,7 @@ pub fn utc_now() -> String {
 }
 
 /// ISO 8601 UTC text of a Unix time (civil-from-days, proleptic Gregorian calendar).
-pub fn utc_from_unix(secs: u64) -> String {
+pub(crate) fn utc_from_unix(secs: u64) -> String {
     let days = (secs / 86_400) as i64;
     let rem = secs % 86_400;
     let z = days + 719_468;
@@ -972,7 +972,7 @@ pub fn utc_from_unix(secs: u64) -> String {
 }
 
 /// SHA-256 of a file, lowercase hex.
-pub fn sha256_file(path: &Path) -> Result<String> {
+pub(crate) fn sha256_file(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::io(path, format!("cannot read the mesh to hash it: {e}")))?;
     Ok(sha256_hex(&bytes))

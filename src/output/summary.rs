@@ -283,7 +283,7 @@ pub fn qp(its: &[Interface], q: &QpCheck, thickness: f64) -> QpSummary {
 /// The first interface figure (interfaces by name, figures by key) that is not finite and
 /// so is written as `null`, as `interface "NAME": KEY`: a resultant of finite tractions can
 /// overflow.
-pub fn non_finite_figure(interfaces: &BTreeMap<String, InterfaceFigures>) -> Option<String> {
+pub(crate) fn non_finite_figure(interfaces: &BTreeMap<String, InterfaceFigures>) -> Option<String> {
     interfaces.iter().find_map(|(name, fig)| {
         fig.floats()
             .into_iter()

@@ -303,13 +303,13 @@ fn balance(body: &Body, c: [f64; 2], loads: Vec<(String, Wrench)>, thickness: f6
 
 /// Relative imbalance above which a body that no displacement condition holds is reported:
 /// such bodies balance to round-off in a solved discrete problem.
-pub const UNBALANCED: f64 = 1e-6;
+pub(crate) const UNBALANCED: f64 = 1e-6;
 
 /// A note naming the bodies held by interfaces and tractions only whose loads do not
 /// balance (a contact solution that is no equilibrium, e.g. past the collapse load); `None`
 /// when every such body balances. Bodies with displacement conditions are left out: their
 /// reactions balance only up to the discretisation error (module doc).
-pub fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
+pub(crate) fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
     let held = |body: &Body| {
         body.elements.iter().any(|e| match e.role {
             Role::Boundary(pi) => model.parts[pi]

@@ -346,7 +346,7 @@ impl Sides<'_> {
 
 /// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
 /// the curve joins several pairs of bodies: `joints[brick_1|brick_2]`.
-pub fn split_name(group: &str, a: &str, b: &str) -> String {
+pub(super) fn split_name(group: &str, a: &str, b: &str) -> String {
     format!("{group}[{a}|{b}]")
 }
 

@@ -46,7 +46,7 @@ mod overlap;
 
 use body::{build_body, mark_traction_breaks, node_dofs, winding};
 use checks::{check_held, check_values};
-pub use interface::split_name;
+use interface::split_name;
 use interface::{align_pair_frames, build_interface, check_one_sided, pairs_of_bodies};
 use overlap::check_overlaps;
 
@@ -421,7 +421,7 @@ fn fmt_point(p: [f64; 2]) -> String {
     format!("({}, {})", fmt_num(p[0]), fmt_num(p[1]))
 }
 /// Compact number formatting for messages and reports.
-pub fn fmt_num(v: f64) -> String {
+pub(crate) fn fmt_num(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }

@@ -29,7 +29,7 @@ use raw::{
     RawUnits,
 };
 use set::apply_set;
-pub use set::{parse_set, shown_set};
+pub(crate) use set::shown_set;
 use spec::{body_spec, boundary_spec, interface_spec, mesh_spec, output_spec, solve_spec};
 
 /// Plane strain or plane stress (docs/scene.md §2, `plane`).
@@ -358,7 +358,7 @@ pub fn read_scene(path: &Path) -> Result<Scene> {
 
 /// Reads a scene file, applies the `--set KEY=VALUE` overrides to its TOML document and
 /// validates the result exactly like a file.
-pub fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
+pub(crate) fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::io(path, format!("cannot read the scene file: {e}")))?;
     if let Some(hint) = not_a_scene(path, &bytes) {
@@ -382,7 +382,7 @@ pub fn read_scene_with(path: &Path, sets: &[String]) -> Result<Scene> {
 
 /// [`parse_scene`] with `--set KEY=VALUE` overrides applied to the document first. An error
 /// that only the overrides cause names the first `--set` that causes it.
-pub fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scene> {
+pub(crate) fn parse_scene_with(text: &str, path: &Path, sets: &[String]) -> Result<Scene> {
     if sets.is_empty() {
         return parse_scene(text, path);
     }
@@ -463,7 +463,7 @@ fn not_a_scene(path: &Path, bytes: &[u8]) -> Option<String> {
 
 /// Err message when `name` cannot be used as a file or group name: it must be made of ASCII
 /// letters, digits, `.`, `_` and `-`, not be empty and not start with `.`.
-pub fn file_name_problem(name: &str) -> Option<String> {
+pub(crate) fn file_name_problem(name: &str) -> Option<String> {
     if name.is_empty() {
         return Some("the name is empty".into());
     }
@@ -485,7 +485,7 @@ pub fn file_name_problem(name: &str) -> Option<String> {
 }
 
 /// Young's moduli outside this range are refused as extreme values.
-pub const YOUNG_RANGE: (f64, f64) = (1e-100, 1e100);
+pub(crate) const YOUNG_RANGE: (f64, f64) = (1e-100, 1e100);
 
 /// Parses and validates scene text; `path` locates relative paths and names the file in
 /// messages.

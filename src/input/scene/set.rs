@@ -4,7 +4,7 @@
 /// One `--set KEY=VALUE`: the dotted key path and the value. The value is read as a TOML
 /// value (number, string, boolean, array, inline table); anything that is not one is taken
 /// as a bare string, so `--set solve.method=qp` works without quotes.
-pub fn parse_set(set: &str) -> std::result::Result<(Vec<String>, toml::Value), String> {
+fn parse_set(set: &str) -> std::result::Result<(Vec<String>, toml::Value), String> {
     let whole = set;
     let set = &shown_set(set);
     let Some((key, value)) = whole.split_once('=') else {
@@ -59,7 +59,7 @@ pub(super) fn apply_set(doc: &mut toml::Table, set: &str) -> std::result::Result
 }
 
 /// A `--set` as messages show it: whole up to 100 characters, else its start and length.
-pub fn shown_set(set: &str) -> String {
+pub(crate) fn shown_set(set: &str) -> String {
     if set.chars().count() <= 100 {
         return set.to_string();
     }
