@@ -32,6 +32,7 @@ pub mod active_set;
 mod collapse;
 pub mod driver;
 pub mod evolutive;
+mod inner;
 pub mod interface;
 pub mod lcp;
 pub mod lemke;
@@ -46,6 +47,7 @@ use crate::error::Error;
 use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
+use inner::*;
 use lcp::{Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
 pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
@@ -163,6 +165,19 @@ struct StepLoop {
     /// Inner solves whose pivoting path the QP completed.
     rescues: usize,
     info: serde_json::Value,
+}
+
+impl StepLoop {
+    fn new(record: bool) -> Self {
+        StepLoop {
+            compact: Vec::new(),
+            record,
+            finishing: 0,
+            rescues: 0,
+            iterations_recorded: 0,
+            info: serde_json::json!({}),
+        }
+    }
 }
 
 /// What the outer loop of a load step leaves for its result.
@@ -364,10 +379,32 @@ impl<'a> Session<'a> {
         base: &problem::Base,
         st: &StepState,
         tol: f64,
+        (next, bound): (&mut StepState, &mut Vec<f64>),
+        (outer, change): (usize, f64),
+    ) -> String {
+        match self.coulomb_exact(base, st, tol) {
+            Ok((open, sign, b)) => {
+                self.restart_from(next, bound, (open, sign, b));
+                format!(
+                    "the Tresca fixed point had not settled after {outer} outer iterations \
+                     (last relative change {change:.1e}): restarted from the exact solution \
+                     of Klarbring's friction LCP (Lemke)"
+                )
+            }
+            Err(e) => format!(
+                "the Tresca fixed point had not settled after {outer} outer iterations and \
+                 Klarbring's friction LCP gave no solution ({e}); the fixed point continued"
+            ),
+        }
+    }
+
+    /// The next outer state and bounds from Coulomb's exact statuses and bounds.
+    fn restart_from(
+        &self,
         next: &mut StepState,
         bound: &mut Vec<f64>,
-    ) -> Result<(), String> {
-        let (open, sign, b) = self.coulomb_exact(base, st, tol)?;
+        (open, sign, b): (Vec<bool>, Vec<f64>, Vec<f64>),
+    ) {
         for r in 0..self.problem.n_open_rows {
             if matches!(
                 self.problem.rows[r].kind,
@@ -378,9 +415,12 @@ impl<'a> Session<'a> {
             }
         }
         *bound = b;
-        Ok(())
     }
 
+    /// A stick edge cycle: a pair at the contact edge opens once tied and closes once untied.
+    /// Such a pair is closed and slipping (the μ → ∞ limit of Coulomb friction where the
+    /// normal force vanishes): it is kept untied from now on.
+    ///
     /// Keeps the stick rows that flip along the cycle of outer iterates that `next` closes
     /// untied from now on (`edge_slip`, and open in `next`); how many. A cycle without such a
     /// row, or after 200 outer iterations, is a failure.
@@ -515,14 +555,7 @@ impl<'a> Session<'a> {
         let mut bound = start.bound.clone();
         let mut bound_changes: Vec<f64> = Vec::new();
         let mut relax = Relaxation::new();
-        let mut lp = StepLoop {
-            compact: Vec::new(),
-            record,
-            finishing: 0,
-            rescues: 0,
-            iterations_recorded: 0,
-            info: serde_json::json!({}),
-        };
+        let mut lp = StepLoop::new(record);
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
@@ -554,11 +587,7 @@ impl<'a> Session<'a> {
                 Err((e, probe)) => {
                     let (err, blocked) = self.explain(&e, &probe, &inner);
                     mechanism = blocked;
-                    failure = Some(Error::numerical(format!(
-                        "the contact solver ({}) failed at load step {}: {err}",
-                        method.name(),
-                        load_step + 1
-                    )));
+                    failure = Some(failed(method, load_step, &err));
                     break;
                 }
             };
@@ -570,11 +599,7 @@ impl<'a> Session<'a> {
             let state = outcome.state;
             if !ok {
                 mechanism = !outcome_blocked.is_empty();
-                let hint = if outcome_blocked.is_empty() {
-                    String::new()
-                } else {
-                    format!("; {}", self.mechanism(&outcome_blocked, &state, &inner))
-                };
+                let hint = self.hint(&outcome_blocked, &state, &inner);
                 failure = Some(not_converged(method, load_step, residual, &notes, &hint));
                 last = Some((state, residual));
                 break;
@@ -585,34 +610,18 @@ impl<'a> Session<'a> {
             let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
             let change = bound_change(&bound, &new_bound);
             let settled = !friction || change <= 1e-10;
-            if friction {
-                bound_changes.push(change);
-            }
+            bound_changes.extend(friction.then_some(change));
             relax.update(outer, change);
             bound = relax.apply(&bound, new_bound);
             if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
                 // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
                 // LCP through Lemke) and restart the fixed point from its bounds.
-                let note = self.coulomb_restart(&base, &st, tol, &mut next, &mut bound);
-                notes.push(match note {
-                    Ok(()) => format!(
-                        "the Tresca fixed point had not settled after {outer} outer \
-                         iterations (last relative change {change:.1e}): restarted from \
-                         the exact solution of Klarbring's friction LCP (Lemke)"
-                    ),
-                    Err(e) => format!(
-                        "the Tresca fixed point had not settled after {outer} outer iterations \
-                         and Klarbring's friction LCP gave no solution ({e}); the fixed point \
-                         continued"
-                    ),
-                });
+                let restart = (&mut next, &mut bound);
+                notes.push(self.coulomb_restart(&base, &st, tol, restart, (outer, change)));
             }
             iterates.push(st.open.clone());
             last = Some((state, residual));
-            let same = (0..n).all(|r| {
-                self.problem.rows[r].kind == RowKind::Friction || next.open[r] == st.open[r]
-            }) && next.cohesion == st.cohesion;
-            if same && settled {
+            if self.same_statuses(&st, &next) && settled {
                 converged = true;
                 st = next;
                 break;
@@ -627,9 +636,7 @@ impl<'a> Session<'a> {
                 continue;
             }
             if !seen.insert(next.open.clone()) {
-                // A stick edge cycle: a pair at the contact edge opens once tied and closes
-                // once untied. Such a pair is closed and slipping (the μ → ∞ limit of Coulomb
-                // friction where the normal force vanishes): keep it untied from now on.
+                // A stick edge cycle (see `untie_edge_cycle`).
                 match self.untie_edge_cycle(&iterates, &mut next, &mut edge_slip, outer) {
                     Ok(k) => slipping += k,
                     Err(e) => {
@@ -663,6 +670,13 @@ impl<'a> Session<'a> {
                 mechanism,
             },
         )
+    }
+
+    /// True when `next` keeps the statuses of `st` (but the friction rows' and cohesion).
+    fn same_statuses(&self, st: &StepState, next: &StepState) -> bool {
+        (0..self.problem.n_open_rows)
+            .all(|r| self.problem.rows[r].kind == RowKind::Friction || next.open[r] == st.open[r])
+            && next.cohesion == st.cohesion
     }
 
     /// The result of a load step from what its outer loop left (`end`): the boundary
@@ -837,6 +851,15 @@ impl<'a> Session<'a> {
         }
     }
 
+    /// "; " and the mechanism of the rows `blocked`, or nothing where none is.
+    fn hint(&self, blocked: &[usize], st: &InnerState, inner: &Inner) -> String {
+        if blocked.is_empty() {
+            String::new()
+        } else {
+            format!("; {}", self.mechanism(blocked, st, inner))
+        }
+    }
+
     /// Names the bodies and the motion that opening (or letting slip) the `blocked` rows
     /// would leave free, with the resultants of the last state `st`.
     fn mechanism(&self, blocked: &[usize], st: &InnerState, inner: &Inner) -> String {
@@ -949,370 +972,6 @@ impl<'a> Session<'a> {
             parts.join("; ")
         )
     }
-}
-
-/// Outer iterations of the Tresca fixed point before a step is reported as not converged.
-const FRICTION_OUTER_LIMIT: usize = 300;
-/// Largest number of rows for the dense coupled LCP (Lemke's tableau is dense).
-const COUPLED_MAX_ROWS: usize = 3000;
-/// At most this many rows that can open for the QP that checks a blocked pivoting path
-/// (a dense QP over them).
-const RESCUE_ROWS: usize = 3000;
-/// Outer iterations of the Tresca fixed point after which the exact coupled problem
-/// (Klarbring's LCP) is solved to restart it.
-const FRICTION_COUPLED_AFTER: usize = 10;
-
-/// One inner solve by `method` from the statuses of `st`, within `budget` iterations;
-/// the evolutive path records its states in `lp`.
-#[allow(clippy::too_many_arguments)]
-fn inner_solve(
-    inner: &Inner,
-    cols: &mut Columns,
-    system: &mut Option<sparse::SparseSystem>,
-    method: Solver,
-    st: &StepState,
-    budget: usize,
-    lp: &mut StepLoop,
-) -> Result<InnerOutcome, InnerFailure> {
-    match method {
-        Solver::Evolutive => {
-            let it0 = lp.iterations_recorded;
-            let mut k = it0;
-            let first = lp.compact.is_empty();
-            let record = lp.record;
-            let compact = &mut lp.compact;
-            let out = evolutive::solve(
-                inner,
-                cols,
-                &st.open,
-                &st.sign,
-                budget,
-                &mut |s: &InnerState| {
-                    // Later outer iterations start where the last one ended.
-                    if record && (first || k > it0) {
-                        compact.push((k, s.open.clone(), s.s.clone()));
-                    }
-                    k += 1;
-                },
-            );
-            Ok(out)
-        }
-        Solver::ActiveSet => {
-            let out = active_set::solve(inner, cols, &st.open, &st.sign, budget);
-            Ok(if out.stalled {
-                hand_over(inner, cols, out, budget, "active-set iteration cycled")
-            } else {
-                out
-            })
-        }
-        Solver::Sparse => {
-            if system.is_none() {
-                let built = sparse::SparseSystem::new(inner.problem)
-                    .map_err(|message| InnerFailure::State { message })?;
-                *system = Some(built);
-            }
-            let Some(sys) = system.as_mut() else {
-                return Err(InnerFailure::State {
-                    message: "the sparse contact system is missing".into(),
-                });
-            };
-            let mut out = sparse::solve(inner, sys, &st.open, &st.sign, budget);
-            if out.stalled && inner.n() > EVOLUTIVE_FALLBACK_ROWS {
-                // The evolutive path's columns cost the square of the rows: at this size the
-                // step ends here, not converged, with the reason in its notes.
-                out.notes.push(format!(
-                    "the evolutive path does not take over above {EVOLUTIVE_FALLBACK_ROWS} rows \
-                     ({} here)",
-                    inner.n()
-                ));
-                return Ok(out);
-            }
-            Ok(if out.stalled {
-                // The evolutive path starts again from the step's statuses, with the whole
-                // budget: the sparse iterates may have gone far from a solution.
-                out.state.open = st.open.clone();
-                out.state.sign = st.sign.clone();
-                let budget = budget + out.iterations;
-                hand_over(
-                    inner,
-                    cols,
-                    out,
-                    budget,
-                    "sparse active-set iteration stopped",
-                )
-            } else {
-                out
-            })
-        }
-        Solver::Lemke => {
-            let (statuses, pivots) = lemke::solve(inner, cols)?;
-            let (out, finish) = exact_state(inner, cols, &statuses);
-            lp.finishing += finish;
-            lp.info = serde_json::json!({
-                "pivots": pivots, "friction_finishing_pivots": lp.finishing,
-            });
-            Ok(out)
-        }
-        Solver::Qp => {
-            let q = qp::solve(inner, cols, inner.tol)?;
-            let (out, finish) = exact_state(inner, cols, &q.statuses);
-            lp.finishing += finish;
-            lp.info = serde_json::json!({
-                "iterations": q.iterations, "solver_status": q.solver_status,
-                "objective": q.objective, "variables": q.variables,
-                "constraints": q.constraints, "friction_finishing_pivots": lp.finishing,
-            });
-            Ok(out)
-        }
-    }
-}
-
-/// The active set stalled (a cycle or its iteration limit): the evolutive iteration goes
-/// on from where it stopped (the least-index rule after its own cycle terminates).
-fn hand_over(
-    inner: &Inner,
-    cols: &mut Columns,
-    stalled: InnerOutcome,
-    budget: usize,
-    why: &str,
-) -> InnerOutcome {
-    let mut notes = stalled.notes;
-    notes.push(format!(
-        "the {why} after {} iterations; continued with the evolutive iteration",
-        stalled.iterations
-    ));
-    let st = &stalled.state;
-    let mut out = evolutive::solve(
-        inner,
-        cols,
-        &st.open,
-        &st.sign,
-        budget.saturating_sub(stalled.iterations),
-        &mut |_| {},
-    );
-    out.iterations += stalled.iterations;
-    notes.append(&mut out.notes);
-    out.notes = notes;
-    out
-}
-
-/// The pivoting path stops where the row to switch cannot open without leaving a body
-/// free; for a positive semidefinite opening stiffness that does not prove that no
-/// solution exists (another order of pivots may reach one). The convex QP of the same
-/// inner problem decides it: a bounded minimiser, checked exactly from its statuses, is
-/// the solution, and the iteration goes on from it; an unbounded QP confirms the
-/// mechanism (`outcome` is returned as it is).
-fn qp_rescue(
-    inner: &Inner,
-    cols: &mut Columns,
-    method: Solver,
-    outcome: InnerOutcome,
-    it0: usize,
-    lp: &mut StepLoop,
-) -> InnerOutcome {
-    let rescued =
-        qp::solve(inner, cols, inner.tol).map(|q| exact_state(inner, cols, &q.statuses).0);
-    match rescued {
-        Ok(rescued) if rescued.converged => {
-            let k = it0 + outcome.iterations + 1;
-            if method == Solver::Evolutive && lp.record {
-                lp.compact
-                    .push((k, rescued.state.open.clone(), rescued.state.s.clone()));
-            }
-            lp.rescues += 1;
-            let mut notes = outcome.notes;
-            notes.extend(rescued.notes);
-            InnerOutcome {
-                state: rescued.state,
-                iterations: outcome.iterations + 1,
-                converged: true,
-                notes,
-                blocked: Vec::new(),
-                stalled: false,
-            }
-        }
-        _ => outcome,
-    }
-}
-
-/// One inner solve by `method` (`budget` iterations), and where a pivoting path stops at
-/// a row that cannot open, the QP's check of it (`qp_rescue`). A failure comes with the
-/// evolutive path's probe from the start statuses (`max_iterations`), which names the
-/// mechanism where there is one.
-fn solve_inner(
-    inner: &Inner,
-    (cols, sparse): (&mut Columns, &mut Option<sparse::SparseSystem>),
-    method: Solver,
-    st: &StepState,
-    (budget, max_iterations): (usize, usize),
-    lp: &mut StepLoop,
-) -> Result<InnerOutcome, (InnerFailure, Box<InnerOutcome>)> {
-    let it0 = lp.iterations_recorded;
-    match inner_solve(inner, cols, sparse, method, st, budget, lp) {
-        Ok(outcome)
-            if !outcome.converged
-                && !outcome.blocked.is_empty()
-                && matches!(method, Solver::Evolutive | Solver::ActiveSet)
-                && inner.n() <= RESCUE_ROWS =>
-        {
-            Ok(qp_rescue(inner, cols, method, outcome, it0, lp))
-        }
-        Ok(outcome) => Ok(outcome),
-        Err(e) => {
-            let probe =
-                evolutive::solve(inner, cols, &st.open, &st.sign, max_iterations, &mut |_| {});
-            Err((e, Box::new(probe)))
-        }
-    }
-}
-
-/// The failure of a friction fixed point that did not settle in `outer` iterations.
-fn unsettled(outer: usize, load_step: usize, change: f64) -> Error {
-    Error::numerical(format!(
-        "the friction fixed point (slip bounds μλ_n from the normal forces) did not settle in \
-         {outer} outer iterations at load step {}: the last relative change of the bounds was \
-         {change:.1e}; use smaller load steps (more values in solve.time or load_factors)",
-        load_step + 1,
-    ))
-}
-
-/// The failure of an inner solve that did not converge, with its notes and the mechanism
-/// `hint` (empty, or "; " and the motion).
-fn not_converged(
-    method: Solver,
-    load_step: usize,
-    residual: f64,
-    notes: &[String],
-    hint: &str,
-) -> Error {
-    Error::numerical(format!(
-        "the contact solver ({}) did not converge at load step {} (largest violation \
-         {residual:.1e} of its scale){}{hint}",
-        method.name(),
-        load_step + 1,
-        if notes.is_empty() {
-            String::new()
-        } else {
-            format!(": {}", notes.join("; "))
-        },
-    ))
-}
-
-/// The relative change of the slip bounds, over the largest finite bound (1 from the tied
-/// first iteration).
-fn bound_change(old: &[f64], new: &[f64]) -> f64 {
-    let scale = old
-        .iter()
-        .chain(new)
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, |a, v| a.max(v.abs()))
-        .max(f64::MIN_POSITIVE);
-    old.iter().zip(new).fold(0.0f64, |a, (x, y)| {
-        a.max(if x.is_finite() {
-            (x - y).abs() / scale
-        } else {
-            1.0
-        })
-    })
-}
-
-/// Rows above which the evolutive path does not take over where the sparse active set stops
-/// (its dense columns would cost about 8 n² bytes and hours).
-const EVOLUTIVE_FALLBACK_ROWS: usize = 40_000;
-
-/// Outer iterations of the Tresca fixed point taken whole whatever happens; after them, a
-/// change of the bounds that does not fall (an oscillating fixed point: large μ, where the
-/// slip of one pair moves the normal force of its neighbours) halves the step the new
-/// bounds take from the old ones (down to 1/16), and a change that halves doubles it again.
-/// The settled bounds are the same fixed point.
-const RELAX_AFTER: usize = 20;
-
-/// The step of the Tresca fixed point.
-struct Relaxation {
-    weight: f64,
-    last_change: f64,
-}
-
-impl Relaxation {
-    fn new() -> Self {
-        Relaxation {
-            weight: 1.0,
-            last_change: f64::INFINITY,
-        }
-    }
-
-    fn update(&mut self, outer: usize, change: f64) {
-        if outer > RELAX_AFTER {
-            if change >= 0.95 * self.last_change {
-                self.weight = (0.5 * self.weight).max(1.0 / 16.0);
-            } else if change <= 0.5 * self.last_change {
-                self.weight = (2.0 * self.weight).min(1.0);
-            }
-        }
-        self.last_change = change;
-    }
-
-    /// The next slip bounds from the old ones and those of the new normal forces.
-    fn apply(&self, old: &[f64], new: Vec<f64>) -> Vec<f64> {
-        if self.weight >= 1.0 || old.len() != new.len() {
-            return new;
-        }
-        let w = self.weight;
-        old.iter()
-            .zip(new)
-            .map(|(&x, y)| if x.is_finite() { x + w * (y - x) } else { y })
-            .collect()
-    }
-}
-
-/// Every row closed, nothing open: the state reported when no inner solve finished.
-fn all_closed_state(n: usize) -> InnerState {
-    InnerState {
-        open: vec![false; n],
-        sign: vec![0.0; n],
-        s: vec![0.0; n],
-        lambda: vec![0.0; n],
-    }
-}
-
-/// The exact state of the statuses `open` found by a solver that does not pivot (Lemke, QP).
-///
-/// With friction, a row at the stick/slip threshold whose slip increment is below the
-/// solver's precision can come out with the wrong slip direction (where most pairs slip, the
-/// slipping block of A is nearly singular and amplifies the last digits): such friction rows
-/// only are finished by the pivoting iteration from the solver's statuses, and the number of
-/// pivots is returned (0 when the statuses were exact).
-fn exact_state(inner: &Inner, cols: &mut Columns, statuses: &Statuses) -> (InnerOutcome, usize) {
-    let (o, refused) = inner.factor(cols, &statuses.open);
-    let state = inner.state(cols, &o, &statuses.sign);
-    let violations = inner.violations(&state);
-    if refused.is_empty()
-        && !violations.is_empty()
-        && violations.iter().all(|v| inner.is_friction(v.row))
-    {
-        let out = evolutive::solve(inner, cols, &state.open, &state.sign, 100, &mut |_| {});
-        let pivots = out.iterations;
-        return (out, pivots);
-    }
-    let converged = refused.is_empty() && violations.is_empty();
-    let mut notes = Vec::new();
-    if !refused.is_empty() {
-        notes.push(format!(
-            "{} pair(s) found open would leave a body free",
-            refused.len()
-        ));
-    }
-    (
-        InnerOutcome {
-            state,
-            iterations: 0,
-            converged,
-            notes,
-            blocked: refused,
-            stalled: false,
-        },
-        0,
-    )
 }
 
 /// A history row of a state.
