@@ -33,17 +33,11 @@ pub fn solve(
     let loose: Vec<usize> = refused.iter().copied().filter(|&r| inner.free[r]).collect();
     if !loose.is_empty() {
         let st = inner.state(cols, &o, &sign);
-        return InnerOutcome {
-            stalled: false,
-            state: st,
-            iterations: 0,
-            converged: false,
-            notes: vec![format!(
-                "{} free tangential row(s) cannot be free without leaving a body free",
-                loose.len()
-            )],
-            blocked: loose,
-        };
+        let why = format!(
+            "{} free tangential row(s) cannot be free without leaving a body free",
+            loose.len()
+        );
+        return InnerOutcome::failed(st, 0, vec![why], loose);
     }
     if !refused.is_empty() {
         notes.push(format!(
@@ -63,14 +57,9 @@ pub fn solve(
         let v = inner.violations(&st);
         if v.is_empty() {
             cols.keep(&o);
-            return InnerOutcome {
-                stalled: false,
-                state: st,
-                iterations,
-                converged: true,
-                notes,
-                blocked: Vec::new(),
-            };
+            let mut out = InnerOutcome::converged(st, iterations);
+            out.notes = notes;
+            return out;
         }
         let mut candidates = v.clone();
         if least_index {
@@ -118,14 +107,7 @@ pub fn solve(
             cols.keep(&o);
             let mut rows: Vec<usize> = blocked.iter().copied().collect();
             rows.sort_unstable();
-            return InnerOutcome {
-                stalled: false,
-                state: st,
-                iterations,
-                converged: false,
-                notes,
-                blocked: rows,
-            };
+            return InnerOutcome::failed(st, iterations, notes, rows);
         }
         iterations += 1;
         st = inner.state(cols, &o, &sign);
@@ -137,14 +119,7 @@ pub fn solve(
                     "the least-index rule returned to an earlier status after {iterations} \
                      iterations (the opening stiffness is not positive definite)"
                 ));
-                return InnerOutcome {
-                    stalled: false,
-                    state: st,
-                    iterations,
-                    converged: false,
-                    notes,
-                    blocked: Vec::new(),
-                };
+                return InnerOutcome::failed(st, iterations, notes, Vec::new());
             }
             notes.push(format!(
                 "the most-violated rule returned to an earlier status after {iterations} \
@@ -160,12 +135,5 @@ pub fn solve(
         "the contact iteration did not converge in {max_iterations} iterations \
          (solve.max_iterations)"
     ));
-    InnerOutcome {
-        stalled: false,
-        state: st,
-        iterations,
-        converged: false,
-        notes,
-        blocked: Vec::new(),
-    }
+    InnerOutcome::failed(st, iterations, notes, Vec::new())
 }

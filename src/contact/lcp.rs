@@ -54,6 +54,24 @@ impl InnerOutcome {
         }
     }
 
+    /// Not converged after `iterations`, with the rows that could not switch (`blocked`,
+    /// a mechanism where not empty) and why in `notes`: a verdict, no hand-over.
+    pub fn failed(
+        state: InnerState,
+        iterations: usize,
+        notes: Vec<String>,
+        blocked: Vec<usize>,
+    ) -> Self {
+        InnerOutcome {
+            state,
+            iterations,
+            converged: false,
+            notes,
+            blocked,
+            stalled: false,
+        }
+    }
+
     /// No verdict after `iterations` (the driver hands over to the evolutive path).
     pub fn stalled(state: InnerState, iterations: usize, notes: Vec<String>) -> Self {
         InnerOutcome {
