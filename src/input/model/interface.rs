@@ -1,0 +1,437 @@
+//! The interfaces of the model: node pairs matched between two bodies, the pair frames, and
+//! the check that an interface is not held on one side only.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::Path;
+
+use crate::error::{Error, Result};
+use crate::input::mesh::Mesh;
+use crate::input::scene::{InterfaceSpec, Scene};
+
+use super::body::constrained_directions;
+use super::{
+    dot, first_time, fmt_point, norm, pair_values, sub, unit, Body, DofClass, Interface,
+    InterfaceElement, Pair, Part, Role,
+};
+
+#[allow(clippy::too_many_arguments)]
+pub(super) fn build_interface(
+    k: usize,
+    (spec, group): (&InterfaceSpec, &str),
+    curves: &BTreeSet<i32>,
+    bodies: &[Body],
+    mesh: &Mesh,
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    scene: &Scene,
+    mfile: &Path,
+) -> Result<Interface> {
+    let sfile = scene.path.as_path();
+    let name = spec.name.as_str();
+    let t0 = first_time(scene);
+    let mut involved: BTreeSet<usize> = BTreeSet::new();
+    for c in curves {
+        let on = curve_bodies.get(c).cloned().unwrap_or_default();
+        if on.len() > 2 {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": curve {c} bounds {} bodies; an interface joins exactly two",
+                    on.len()
+                ),
+            ));
+        }
+        involved.extend(on);
+    }
+    let names = |set: &BTreeSet<usize>| -> String {
+        set.iter()
+            .map(|&b| format!("\"{}\"", bodies[b].name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if involved.len() != 2 {
+        return Err(Error::input(
+            sfile,
+            format!(
+                "[interface.{name}]: its curves bound {} bod{} ({}); an interface must be a curve \
+                 shared by exactly two bodies (draw the joint once and use it in both surfaces' \
+                 curve loops)",
+                involved.len(),
+                if involved.len() == 1 { "y" } else { "ies" },
+                names(&involved)
+            ),
+        ));
+    }
+    let mut it = involved.iter();
+    let (ba, bb) = match (it.next(), it.next()) {
+        (Some(&a), Some(&b)) => (a.min(b), a.max(b)),
+        _ => {
+            return Err(Error::input(
+                sfile,
+                format!("[interface.{name}]: needs two bodies"),
+            ))
+        }
+    };
+    let (a, b) = (&bodies[ba], &bodies[bb]);
+    let on_interface = |body: &Body| -> Vec<usize> {
+        (0..body.elements.len())
+            .filter(|&e| body.elements[e].role == Role::Interface(k))
+            .collect()
+    };
+    let elems_a = on_interface(a);
+    let elems_b = on_interface(b);
+
+    // Match B's interface nodes to A's: same mesh node, else same position.
+    let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
+    for &e in &elems_b {
+        for n in b.elements[e].nodes {
+            b_by_mesh.insert(b.mesh_nodes[n], n);
+        }
+    }
+    let min_len = elems_a
+        .iter()
+        .map(|&e| a.elements[e].length)
+        .chain(elems_b.iter().map(|&e| b.elements[e].length))
+        .fold(f64::INFINITY, f64::min);
+    let tol = 1e-6 * min_len;
+    let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
+    let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
+    let mut by_position = false;
+    for &e in &elems_a {
+        for n in a.elements[e].nodes {
+            if a_to_b.contains_key(&n) {
+                continue;
+            }
+            let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
+                Some(&m) => m,
+                None => {
+                    by_position = true;
+                    let x = a.nodes[n];
+                    match b_nodes
+                        .iter()
+                        .copied()
+                        .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
+                    {
+                        Some(m) => m,
+                        None => {
+                            return Err(Error::input(
+                                mfile,
+                                format!(
+                                    "interface \"{name}\": node {} {} of body \"{}\" has no \
+                                     matching node on body \"{}\": the two sides must be meshed \
+                                     with the same nodes; use one curve shared by both surfaces \
+                                     (or the same Transfinite count on both)",
+                                    mesh.node_tags[a.mesh_nodes[n]],
+                                    fmt_point(x),
+                                    a.name,
+                                    b.name
+                                ),
+                            ))
+                        }
+                    }
+                }
+            };
+            a_to_b.insert(n, partner);
+        }
+    }
+    if a_to_b.len() != b_nodes.len() {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "interface \"{name}\": body \"{}\" has {} interface nodes but body \"{}\" has {}: \
+                 mesh the joint as one curve shared by both surfaces",
+                a.name,
+                a_to_b.len(),
+                b.name,
+                b_nodes.len()
+            ),
+        ));
+    }
+
+    // Order A's interface elements along the curve direction as drawn (mesh order).
+    let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
+    let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
+    for &e in &elems_a {
+        let el = &a.elements[e];
+        let (s, t) = if !el.reversed {
+            (el.nodes[0], el.nodes[1])
+        } else {
+            (el.nodes[1], el.nodes[0])
+        };
+        next_of.insert(s, (e, t));
+        has_incoming.insert(t);
+    }
+    let mut starts: Vec<usize> = next_of
+        .keys()
+        .copied()
+        .filter(|n| !has_incoming.contains(n))
+        .collect();
+    starts.sort_by_key(|&n| a.mesh_nodes[n]);
+    if starts.is_empty() {
+        // A closed interface (a whole inclusion): start anywhere.
+        if let Some(&n) = next_of.keys().min() {
+            starts.push(n);
+        }
+    }
+    let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
+    let mut s_of: Vec<f64> = Vec::new();
+    let mut seen: BTreeSet<usize> = BTreeSet::new();
+    let mut s_acc = 0.0;
+    for &s0 in &starts {
+        let mut n = s0;
+        if seen.insert(n) {
+            order.push(n);
+            s_of.push(s_acc);
+        }
+        while let Some(&(e, t)) = next_of.get(&n) {
+            s_acc += a.elements[e].length;
+            if !seen.insert(t) {
+                break;
+            }
+            order.push(t);
+            s_of.push(s_acc);
+            n = t;
+        }
+    }
+    if order.len() != a_to_b.len() {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
+                 (a node joins more than two interface elements)",
+                a.name
+            ),
+        ));
+    }
+    let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
+
+    // Pairs with averaged normals of A.
+    let mut normals = vec![[0.0f64; 2]; order.len()];
+    for &e in &elems_a {
+        let el = &a.elements[e];
+        for n in el.nodes {
+            let j = pair_of[&n];
+            normals[j][0] += el.normal[0];
+            normals[j][1] += el.normal[1];
+        }
+    }
+    let mut pairs = Vec::with_capacity(order.len());
+    for (j, &na) in order.iter().enumerate() {
+        let normal = unit(normals[j]);
+        let x = a.nodes[na];
+        let (gap, cohesion, friction) = pair_values(spec, x, t0).map_err(|m| {
+            Error::input(
+                sfile,
+                format!("{m} (node {})", mesh.node_tags[a.mesh_nodes[na]]),
+            )
+        })?;
+        pairs.push(Pair {
+            node_a: na,
+            node_b: a_to_b[&na],
+            x,
+            normal,
+            tangent: [-normal[1], normal[0]],
+            s: s_of[j],
+            gap,
+            cohesion,
+            friction,
+        });
+    }
+
+    // Interface elements: A's element and B's element on the same node pair.
+    let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
+    for &e in &elems_b {
+        let [s, t] = b.elements[e].nodes;
+        b_elem_of.insert((s.min(t), s.max(t)), e);
+    }
+    let mut elements = Vec::with_capacity(elems_a.len());
+    for &e in &elems_a {
+        let [s, t] = a.elements[e].nodes;
+        let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
+        let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
+            Some(&eb) => eb,
+            None => {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "interface \"{name}\": element {} of body \"{}\" has no counterpart on \
+                         body \"{}\" joining the same nodes",
+                        a.elements[e].tag, a.name, b.name
+                    ),
+                ))
+            }
+        };
+        let ea = &a.elements[e];
+        let eb = &b.elements[elem_b];
+        if dot(ea.normal, eb.normal) > -0.999 {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of element \
+                     {}: the bodies overlap there",
+                    a.name, b.name, ea.tag
+                ),
+            ));
+        }
+        elements.push(InterfaceElement {
+            elem_a: e,
+            elem_b,
+            pairs: [pair_of[&s], pair_of[&t]],
+        });
+    }
+    let length = elems_a.iter().map(|&e| a.elements[e].length).sum();
+    Ok(Interface {
+        spec: spec.clone(),
+        group: group.to_string(),
+        body_a: ba,
+        body_b: bb,
+        pairs,
+        elements,
+        length,
+        matched_by_position: by_position,
+    })
+}
+
+/// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
+/// the curve joins several pairs of bodies: `joints[brick_1|brick_2]`.
+pub fn split_name(group: &str, a: &str, b: &str) -> String {
+    format!("{group}[{a}|{b}]")
+}
+
+/// The curves of an interface group per pair of bodies that share them (bodies by index,
+/// smaller first). When the group joins two or more pairs, each of its curves must be
+/// shared by exactly two bodies.
+pub(super) fn pairs_of_bodies(
+    group: &str,
+    curves: &[i32],
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    scene: &Scene,
+    sfile: &Path,
+) -> Result<BTreeMap<(usize, usize), BTreeSet<i32>>> {
+    let mut by_pair: BTreeMap<(usize, usize), BTreeSet<i32>> = BTreeMap::new();
+    for c in curves {
+        if let Some([a, b]) = curve_bodies.get(c).map(Vec::as_slice) {
+            by_pair
+                .entry(((*a).min(*b), (*a).max(*b)))
+                .or_default()
+                .insert(*c);
+        }
+    }
+    if by_pair.len() > 1 {
+        for c in curves {
+            let on = curve_bodies.get(c).map(Vec::as_slice).unwrap_or(&[]);
+            if on.len() != 2 {
+                let names: Vec<&str> = on.iter().map(|&b| scene.bodies[b].name.as_str()).collect();
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{group}\" joins several pairs of bodies, but its curve {c} \
+                         bounds {} bod{} ({}): each curve of an interface is shared by exactly \
+                         two bodies; move curve {c} to another Physical Curve",
+                        on.len(),
+                        if on.len() == 1 { "y" } else { "ies" },
+                        if names.is_empty() {
+                            "none".to_string()
+                        } else {
+                            names.join(", ")
+                        }
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(by_pair)
+}
+
+/// Where an interface ends on a displacement condition that fixes one direction (a symmetry
+/// plane crossing a curved joint), the pair frame is turned onto that direction: the averaged
+/// normal of a chord differs from the plane's by half an element's angle, and the frame of a
+/// pair must contain the prescribed direction. Turns larger than 30° are left to the
+/// assembly, which reports an oblique condition.
+pub(super) fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
+    let limit = 30f64.to_radians().cos();
+    for it in interfaces.iter_mut() {
+        let a = &bodies[it.body_a];
+        for p in it.pairs.iter_mut() {
+            let d = a.dofs[p.node_a];
+            let one_known = d.class[1] == DofClass::Known && d.class[0] != DofClass::Known;
+            if !one_known {
+                continue;
+            }
+            let k = d.frame[1];
+            let (cn, ct) = (dot(k, p.normal), dot(k, p.tangent));
+            if cn.abs() >= ct.abs() && cn.abs() >= limit {
+                p.normal = [k[0] * cn.signum(), k[1] * cn.signum()];
+                p.tangent = [-p.normal[1], p.normal[0]];
+            } else if ct.abs() > cn.abs() && ct.abs() >= limit {
+                p.tangent = [k[0] * ct.signum(), k[1] * ct.signum()];
+                p.normal = [p.tangent[1], -p.tangent[0]];
+            }
+        }
+    }
+}
+
+/// A displacement condition that reaches an interface node must hold both sides of the
+/// pair along each of the pair's directions, or neither (the assembly cannot join a known
+/// displacement on one side to an unknown one on the other): refused here, so that `check`
+/// says what `run` would.
+pub(super) fn check_one_sided(
+    bodies: &[Body],
+    interfaces: &[Interface],
+    parts: &[Part],
+    sfile: &Path,
+) -> Result<()> {
+    // The share of direction e that the known components of a node cover (0 to 1).
+    let known = |b: &Body, n: usize, e: [f64; 2]| -> f64 {
+        let d = b.dofs[n];
+        (0..2)
+            .filter(|&k| d.class[k] == DofClass::Known)
+            .map(|k| dot(d.frame[k], e).powi(2))
+            .sum()
+    };
+    // The boundary conditions of a body that reach node n.
+    let held_by = |b: &Body, n: usize| -> Vec<String> {
+        let mut names: Vec<String> = b
+            .elements
+            .iter()
+            .filter(|e| e.nodes.contains(&n))
+            .flat_map(|e| constrained_directions(e, parts))
+            .map(|(_, pi, _)| parts[pi].spec.name.clone())
+            .collect();
+        names.dedup();
+        names
+    };
+    for it in interfaces {
+        let (a, b) = (&bodies[it.body_a], &bodies[it.body_b]);
+        for p in &it.pairs {
+            for (e, what) in [(p.normal, "normal"), (p.tangent, "tangential")] {
+                let (ka, kb) = (known(a, p.node_a, e), known(b, p.node_b, e));
+                let whole = |k: f64| !(1e-9..=1.0 - 1e-9).contains(&k);
+                if whole(ka) && whole(kb) && (ka > 0.5) == (kb > 0.5) {
+                    continue;
+                }
+                let (held, loose) = if ka >= kb { (a, b) } else { (b, a) };
+                let node = if ka >= kb { p.node_a } else { p.node_b };
+                let by = held_by(held, node)
+                    .iter()
+                    .map(|n| format!("`boundary.{n}`"))
+                    .collect::<Vec<_>>()
+                    .join(", ");
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "interface \"{}\" at {}: {by} prescribes the {what} displacement of body \
+                         \"{}\" there, but nothing prescribes it on body \"{}\" across the \
+                         interface: a displacement component at an interface node is prescribed \
+                         on both bodies or on neither; extend the condition to the other body's \
+                         boundary that ends there, or end it before the interface",
+                        it.spec.name,
+                        fmt_point(p.x),
+                        held.name,
+                        loose.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,1026 @@
+//! The model: bodies with oriented boundary loops, boundary parts, interfaces with matched
+//! node pairs, and the class of every displacement degree of freedom.
+//!
+//! Place in the flow: `scene` + `mesh` → [`Model`] → assembly. Everything geometric that
+//! the boundary element method needs is decided here, once:
+//!
+//! * **Bodies** are Physical Surfaces. A body's boundary is the set of bounding curves of its
+//!   surfaces (a curve bounding two surfaces of the same body is internal and dropped); its
+//!   2-node line elements are chained into closed loops. The outer loop is oriented
+//!   counter-clockwise and holes clockwise, by signed area and nesting, whatever direction
+//!   gmsh drew each curve in (docs/formulation.md §1.1).
+//! * **Nodes are per body**: a mesh node on an interface appears once in each of the two
+//!   bodies (docs/formulation.md §5.1).
+//! * **Boundary parts** are Physical Curves with per-component conditions; curves the scene
+//!   does not list are traction-free.
+//! * **Interfaces** are Physical Curves shared by exactly two bodies, turned into node pairs
+//!   (matched by mesh node, or by position when the two sides were drawn as separate
+//!   coincident curves) with the outward normal of the first body (docs/formulation.md §5.4–§5.5).
+//! * **Double traction nodes** (`traction_break`) at corners and changes of condition
+//!   (docs/formulation.md §2.2, §8.3).
+//! * **Node classes** per displacement component (docs/formulation.md §2.2): U1 known (touching a
+//!   displacement condition in that direction), U0 unknown on an interface, U2 unknown
+//!   elsewhere.
+//!
+//! Checks made here (all input errors, exit 2): group names and kinds, open loops (with the
+//! gmsh hint about untagged curves), zero-length elements, crossing or overlapping bodies,
+//! interface nodes that do not match, expressions undefined at a node, and bodies that
+//! nothing holds against rigid motion.
+//!
+//! Files: this one holds the types and [`build`]; `body.rs` builds one body (loops, traction
+//! breaks, node classes), `interface.rs` the interfaces, `overlap.rs` and `checks.rs` the
+//! checks on the built bodies.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::path::{Path, PathBuf};
+
+use crate::error::{did_you_mean, Error, Result};
+use crate::input::mesh::Mesh;
+use crate::input::scene::{BoundarySpec, InitialState, InterfaceSpec, Scene, Tangential};
+use crate::input::tables::{self, Resolved};
+
+mod body;
+mod checks;
+mod interface;
+mod overlap;
+
+use body::{build_body, mark_traction_breaks, node_dofs, winding};
+use checks::{check_held, check_values};
+pub use interface::split_name;
+use interface::{align_pair_frames, build_interface, check_one_sided, pairs_of_bodies};
+use overlap::check_overlaps;
+
+/// Where a boundary element belongs.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Role {
+    /// A boundary part (index into [`Model::parts`]).
+    Boundary(usize),
+    /// An interface (index into [`Model::interfaces`]).
+    Interface(usize),
+}
+
+/// A straight 2-node boundary element of one body, oriented along its loop (body on the left).
+#[derive(Debug, Clone)]
+pub struct Element {
+    /// Body-local node indices, start then end.
+    pub nodes: [usize; 2],
+    /// gmsh element tag.
+    pub tag: usize,
+    /// gmsh curve entity the element lies on.
+    pub curve: i32,
+    pub role: Role,
+    pub length: f64,
+    /// Unit tangent, start → end.
+    pub tangent: [f64; 2],
+    /// Unit outward normal `(τ_y, −τ_x)`.
+    pub normal: [f64; 2],
+    /// Index of the loop the element belongs to.
+    pub loop_index: usize,
+    /// True when tractions are discontinuous at the start node: a double traction node
+    /// (corner, or change of part or condition).
+    pub traction_break: bool,
+    /// True when the element runs against the direction gmsh drew its curve in.
+    pub reversed: bool,
+}
+
+/// A closed boundary loop: element indices in traversal order.
+#[derive(Debug, Clone)]
+pub struct Loop {
+    pub elements: Vec<usize>,
+    /// Signed area enclosed (positive: counter-clockwise outer loop; negative: hole).
+    pub area: f64,
+    pub is_hole: bool,
+}
+
+/// Class of one displacement component at a node (docs/formulation.md §2.2).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DofClass {
+    /// U1: prescribed by a displacement condition.
+    Known,
+    /// U0: unknown, on an interface.
+    Interface,
+    /// U2: unknown, elsewhere.
+    Free,
+}
+
+/// The two displacement components of a node: their directions and classes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct NodeDofs {
+    /// Unit directions of components 0 and 1 (orthonormal).
+    pub frame: [[f64; 2]; 2],
+    pub class: [DofClass; 2],
+}
+
+/// One elastic body: a Physical Surface.
+#[derive(Debug, Clone)]
+pub struct Body {
+    pub name: String,
+    pub young: f64,
+    pub poisson: f64,
+    pub body_force: Option<[f64; 2]>,
+    /// The scene's body force (numbers or expressions in t), evaluated into `body_force` at
+    /// the model's pseudo-time.
+    pub body_force_spec: Option<[crate::input::expr::Scalar; 2]>,
+    /// gmsh surface entities of the body.
+    pub surfaces: Vec<i32>,
+    /// Boundary node coordinates (body-local numbering).
+    pub nodes: Vec<[f64; 2]>,
+    /// Index into `Mesh::nodes` of each body node.
+    pub mesh_nodes: Vec<usize>,
+    pub elements: Vec<Element>,
+    pub loops: Vec<Loop>,
+    pub dofs: Vec<NodeDofs>,
+    /// Mesh triangles of the body (mesh node indices), the grid for interior fields.
+    pub triangles: Vec<[usize; 3]>,
+    pub area: f64,
+}
+
+impl Body {
+    pub fn perimeter(&self) -> f64 {
+        self.elements.iter().map(|e| e.length).sum()
+    }
+
+    /// Winding number of the boundary around x: non-zero inside the body (holes cancel).
+    pub fn winding_number(&self, x: [f64; 2]) -> i32 {
+        winding(
+            x,
+            self.elements
+                .iter()
+                .map(|e| (self.nodes[e.nodes[0]], self.nodes[e.nodes[1]])),
+        )
+    }
+
+    /// Number of nodes in each class (U1, U0, U2), counting a node once per component.
+    pub fn dof_counts(&self) -> [usize; 3] {
+        let mut c = [0; 3];
+        for d in &self.dofs {
+            for k in d.class {
+                match k {
+                    DofClass::Known => c[0] += 1,
+                    DofClass::Interface => c[1] += 1,
+                    DofClass::Free => c[2] += 1,
+                }
+            }
+        }
+        c
+    }
+}
+
+/// A boundary part: a Physical Curve that is not an interface.
+#[derive(Debug, Clone)]
+pub struct Part {
+    pub spec: BoundarySpec,
+    /// False for a Physical Curve the scene does not list (traction-free).
+    pub listed: bool,
+    /// Elements per body (body index → count).
+    pub elements: BTreeMap<usize, usize>,
+    pub length: f64,
+}
+
+/// A matched interface node pair.
+#[derive(Debug, Clone)]
+pub struct Pair {
+    /// Body-local node index in the first body (A) and in the second (B).
+    pub node_a: usize,
+    pub node_b: usize,
+    /// Position (of A's node).
+    pub x: [f64; 2],
+    /// Unit outward normal of A at the node (averaged over A's adjacent interface elements).
+    pub normal: [f64; 2],
+    /// Unit tangent `(−n_y, n_x)`.
+    pub tangent: [f64; 2],
+    /// Arc length from the curve's first node.
+    pub s: f64,
+    /// Initial normal gap h ≥ 0 (open zones).
+    pub gap: f64,
+    /// Cohesion c ≥ 0 (closed zones).
+    pub cohesion: f64,
+    /// Coulomb coefficient μ ≥ 0 (`tangential = "friction"`; 0 otherwise).
+    pub friction: f64,
+}
+
+/// An interface element: the same segment seen from both bodies.
+#[derive(Debug, Clone, Copy)]
+pub struct InterfaceElement {
+    /// Element index in body A and in body B.
+    pub elem_a: usize,
+    pub elem_b: usize,
+    /// Pair indices at A's start and end nodes.
+    pub pairs: [usize; 2],
+}
+
+/// A Physical Curve shared by two bodies.
+#[derive(Debug, Clone)]
+pub struct Interface {
+    /// Its table; `spec.name` is the Physical Curve's name, or `CURVE[A|B]` for the part
+    /// between bodies A and B of a curve that joins several pairs of bodies.
+    pub spec: InterfaceSpec,
+    /// The Physical Curve.
+    pub group: String,
+    /// Body indices; A comes first in the scene.
+    pub body_a: usize,
+    pub body_b: usize,
+    /// Pairs in order of arc length.
+    pub pairs: Vec<Pair>,
+    pub elements: Vec<InterfaceElement>,
+    pub length: f64,
+    /// True when the two sides were separate coincident curves matched by position.
+    pub matched_by_position: bool,
+}
+
+/// Element size figures for `sgbem check`.
+#[derive(Debug, Clone, Default)]
+pub struct SizeStats {
+    pub smallest: (f64, String),
+    pub largest: (f64, String),
+    /// Largest length ratio between neighbouring elements of a loop.
+    pub grading: (f64, String),
+}
+
+/// The validated model.
+#[derive(Debug, Clone)]
+pub struct Model {
+    pub mesh_path: PathBuf,
+    pub bodies: Vec<Body>,
+    pub parts: Vec<Part>,
+    pub interfaces: Vec<Interface>,
+    /// Diagonal of the bounding box of all boundary nodes.
+    pub scale: f64,
+    pub sizes: SizeStats,
+    /// Physical Curves that lie on no body boundary (ignored).
+    pub unused_curves: Vec<String>,
+    /// The pseudo-time at which the prescribed values (gaps, cohesions, friction
+    /// coefficients, body forces, boundary values) are evaluated.
+    pub time: f64,
+    /// Which scene table applies to each body and interface group (exact, glob, default).
+    pub tables: Vec<Resolved>,
+}
+
+impl Model {
+    pub fn element_count(&self) -> usize {
+        self.bodies.iter().map(|b| b.elements.len()).sum()
+    }
+    pub fn pair_count(&self) -> usize {
+        self.interfaces.iter().map(|i| i.pairs.len()).sum()
+    }
+
+    /// The pairs of unilateral interfaces (the contact problem's complementarity rows).
+    pub fn unilateral_pair_count(&self) -> usize {
+        self.interfaces
+            .iter()
+            .filter(|i| i.spec.model == crate::input::scene::InterfaceModel::Unilateral)
+            .map(|i| i.pairs.len())
+            .sum()
+    }
+
+    /// The junctions: points where a body meets two or more others (a node of one body in
+    /// pairs of two or more interfaces), as (point, bodies meeting there), in body order.
+    pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {
+        let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
+        for it in &self.interfaces {
+            for p in &it.pairs {
+                *count.entry((it.body_a, p.node_a)).or_default() += 1;
+                *count.entry((it.body_b, p.node_b)).or_default() += 1;
+            }
+        }
+        // Group the junction nodes by position (the nodes of all bodies there coincide).
+        let mut out: Vec<([f64; 2], Vec<usize>)> = Vec::new();
+        let tol = 1e-9 * self.scale;
+        for (&(b, n), &c) in &count {
+            if c < 2 {
+                continue;
+            }
+            let x = self.bodies[b].nodes[n];
+            match out
+                .iter_mut()
+                .find(|(y, _)| (y[0] - x[0]).abs() <= tol && (y[1] - x[1]).abs() <= tol)
+            {
+                Some((_, bodies)) => bodies.push(b),
+                None => out.push((x, vec![b])),
+            }
+        }
+        out
+    }
+
+    /// The model with its prescribed values evaluated at pseudo-time `t` (a load step of
+    /// `[solve] time`): body forces, and the gap, cohesion and friction coefficient of
+    /// every pair; boundary values are evaluated at `time` by the assembly. Values that are
+    /// not finite or negative where they must not be are input errors naming the step.
+    pub fn at_time(&self, scene: &Scene, t: f64) -> Result<Model> {
+        let mut m = self.clone();
+        m.time = t;
+        for body in m.bodies.iter_mut() {
+            body.body_force = body
+                .body_force_spec
+                .as_ref()
+                .map(|b| [b[0].eval([0.0, 0.0], t), b[1].eval([0.0, 0.0], t)]);
+            if let Some(b) = body.body_force {
+                if !b.iter().all(|c| c.is_finite()) {
+                    return Err(Error::input(
+                        &scene.path,
+                        format!(
+                            "`body.{}.body_force` is not finite at t = {}: it must be finite at \
+                             every step",
+                            body.name,
+                            fmt_num(t)
+                        ),
+                    ));
+                }
+            }
+        }
+        for it in &mut m.interfaces {
+            for p in &mut it.pairs {
+                let (gap, cohesion, friction) =
+                    pair_values(&it.spec, p.x, t).map_err(|msg| Error::input(&scene.path, msg))?;
+                p.gap = gap;
+                p.cohesion = cohesion;
+                p.friction = friction;
+            }
+        }
+        check_values(&m.bodies, &m.parts, &scene.path, t)?;
+        Ok(m)
+    }
+}
+
+/// The pseudo-time of the first load step (1 without `[solve] time`).
+fn first_time(scene: &Scene) -> f64 {
+    scene.solve.steps().first().map_or(1.0, |s| s.1)
+}
+
+/// Gap, cohesion and friction coefficient of a pair at x and pseudo-time t (each only where
+/// its interface's settings use it); an error message when one is not finite and >= 0.
+fn pair_values(
+    spec: &InterfaceSpec,
+    x: [f64; 2],
+    t: f64,
+) -> std::result::Result<(f64, f64, f64), String> {
+    let gap = spec.gap.eval(x, t);
+    let cohesion = spec.cohesion.eval(x, t);
+    let friction = spec.friction.eval(x, t);
+    if !gap.is_finite() {
+        return Err(format!(
+            "`interface.{}.gap` is {} at {} (t = {}): it must be a finite number at every \
+             interface node and step (negative: an interference)",
+            spec.name,
+            fmt_num(gap),
+            fmt_point(x),
+            fmt_num(t)
+        ));
+    }
+    for (what, v) in [("cohesion", cohesion), ("friction", friction)] {
+        if !(v.is_finite() && v >= 0.0) {
+            return Err(format!(
+                "`interface.{}.{what}` is {} at {} (t = {}): it must be a finite number >= 0 \
+                 at every interface node and step",
+                spec.name,
+                fmt_num(v),
+                fmt_point(x),
+                fmt_num(t)
+            ));
+        }
+    }
+    Ok((
+        if spec.initial == InitialState::Open {
+            gap
+        } else {
+            0.0
+        },
+        if spec.initial == InitialState::Closed {
+            cohesion
+        } else {
+            0.0
+        },
+        if spec.tangential == Tangential::Friction {
+            friction
+        } else {
+            0.0
+        },
+    ))
+}
+
+// ---------------------------------------------------------------------------------------
+// Small 2-vector helpers.
+
+fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
+    [a[0] - b[0], a[1] - b[1]]
+}
+fn norm(a: [f64; 2]) -> f64 {
+    a[0].hypot(a[1])
+}
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[0] + a[1] * b[1]
+}
+fn unit(a: [f64; 2]) -> [f64; 2] {
+    let n = norm(a);
+    [a[0] / n, a[1] / n]
+}
+fn fmt_point(p: [f64; 2]) -> String {
+    format!("({}, {})", fmt_num(p[0]), fmt_num(p[1]))
+}
+/// Compact number formatting for messages and reports.
+pub fn fmt_num(v: f64) -> String {
+    if v == 0.0 {
+        return "0".into();
+    }
+    let a = v.abs();
+    if (1e-3..1e6).contains(&a) {
+        let s = format!("{v:.6}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
+const OPEN_LOOP_HINT: &str = "gmsh drops the elements of curves that are in no Physical Curve \
+once any physical group exists: add every boundary curve to a named Physical Curve \
+(e.g. Physical Curve(\"free\") = {...};) and mesh again";
+
+/// What each physical curve of the mesh is, after reading the scene.
+enum CurveUse {
+    Boundary(usize),
+    Interface(usize),
+    /// A Physical Curve joining several pairs of bodies: the interface of each pair.
+    Split(BTreeMap<(usize, usize), usize>),
+}
+
+/// Builds and validates the model of a scene on a mesh.
+pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
+    let t0 = first_time(scene);
+    let (with_bodies, mut resolved) = tables::resolve_bodies(scene, mesh)?;
+    let scene = &with_bodies;
+    let mfile = mesh_path;
+    let sfile = scene.path.as_path();
+    let named = |dim: i32| -> Vec<&str> {
+        mesh.physical_names
+            .iter()
+            .filter(|p| p.dim == dim)
+            .map(|p| p.name.as_str())
+            .collect()
+    };
+    let group_tag = |dim: i32, name: &str| -> Option<i32> {
+        mesh.physical_names
+            .iter()
+            .find(|p| p.dim == dim && p.name == name)
+            .map(|p| p.tag)
+    };
+    let wrong_kind = |key: &str, name: &str, want: i32| -> Error {
+        let kinds = [
+            "Physical Point",
+            "Physical Curve",
+            "Physical Surface",
+            "Physical Volume",
+        ];
+        let found = mesh
+            .physical_names
+            .iter()
+            .find(|p| p.name == name)
+            .map(|p| kinds.get(p.dim as usize).copied().unwrap_or("group"));
+        let want_s = kinds[want as usize];
+        match found {
+            Some(kind) => Error::input(
+                sfile,
+                format!(
+                    "[{key}.{name}] names a {kind} of {}, but a {key} must be a {want_s}",
+                    mfile.display()
+                ),
+            ),
+            None => Error::input(
+                sfile,
+                format!(
+                    "[{key}.{name}]: {} has no {want_s} named \"{name}\"{}; its {want_s}s are: {}",
+                    mfile.display(),
+                    did_you_mean(name, named(want).into_iter()),
+                    list_or_none(&named(want))
+                ),
+            ),
+        }
+    };
+
+    // --- Bodies: physical surfaces -----------------------------------------------------
+    let mut surface_owner: HashMap<i32, usize> = HashMap::new();
+    let mut body_surfaces: Vec<Vec<i32>> = Vec::new();
+    for (bi, spec) in scene.bodies.iter().enumerate() {
+        let tag = group_tag(2, &spec.name).ok_or_else(|| wrong_kind("body", &spec.name, 2))?;
+        let surfaces: Vec<i32> = mesh
+            .surfaces
+            .values()
+            .filter(|s| s.physical_tags.contains(&tag))
+            .map(|s| s.tag)
+            .collect();
+        if surfaces.is_empty() {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "Physical Surface \"{}\" holds no surface entity: mesh the .geo again",
+                    spec.name
+                ),
+            ));
+        }
+        for &s in &surfaces {
+            if let Some(&other) = surface_owner.get(&s) {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "surface {s} belongs to both Physical Surfaces \"{}\" and \"{}\": bodies \
+                         overlap; put each surface in one body only",
+                        scene.bodies[other].name, spec.name
+                    ),
+                ));
+            }
+            surface_owner.insert(s, bi);
+        }
+        body_surfaces.push(surfaces);
+    }
+    for p in mesh.physical_names.iter().filter(|p| p.dim == 2) {
+        if scene.body(&p.name).is_none() {
+            return Err(Error::input(
+                sfile,
+                format!(
+                    "{} has a Physical Surface \"{}\" but the scene has no [body.{}]: add it with \
+                     its young and poisson (or a [body.\"PATTERN*\"] or [defaults.body] table \
+                     that applies to it){}",
+                    mfile.display(),
+                    p.name,
+                    p.name,
+                    did_you_mean(&p.name, scene.bodies.iter().map(|b| b.name.as_str()))
+                        .replace("did you mean", "or rename")
+                ),
+            ));
+        }
+    }
+
+    // --- Boundary curves of each body ---------------------------------------------------
+    let mut body_curves: Vec<BTreeSet<i32>> = Vec::new();
+    for (bi, surfaces) in body_surfaces.iter().enumerate() {
+        let mut count: BTreeMap<i32, usize> = BTreeMap::new();
+        for s in surfaces {
+            let ent = &mesh.surfaces[s];
+            if ent.bounding.is_empty() {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "surface {s} of body \"{}\" has no bounding curves in $Entities",
+                        scene.bodies[bi].name
+                    ),
+                ));
+            }
+            for c in &ent.bounding {
+                let tag = c.checked_abs().filter(|t| *t > 0).ok_or_else(|| {
+                    Error::input(
+                        mfile,
+                        format!("surface {s} lists an invalid bounding curve tag {c} in $Entities"),
+                    )
+                })?;
+                *count.entry(tag).or_default() += 1;
+            }
+        }
+        // A curve bounding two surfaces of the same body is internal to it.
+        body_curves.push(
+            count
+                .into_iter()
+                .filter(|(_, n)| n % 2 == 1)
+                .map(|(c, _)| c)
+                .collect(),
+        );
+    }
+    let mut curve_bodies: BTreeMap<i32, Vec<usize>> = BTreeMap::new();
+    for (bi, curves) in body_curves.iter().enumerate() {
+        for &c in curves {
+            curve_bodies.entry(c).or_default().push(bi);
+        }
+    }
+
+    // --- Interface tables from globs and defaults, now that shared curves are known -------
+    let shared_groups: BTreeSet<&str> = mesh
+        .physical_names
+        .iter()
+        .filter(|p| p.dim == 1)
+        .filter(|p| {
+            mesh.curves.values().any(|c| {
+                c.physical_tags.contains(&p.tag)
+                    && curve_bodies.get(&c.tag).is_some_and(|b| b.len() >= 2)
+            })
+        })
+        .map(|p| p.name.as_str())
+        .collect();
+    let (with_interfaces, from_tables) = tables::resolve_interfaces(scene, mesh, &shared_groups)?;
+    resolved.extend(from_tables);
+    let scene = &with_interfaces;
+
+    // --- What each physical curve is -----------------------------------------------------
+    for b in &scene.boundaries {
+        if group_tag(1, &b.name).is_none() {
+            return Err(wrong_kind("boundary", &b.name, 1));
+        }
+    }
+    for i in &scene.interfaces {
+        if group_tag(1, &i.name).is_none() {
+            return Err(wrong_kind("interface", &i.name, 1));
+        }
+    }
+    let mut parts: Vec<Part> = Vec::new();
+    // (the interface's table, named after its pair of bodies when the curve is split; its curves)
+    let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
+    let mut uses: HashMap<i32, CurveUse> = HashMap::new(); // group tag → use
+    let mut unused_curves = Vec::new();
+    for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
+        let curves: Vec<i32> = mesh
+            .curves
+            .values()
+            .filter(|c| c.physical_tags.contains(&p.tag))
+            .map(|c| c.tag)
+            .collect();
+        let on_bodies: BTreeSet<usize> = curves
+            .iter()
+            .filter_map(|c| curve_bodies.get(c))
+            .flatten()
+            .copied()
+            .collect();
+        if on_bodies.is_empty() {
+            if scene.boundary(&p.name).is_some() || scene.interface(&p.name).is_some() {
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "Physical Curve \"{}\" lies on no body boundary in {}: check the curves \
+                         it holds",
+                        p.name,
+                        mfile.display()
+                    ),
+                ));
+            }
+            unused_curves.push(p.name.clone());
+            continue;
+        }
+        let shared: Vec<i32> = curves
+            .iter()
+            .copied()
+            .filter(|c| curve_bodies.get(c).is_some_and(|b| b.len() >= 2))
+            .collect();
+        if let Some(spec) = scene.interface(&p.name) {
+            let by_pair = pairs_of_bodies(&p.name, &curves, &curve_bodies, scene, sfile)?;
+            if by_pair.len() <= 1 {
+                uses.insert(p.tag, CurveUse::Interface(interfaces_found.len()));
+                interfaces_found.push((
+                    spec.clone(),
+                    p.name.clone(),
+                    curves.iter().copied().collect(),
+                ));
+            } else {
+                let mut split = BTreeMap::new();
+                for ((a, b), set) in by_pair {
+                    split.insert((a, b), interfaces_found.len());
+                    let name = split_name(&p.name, &scene.bodies[a].name, &scene.bodies[b].name);
+                    interfaces_found.push((
+                        InterfaceSpec {
+                            name,
+                            ..spec.clone()
+                        },
+                        p.name.clone(),
+                        set,
+                    ));
+                }
+                uses.insert(p.tag, CurveUse::Split(split));
+            }
+        } else {
+            if let Some(&c) = shared.first() {
+                let names: Vec<&str> = curve_bodies[&c]
+                    .iter()
+                    .map(|&b| scene.bodies[b].name.as_str())
+                    .collect();
+                let how = if scene.boundary(&p.name).is_some() {
+                    format!("[boundary.{}] cannot apply to it", p.name)
+                } else {
+                    "the scene does not list it".to_string()
+                };
+                return Err(Error::input(
+                    sfile,
+                    format!(
+                        "Physical Curve \"{}\" is shared by bodies {} (curve {c}) and {how}: \
+                         declare [interface.{}] with model = \"bonded\" or \"unilateral\" (or \
+                         an [interface.\"PATTERN*\"] or [defaults.interface] table)",
+                        p.name,
+                        names.join(" and "),
+                        p.name
+                    ),
+                ));
+            }
+            let (spec, listed) = match scene.boundary(&p.name) {
+                Some(s) => (s.clone(), true),
+                None => (BoundarySpec::traction_free(&p.name), false),
+            };
+            uses.insert(p.tag, CurveUse::Boundary(parts.len()));
+            parts.push(Part {
+                spec,
+                listed,
+                elements: BTreeMap::new(),
+                length: 0.0,
+            });
+        }
+    }
+
+    // The role of each boundary curve (through its physical group).
+    let mut curve_role: HashMap<i32, Role> = HashMap::new();
+    for (bi, curves) in body_curves.iter().enumerate() {
+        for &c in curves {
+            let ent = match mesh.curves.get(&c) {
+                Some(e) => e,
+                None => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "surface of body \"{}\" is bounded by curve {c}, which $Entities does \
+                             not define",
+                            scene.bodies[bi].name
+                        ),
+                    ))
+                }
+            };
+            let roles: Vec<(Role, String)> = ent
+                .physical_tags
+                .iter()
+                .filter_map(|t| {
+                    let name = mesh.physical_name(1, *t)?.to_string();
+                    match uses.get(t)? {
+                        CurveUse::Boundary(pi) => Some((Role::Boundary(*pi), name)),
+                        CurveUse::Interface(k) => Some((Role::Interface(*k), name)),
+                        CurveUse::Split(by_pair) => {
+                            let on = curve_bodies.get(&c)?;
+                            let k = by_pair.get(&(on[0].min(on[1]), on[0].max(on[1])))?;
+                            Some((Role::Interface(*k), name))
+                        }
+                    }
+                })
+                .collect();
+            // Groups the scene uses win over unlisted (traction-free) ones.
+            let used: Vec<&(Role, String)> = roles
+                .iter()
+                .filter(|(r, _)| match r {
+                    Role::Boundary(pi) => parts[*pi].listed,
+                    Role::Interface(_) => true,
+                })
+                .collect();
+            let listed: Vec<&(Role, String)> = if used.is_empty() {
+                roles.iter().take(1).collect()
+            } else {
+                used
+            };
+            match listed.as_slice() {
+                [] => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "curve {c} bounds body \"{}\" but belongs to no named Physical \
+                             Curve: {OPEN_LOOP_HINT}",
+                            scene.bodies[bi].name
+                        ),
+                    ))
+                }
+                [(role, _)] => {
+                    curve_role.insert(c, *role);
+                }
+                many => {
+                    let names: Vec<&str> = many.iter().map(|(_, n)| n.as_str()).collect();
+                    return Err(Error::input(
+                        sfile,
+                        format!(
+                            "curve {c} belongs to Physical Curves {} which the scene all uses: \
+                             a curve may carry one condition; split the groups",
+                            names.join(", ")
+                        ),
+                    ));
+                }
+            }
+        }
+    }
+
+    // --- Line elements per curve ----------------------------------------------------------
+    let mut curve_lines: HashMap<i32, Vec<usize>> = HashMap::new();
+    for (li, l) in mesh.lines.iter().enumerate() {
+        curve_lines.entry(l.curve).or_default().push(li);
+    }
+
+    let mut all_nodes: Vec<[f64; 2]> = Vec::new();
+    for curves in &body_curves {
+        for c in curves {
+            for &li in curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]) {
+                for &n in &mesh.lines[li].nodes {
+                    all_nodes.push(mesh.nodes[n]);
+                }
+            }
+        }
+    }
+    let scale = bbox_diagonal(&all_nodes);
+    check_resolution(mesh, &body_curves, &curve_lines, mfile)?;
+    if !(scale > 0.0 && scale.is_finite()) {
+        return Err(Error::input(
+            mfile,
+            "the bodies have no boundary elements of positive size: mesh with `gmsh -2` (or -1)",
+        ));
+    }
+
+    // --- Bodies: nodes, loops, orientation -------------------------------------------------
+    let mut bodies: Vec<Body> = Vec::new();
+    for (bi, spec) in scene.bodies.iter().enumerate() {
+        let mut body = build_body(
+            spec.name.as_str(),
+            &body_curves[bi],
+            &curve_lines,
+            &curve_role,
+            mesh,
+            mfile,
+            scale,
+        )?;
+        body.young = spec.young;
+        body.poisson = spec.poisson;
+        body.body_force = spec.body_force_at(t0);
+        body.body_force_spec = spec.body_force.clone();
+        body.surfaces = body_surfaces[bi].clone();
+        body.triangles = mesh
+            .triangles
+            .iter()
+            .filter(|t| body.surfaces.contains(&t.surface))
+            .map(|t| t.nodes)
+            .collect();
+        bodies.push(body);
+    }
+
+    // Part statistics.
+    for (bi, body) in bodies.iter().enumerate() {
+        for e in &body.elements {
+            if let Role::Boundary(pi) = e.role {
+                *parts[pi].elements.entry(bi).or_default() += 1;
+                parts[pi].length += e.length;
+            }
+        }
+    }
+
+    // --- Interfaces ---------------------------------------------------------------------------
+    let mut interfaces = Vec::new();
+    for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
+        interfaces.push(build_interface(
+            k,
+            (spec, group),
+            curves,
+            &bodies,
+            mesh,
+            &curve_bodies,
+            scene,
+            mfile,
+        )?);
+    }
+
+    check_overlaps(&bodies, mfile, scale)?;
+    mark_traction_breaks(&mut bodies);
+    for body in bodies.iter_mut() {
+        body.dofs = node_dofs(body, &parts);
+    }
+    align_pair_frames(&bodies, &mut interfaces);
+    check_one_sided(&bodies, &interfaces, &parts, sfile)?;
+    check_values(&bodies, &parts, sfile, t0)?;
+    check_held(&bodies, &interfaces, sfile, scale)?;
+    let sizes = size_stats(&bodies);
+
+    let model = Model {
+        tables: resolved,
+        mesh_path: mesh_path.to_path_buf(),
+        bodies,
+        parts,
+        interfaces,
+        scale,
+        sizes,
+        unused_curves,
+        time: t0,
+    };
+    // Every step's values must be valid, not only the first's.
+    if scene.solve.time.is_some() {
+        for (_, t) in scene.solve.steps().into_iter().skip(1) {
+            model.at_time(scene, t)?;
+        }
+    }
+    Ok(model)
+}
+
+fn list_or_none(names: &[&str]) -> String {
+    if names.is_empty() {
+        "none".into()
+    } else {
+        names
+            .iter()
+            .map(|n| format!("\"{n}\""))
+            .collect::<Vec<_>>()
+            .join(", ")
+    }
+}
+
+/// How far from the origin the body lines lie (largest coordinate), the step with which
+/// floating point resolves coordinates there, and their shortest positive element.
+pub fn resolution(lines: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> (f64, f64, f64) {
+    let (mut far, mut h) = (0.0f64, f64::INFINITY);
+    for (a, b) in lines {
+        far = far
+            .max(a[0].abs())
+            .max(a[1].abs())
+            .max(b[0].abs())
+            .max(b[1].abs());
+        let l = norm(sub(b, a));
+        if l > 0.0 {
+            h = h.min(l);
+        }
+    }
+    (far, far * f64::EPSILON, h)
+}
+
+/// Refuses a mesh so far from the origin that floating point resolves its coordinates to
+/// no better than a tenth of its shortest element (nodes then round onto one another):
+/// the reason, not a symptom (zero-length elements, "duplicate points").
+fn check_resolution(
+    mesh: &Mesh,
+    body_curves: &[BTreeSet<i32>],
+    curve_lines: &HashMap<i32, Vec<usize>>,
+    mfile: &Path,
+) -> Result<()> {
+    let lines = body_curves
+        .iter()
+        .flatten()
+        .flat_map(|c| curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]))
+        .map(|&li| {
+            let n = mesh.lines[li].nodes;
+            (mesh.nodes[n[0]], mesh.nodes[n[1]])
+        });
+    let (far, step, h) = resolution(lines);
+    if !far.is_finite() || (far > 0.0 && (step > 0.1 * h || step.is_nan())) {
+        let shortest = if h.is_finite() {
+            format!("a tenth of its shortest element ({})", fmt_num(h))
+        } else {
+            "the size of any element (every element has collapsed)".to_string()
+        };
+        return Err(Error::input(
+            mfile,
+            format!(
+                "the mesh lies {} from the origin, where floating point resolves coordinates \
+                 only to {}, more than {shortest}: nodes round onto one another and the \
+                 geometry is lost; move the model near the origin (e.g. Translate in the .geo, \
+                 or subtract a reference point from the coordinates) and mesh again",
+                fmt_num(far),
+                fmt_num(step)
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn bbox_diagonal(points: &[[f64; 2]]) -> f64 {
+    let mut lo = [f64::INFINITY; 2];
+    let mut hi = [f64::NEG_INFINITY; 2];
+    for p in points {
+        for k in 0..2 {
+            lo[k] = lo[k].min(p[k]);
+            hi[k] = hi[k].max(p[k]);
+        }
+    }
+    if points.is_empty() {
+        0.0
+    } else {
+        norm(sub(hi, lo))
+    }
+}
+
+fn size_stats(bodies: &[Body]) -> SizeStats {
+    let mut s = SizeStats {
+        smallest: (f64::INFINITY, String::new()),
+        largest: (0.0, String::new()),
+        grading: (1.0, String::new()),
+    };
+    for body in bodies {
+        for e in &body.elements {
+            let place = format!("body \"{}\", element {}", body.name, e.tag);
+            if e.length < s.smallest.0 {
+                s.smallest = (e.length, place.clone());
+            }
+            if e.length > s.largest.0 {
+                s.largest = (e.length, place);
+            }
+        }
+        for l in &body.loops {
+            let n = l.elements.len();
+            for k in 0..n {
+                let (p, q) = (
+                    &body.elements[l.elements[k]],
+                    &body.elements[l.elements[(k + 1) % n]],
+                );
+                let r = p.length.max(q.length) / p.length.min(q.length);
+                if r > s.grading.0 {
+                    s.grading = (
+                        r,
+                        format!("body \"{}\", elements {} and {}", body.name, p.tag, q.tag),
+                    );
+                }
+            }
+        }
+    }
+    s
+}
