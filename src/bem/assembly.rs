@@ -275,9 +275,8 @@ pub fn assemble_body_scaled(
         if !side_a && it.body_b != bi {
             continue;
         }
-        for (j, p) in it.pairs.iter().enumerate() {
-            let n = if side_a { p.node_a } else { p.node_b };
-            node_pairs[n].push((k, j));
+        for j in 0..it.point_count(side_a) {
+            node_pairs[it.point(side_a, j).0].push((k, j));
         }
     }
 
@@ -345,13 +344,15 @@ pub fn assemble_body_scaled(
                     // The unknown direction must be one of a pair's local directions (at a
                     // junction, of any of its pairs; the contact problem projects it onto
                     // the frames of the others).
+                    let frame_of = |kk: usize, jj: usize| {
+                        let it = &model.interfaces[kk];
+                        it.point(it.body_a == bi, jj).1
+                    };
                     let found = if d.class == [DofClass::Interface; 2] {
-                        let p = &model.interfaces[iface].pairs[pair];
-                        Some((iface, pair, k, [p.tangent, p.normal][k]))
+                        Some((iface, pair, k, frame_of(iface, pair)[k]))
                     } else {
                         node_pairs[n].iter().find_map(|&(kk, jj)| {
-                            let p = &model.interfaces[kk].pairs[jj];
-                            let frame = [p.tangent, p.normal];
+                            let frame = frame_of(kk, jj);
                             (0..2)
                                 .find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9)
                                 .map(|c| (kk, jj, c, frame[c]))
@@ -388,8 +389,8 @@ pub fn assemble_body_scaled(
         .collect();
     pairs_here.sort_unstable();
     for &(k, j, _) in &pairs_here {
-        let p = &model.interfaces[k].pairs[j];
-        for (comp, dir) in [p.tangent, p.normal].into_iter().enumerate() {
+        let it = &model.interfaces[k];
+        for (comp, dir) in it.point(it.body_a == bi, j).1.into_iter().enumerate() {
             unknowns.push(Unknown::Traction0 {
                 iface: k,
                 pair: j,
@@ -442,11 +443,7 @@ pub fn assemble_body_scaled(
                 iface, pair, dir, ..
             } => {
                 let it = &model.interfaces[iface];
-                let node = if it.body_a == bi {
-                    it.pairs[pair].node_a
-                } else {
-                    it.pairs[pair].node_b
-                };
+                let node = it.point(it.body_a == bi, pair).0;
                 for &(ei, end) in &node_elems[node] {
                     if body.elements[ei].role == Role::Interface(iface) {
                         entries[ei].push(Entry {

@@ -197,12 +197,35 @@ pub struct Pair {
     pub cohesion: f64,
     /// Coulomb coefficient μ ≥ 0 (`tangential = "friction"`; 0 otherwise).
     pub friction: f64,
+    /// Where the two sides were meshed on their own (docs/formulation.md §5.6): B's nodes and
+    /// the coefficients of the pair's rows, `u^B = Σ c_k u^B_k` (they sum to one). Empty for
+    /// a node pair (B's node is `node_b`) and for a node of A that faces nothing of B (no
+    /// rows: reported open).
+    pub partners: Vec<(usize, f64)>,
+    /// Sides meshed on their own: B's element facing the node (body-local index).
+    pub segment: Option<usize>,
+    /// Sides meshed on their own: the normal gap measured from the geometry, which `gap`
+    /// includes on unilateral interfaces (0 for node pairs).
+    pub gap_geometry: f64,
+    /// Sides meshed on their own: the tributary length of the rows, ∫ψ_j ds over the part of
+    /// the node's elements that faces B (node pairs: see [`Interface::weights`]).
+    pub weight: f64,
+}
+
+/// A node of body B on an interface whose sides were meshed on their own, with the frame of
+/// its interface unknowns: `normal` is the opposite of B's outward normal (A's direction).
+#[derive(Debug, Clone, Copy)]
+pub struct SideNode {
+    pub node: usize,
+    pub normal: [f64; 2],
+    pub tangent: [f64; 2],
 }
 
 /// An interface element: the same segment seen from both bodies.
 #[derive(Debug, Clone, Copy)]
 pub struct InterfaceElement {
-    /// Element index in body A and in body B.
+    /// Element index in body A and in body B (sides meshed on their own: B's element facing
+    /// the start of A's).
     pub elem_a: usize,
     pub elem_b: usize,
     /// Pair indices at A's start and end nodes.
@@ -226,6 +249,72 @@ pub struct Interface {
     pub length: f64,
     /// True when the two sides were separate coincident curves matched by position.
     pub matched_by_position: bool,
+    /// B's interface nodes where the two sides were meshed on their own (their nodes do not
+    /// pair up): the pairs are then A's nodes, whose rows reach B's nodes through
+    /// [`Pair::partners`]. Empty for node pairs.
+    pub b_nodes: Vec<SideNode>,
+}
+
+impl Interface {
+    /// True when the two sides were meshed on their own (rows over B's segments).
+    pub fn independent(&self) -> bool {
+        !self.b_nodes.is_empty()
+    }
+
+    /// The number of interface points of side A (`side_a`) or B: the index range of the
+    /// `pair` of that body's interface unknowns.
+    pub fn point_count(&self, side_a: bool) -> usize {
+        if side_a || !self.independent() {
+            self.pairs.len()
+        } else {
+            self.b_nodes.len()
+        }
+    }
+
+    /// Interface point j of side A (`side_a`) or B: its body-local node and the frame
+    /// `[tangent, normal]` of its unknowns.
+    pub fn point(&self, side_a: bool, j: usize) -> (usize, [[f64; 2]; 2]) {
+        if !side_a && self.independent() {
+            let p = &self.b_nodes[j];
+            return (p.node, [p.tangent, p.normal]);
+        }
+        let p = &self.pairs[j];
+        (
+            if side_a { p.node_a } else { p.node_b },
+            [p.tangent, p.normal],
+        )
+    }
+
+    /// The tributary length of each pair: half of each adjacent element of A (node pairs),
+    /// or the part of that which faces B (sides meshed on their own).
+    pub fn weights(&self) -> Vec<f64> {
+        if self.independent() {
+            return self.pairs.iter().map(|p| p.weight).collect();
+        }
+        let mut w = vec![0.0; self.pairs.len()];
+        for e in &self.elements {
+            let (a, b) = (self.pairs[e.pairs[0]].x, self.pairs[e.pairs[1]].x);
+            let l = (b[0] - a[0]).hypot(b[1] - a[1]);
+            w[e.pairs[0]] += 0.5 * l;
+            w[e.pairs[1]] += 0.5 * l;
+        }
+        w
+    }
+
+    /// Where B meets the rows of pair j: B's node (node pairs) or the point `Σ c_k x_k` of
+    /// B's partners (sides meshed on their own; A's node where it has none).
+    pub fn b_point(&self, b: &Body, j: usize) -> [f64; 2] {
+        let p = &self.pairs[j];
+        if !self.independent() {
+            return b.nodes[p.node_b];
+        }
+        if p.partners.is_empty() {
+            return p.x;
+        }
+        p.partners.iter().fold([0.0, 0.0], |acc, &(k, c)| {
+            [acc[0] + c * b.nodes[k][0], acc[1] + c * b.nodes[k][1]]
+        })
+    }
 }
 
 /// Element size figures for `sgbem check`.
@@ -278,9 +367,10 @@ impl Model {
     pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {
         let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
         for it in &self.interfaces {
-            for p in &it.pairs {
-                *count.entry((it.body_a, p.node_a)).or_default() += 1;
-                *count.entry((it.body_b, p.node_b)).or_default() += 1;
+            for (side_a, body) in [(true, it.body_a), (false, it.body_b)] {
+                for j in 0..it.point_count(side_a) {
+                    *count.entry((body, it.point(side_a, j).0)).or_default() += 1;
+                }
             }
         }
         // Group the junction nodes by position (the nodes of all bodies there coincide).
@@ -332,13 +422,24 @@ impl Model {
             for p in &mut it.pairs {
                 let (gap, cohesion, friction) =
                     pair_values(&it.spec, p.x, t).map_err(|msg| Error::input(&scene.path, msg))?;
-                p.gap = gap;
+                p.gap = with_geometry(&it.spec, p.gap_geometry, gap);
                 p.cohesion = cohesion;
                 p.friction = friction;
             }
         }
         check_values(&m.bodies, &m.parts, &scene.path, t)?;
         Ok(m)
+    }
+}
+
+/// The gap of a pair: the scene's `gap`, plus the gap measured from the geometry on a
+/// unilateral interface whose sides were meshed on their own (a bonded one joins the sides
+/// as drawn).
+fn with_geometry(spec: &InterfaceSpec, geometry: f64, gap: f64) -> f64 {
+    if geometry == 0.0 || spec.model != crate::input::scene::InterfaceModel::Unilateral {
+        gap
+    } else {
+        geometry + gap
     }
 }
 
@@ -870,6 +971,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             &curve_bodies,
             scene,
             mfile,
+            None,
         )?);
     }
 
