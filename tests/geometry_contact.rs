@@ -7,6 +7,10 @@
 //!   free sides and a pressure on the top, a uniform compression whose lateral displacement
 //!   is linear along the interface (a tied tangential row must reproduce it). The interface
 //!   pressure must be exact to 1e-8 and the tangential traction zero.
+//! * Hertz line contact from the drawing (`geo/hertz_drawn.geo`): a half cylinder drawn
+//!   0.01 above a flat block, meshed on its own, with no gap in the scene: the gap on the
+//!   axis as drawn, the half-width within one element and the peak pressure within 1 % of
+//!   Johnson's, for the load of the run.
 //!
 //! Run with `cargo test --release --test geometry_contact -- --nocapture` to see the numbers.
 
@@ -170,4 +174,89 @@ fn patch_test_with_free_sides_reproduces_a_linear_field() {
             assert!(tt <= 1e-8 * q, "tangential traction {tt:e}");
         }
     }
+}
+
+/// A half cylinder of radius 100 (a quarter disc in the half model) drawn 0.01 above a flat
+/// block, each meshed on its own (0.08 on the arc, 0.1 on the flat near the contact); the
+/// diametral plane pushed down by 0.2. The gap comes from the drawing alone.
+#[test]
+fn hertz_with_the_gap_from_the_drawing() {
+    let dir = support::tmpdir("hertz_drawn");
+    let (e1, n1, e2, n2, radius) = (1000.0, 0.3, 2000.0, 0.25, 100.0);
+    let scene = format!(
+        "title = \"Hertz from the drawing\"\nplane = \"strain\"\n\
+         [mesh]\nfile = \"{}\"\nh_fine = 0.1\n\
+         [body.cylinder]\nyoung = {e1}\npoisson = {n1}\n\
+         [body.flat]\nyoung = {e2}\npoisson = {n2}\n\
+         [boundary.top]\nuy = -0.2\ntx = 0.0\n\
+         [boundary.base]\nuy = 0.0\ntx = 0.0\n\
+         [boundary.symmetry]\nun = 0.0\ntt = 0.0\n\
+         [interface.contact]\nmodel = \"unilateral\"\ninitial = \"open\"\n\
+         tangential = \"slide\"\n\
+         [solve]\ntolerance = 1e-10\n[output]\nvtk = false\n",
+        geo("hertz_drawn")
+    );
+    let (mut rows, summary) = run(&dir, &scene, "contact");
+    assert_eq!(summary["status"], "converged");
+    rows.sort_by(|a, b| a.num("s").total_cmp(&b.num("s")));
+    // The rows are the cylinder's nodes; on the axis the gap is the drawn 0.01 (the arc's
+    // chords lie within 1e-5 of the circle there).
+    let axis = &rows[0];
+    assert!(axis.num("x").abs() < 1e-12);
+    assert!(
+        (axis.num("gap") - 0.01).abs() < 1e-6,
+        "gap on the axis {}",
+        axis.num("gap")
+    );
+    // Johnson (1985) for the load of the run (full model: twice the half's).
+    let e_star = 1.0 / ((1.0f64 - n1 * n1) / e1 + (1.0 - n2 * n2) / e2);
+    let p = -2.0
+        * summary["interfaces"]["contact"]["normal_resultant"]
+            .as_f64()
+            .unwrap();
+    let pi = std::f64::consts::PI;
+    let b = (4.0 * p * radius / (pi * e_star)).sqrt();
+    let p0 = 2.0 * p / (pi * b);
+    let last_closed = rows
+        .iter()
+        .filter(|r| r.closed())
+        .map(|r| r.num("x"))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let first_open = rows
+        .iter()
+        .filter(|r| !r.closed())
+        .map(|r| r.num("x"))
+        .fold(f64::INFINITY, f64::min);
+    let peak = -rows
+        .iter()
+        .map(|r| r.num("normal_traction"))
+        .fold(f64::INFINITY, f64::min);
+    let element = first_open - last_closed;
+    println!(
+        "hertz from the drawing: P = {p:.5}: b Johnson {b:.4}, last closed pair {last_closed:.4}, \
+         first open {first_open:.4}; p0 Johnson {p0:.4}, peak {peak:.4} ({:+.3} %)",
+        100.0 * (peak / p0 - 1.0)
+    );
+    assert!(
+        last_closed < first_open,
+        "the closed pairs are not one zone"
+    );
+    assert!(
+        element < 0.1,
+        "elements of the arc near the contact: {element}"
+    );
+    assert!(
+        last_closed <= b && b <= first_open,
+        "half-width: Johnson b = {b} not between the last closed pair {last_closed} and the \
+         first open one {first_open}"
+    );
+    assert!(
+        (peak / p0 - 1.0).abs() <= 0.01,
+        "peak pressure {peak} vs Johnson p0 = {p0}"
+    );
+    let tangential = rows
+        .iter()
+        .map(|r| r.num("tangential_traction").abs())
+        .fold(0.0, f64::max);
+    assert_eq!(tangential, 0.0, "frictionless: tangential traction");
 }
