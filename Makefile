@@ -154,6 +154,7 @@ bench:
 	$(CARGO) bench --bench stages
 	$(CARGO) bench --bench contact
 	$(CARGO) bench --bench masonry
+	$(CARGO) bench --bench detect
 
 # Refinement levels x quadrature presets of the closed-form benchmarks and of the paper's
 # examples 1 and 2: error (or detached length) against run time, in out/accuracy/

@@ -211,10 +211,15 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
             if i.matched_by_position {
                 "; sides matched by position".to_string()
             } else if i.independent() {
+                let found = if i.group == crate::input::model::FOUND_GROUP {
+                    "; found by [contact]"
+                } else {
+                    ""
+                };
                 let (facing, lo, hi) = independent_figures(i);
                 format!(
-                    "; sides meshed on their own, paired from the geometry: {facing} of {} \
-                     pairs face {} ({} elements), gap from the geometry {} to {}",
+                    "{found}; sides meshed on their own, paired from the geometry: {facing} of \
+                     {} pairs face {} ({} elements), gap from the geometry {} to {}",
                     i.pairs.len(),
                     model.bodies[i.body_b].name,
                     model.bodies[i.body_b]

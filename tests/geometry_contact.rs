@@ -260,3 +260,145 @@ fn hertz_with_the_gap_from_the_drawing() {
         .fold(0.0, f64::max);
     assert_eq!(tangential, 0.0, "frictionless: tangential traction");
 }
+
+/// `geo/stacked_blocks.geo` with `nb` blocks and `[contact]`, the other keys in `rest`.
+fn stack_scene(nb: usize, mesh_extra: &str, rest: &str) -> String {
+    format!(
+        "title = \"stacked blocks found by [contact]\"\nplane = \"strain\"\n\
+         [mesh]\nfile = \"{}\"\nnb = {nb}\n{mesh_extra}\n\
+         [defaults.body]\nyoung = 1000.0\npoisson = 0.2\nbody_force = [0.0, -2.0]\n\
+         [boundary.base]\nux = 0.0\nuy = 0.0\n{rest}",
+        geo("stacked_blocks")
+    )
+}
+
+/// Five blocks drawn and meshed on their own (no joint with matching nodes, every other
+/// block shifted by a quarter of its width) under self-weight γ = 2: `[contact]` finds the
+/// four joints, and each carries the weight of the blocks above it, γ w h (5 − i), to 1e-8
+/// with no tangential resultant.
+#[test]
+fn contact_finds_the_joints_of_separately_drawn_blocks() {
+    let dir = support::tmpdir("stack_found");
+    let nb = 5;
+    let rest = "[contact]\nsearch = 1e-6\n\
+                [defaults.interface]\nmodel = \"unilateral\"\ntangential = \"friction\"\n\
+                friction = 0.6\n[output]\nvtk = false\n";
+    let scene = stack_scene(nb, "", rest);
+    let s = support::write(&dir, "check.toml", &scene);
+    let (code, text, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for i in 1..nb {
+        let name = format!("contact[block_{}|block_{i}]", i - 1);
+        assert!(text.contains(&name), "check does not list {name}: {text}");
+    }
+    assert!(text.contains("found by [contact]"), "{text}");
+    let (_, summary) = run(&dir, &scene, "contact[block_0|block_1]");
+    assert_eq!(summary["status"], "converged");
+    let found = summary["interfaces"].as_object().unwrap();
+    assert_eq!(found.len(), nb - 1, "{found:?}");
+    for i in 1..nb {
+        let f = &summary["interfaces"][format!("contact[block_{}|block_{i}]", i - 1)];
+        let weight = 2.0 * 1.0 * 0.5 * (nb - i) as f64;
+        let n = f["normal_resultant"].as_f64().unwrap();
+        let t = f["tangential_resultant"].as_f64().unwrap();
+        println!(
+            "joint {i}: normal resultant {n:.12} (weight above {weight}), relative error \
+             {:.1e}; tangential {t:.1e}; open pairs {} of {}",
+            (n + weight).abs() / weight,
+            f["open_pairs"],
+            f["pairs"]
+        );
+        assert!(
+            (n + weight).abs() <= 1e-8 * weight,
+            "joint {i}: {n} vs {weight}"
+        );
+        assert!(t.abs() <= 1e-8 * weight, "joint {i}: tangential {t}");
+    }
+}
+
+/// A declared interface between the same boundaries wins over `[contact]`; a scene whose
+/// bodies overlap is refused naming both bodies and the depth; `[contact]` needs
+/// `[defaults.interface]`.
+#[test]
+fn contact_declared_interfaces_win_and_overlaps_are_refused() {
+    let dir = support::tmpdir("stack_rules");
+    let iface = "[defaults.interface]\nmodel = \"unilateral\"\n";
+    // Two blocks; the Physical Curve "faces" declared as the interface.
+    let scene = stack_scene(
+        2,
+        "",
+        &format!("[contact]\nsearch = 1e-6\n{iface}[interface.faces]\nmodel = \"bonded\"\n"),
+    );
+    let s = support::write(&dir, "declared.toml", &scene);
+    let (code, text, err) = support::sgbem(&["check", s.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let names: Vec<&str> = v["interfaces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["faces"]);
+
+    // Block 1 drawn 0.01 into block 0.
+    let scene = stack_scene(
+        2,
+        "sink = 0.01",
+        &format!("[contact]\nsearch = 1e-3\n{iface}"),
+    );
+    let s = support::write(&dir, "overlap.toml", &scene);
+    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("\"block_0\"")
+            && err.contains("\"block_1\"")
+            && err.contains("overlap by 0.01"),
+        "{err}"
+    );
+
+    // No [defaults.interface].
+    let scene = stack_scene(2, "", "[contact]\nsearch = 1e-6\n");
+    let s = support::write(&dir, "nodefault.toml", &scene);
+    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("[defaults.interface]"), "{err}");
+}
+
+/// `between = [A, B]`: the interface over two Physical Curves, one on each block; the same
+/// exact pressure as the curve that holds both. Its mistakes are input errors.
+#[test]
+fn between_names_the_two_sides_of_an_interface() {
+    let dir = support::tmpdir("between");
+    let q = 2.5;
+    let rest = |joint: &str| {
+        format!(
+            "[body.upper]\nyoung = 1000.0\npoisson = 0.3\n\
+             [body.lower]\nyoung = 1000.0\npoisson = 0.3\n\
+             [boundary.top]\nty = -{q}\n[boundary.base]\nuy = 0.0\n[boundary.left]\nux = 0.0\n\
+             [interface.joint]\n{joint}\n"
+        )
+    };
+    let good = rest("model = \"bonded\"\nbetween = [\"upper_bottom\", \"lower_top\"]");
+    let (rows, _) = run(&dir, &patch_scene(10, 7, &good), "joint");
+    let (dev, tt) = deviations(&rows, q);
+    assert!(dev <= 1e-8 * q && tt <= 1e-8 * q, "{dev:e} {tt:e}");
+    for (joint, culprit) in [
+        (
+            "model = \"bonded\"\nbetween = [\"upper_bottom\", \"nope\"]",
+            "no Physical Curve named so",
+        ),
+        (
+            "model = \"bonded\"\nbetween = [\"upper_bottom\"]",
+            "must name two different Physical Curves",
+        ),
+    ] {
+        let s = support::write(&dir, "bad.toml", &patch_scene(10, 7, &rest(joint)));
+        let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains("interface.joint.between") && err.contains(culprit),
+            "{err}"
+        );
+    }
+}

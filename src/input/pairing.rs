@@ -403,6 +403,58 @@ impl SegmentGrid {
     }
 }
 
+/// A boundary segment of a body, for [`facing_pairs`].
+#[derive(Debug, Clone, Copy)]
+pub struct BodySegment {
+    pub body: usize,
+    pub a: [f64; 2],
+    pub b: [f64; 2],
+    /// Unit outward normal.
+    pub normal: [f64; 2],
+}
+
+/// The pairs (i, j) of segments of different bodies (`body` of i below that of j) that face
+/// each other within `search`: outward normals within 60° of opposite, at most `search`
+/// apart, and each overlapping the other in projection (pieces that meet at a corner only
+/// do not pair). A uniform grid of cells about one segment or `search` wide, whichever is
+/// larger, keeps the search near linear in the number of segments.
+pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
+    let lines: Vec<([f64; 2], [f64; 2])> = segs.iter().map(|s| (s.a, s.b)).collect();
+    let mean =
+        lines.iter().map(|(p, q)| norm(sub(*q, *p))).sum::<f64>() / lines.len().max(1) as f64;
+    let grid = SegmentGrid::new(&lines, mean.max(search));
+    let mut out = Vec::new();
+    for (i, s) in segs.iter().enumerate() {
+        for j in grid.near(s.a, s.b, search) {
+            let t = &segs[j];
+            if t.body <= s.body
+                || dot(s.normal, t.normal) > FACING_COS
+                || segment_distance(s.a, s.b, t.a, t.b) > search
+                || !overlaps(s.a, s.b, t.a, t.b)
+            {
+                continue;
+            }
+            out.push((i, j));
+        }
+    }
+    out
+}
+
+/// True when segment [r, s] projected on the line of [p, q] overlaps it by more than
+/// rounding, and the other way round.
+fn overlaps(p: [f64; 2], q: [f64; 2], r: [f64; 2], s: [f64; 2]) -> bool {
+    let along = |p: [f64; 2], q: [f64; 2], r: [f64; 2], s: [f64; 2]| -> bool {
+        let d = sub(q, p);
+        let l2 = dot(d, d);
+        if l2 <= 0.0 {
+            return false;
+        }
+        let (a, b) = (dot(sub(r, p), d) / l2, dot(sub(s, p), d) / l2);
+        a.max(b).min(1.0) - a.min(b).max(0.0) > 1e-9
+    };
+    along(p, q, r, s) && along(r, s, p, q)
+}
+
 /// Distance between two segments (zero where they touch or cross).
 pub fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     let point_seg = |p: [f64; 2], s0: [f64; 2], s1: [f64; 2]| -> f64 {
@@ -598,6 +650,50 @@ mod tests {
                 }
             }
         }
+    }
+
+    #[test]
+    fn facing_pieces_overlap_but_corners_do_not() {
+        // Two stacked blocks' faces: overlap; diagonal neighbours meeting at a corner: not.
+        assert!(overlaps([0.0, 0.0], [1.0, 0.0], [1.5, 0.0], [0.5, 0.0]));
+        assert!(!overlaps([0.0, 0.0], [1.0, 0.0], [2.0, 0.0], [1.0, 0.0]));
+        // A steep piece overlaps the line of a long one, not the other way round.
+        assert!(!overlaps([0.0, 0.0], [1.0, 0.0], [0.5, 0.0], [0.5, 1.0]));
+    }
+
+    #[test]
+    fn facing_pairs_of_two_stacked_squares() {
+        // Square 0 [0,1]², square 1 [0.5,1.5] x [1,2] (counter-clockwise): only the top of
+        // 0 and the bottom of 1 face each other; the corner (1, 1) where 0's right side
+        // meets 1's bottom does not pair.
+        let square = |body: usize, x0: f64, y0: f64| {
+            let p = [
+                [x0, y0],
+                [x0 + 1.0, y0],
+                [x0 + 1.0, y0 + 1.0],
+                [x0, y0 + 1.0],
+            ];
+            (0..4)
+                .map(|k| {
+                    let (a, b) = (p[k], p[(k + 1) % 4]);
+                    let l = norm(sub(b, a));
+                    BodySegment {
+                        body,
+                        a,
+                        b,
+                        normal: [(b[1] - a[1]) / l, -(b[0] - a[0]) / l],
+                    }
+                })
+                .collect::<Vec<_>>()
+        };
+        let mut segs = square(0, 0.0, 0.0);
+        segs.extend(square(1, 0.5, 1.0));
+        assert_eq!(facing_pairs(&segs, 1e-6), vec![(2, 4)]);
+        // Apart by 0.01: found with search 0.02, not with 0.005.
+        let mut segs = square(0, 0.0, 0.0);
+        segs.extend(square(1, 0.5, 1.01));
+        assert_eq!(facing_pairs(&segs, 0.02), vec![(2, 4)]);
+        assert!(facing_pairs(&segs, 0.005).is_empty());
     }
 
     #[test]

@@ -170,6 +170,18 @@ pub struct InterfaceSpec {
     pub tangential: Tangential,
     /// Coulomb coefficient μ ≥ 0 (with `tangential = "friction"`; 0 otherwise).
     pub friction: Scalar,
+    /// `between = [A, B]`: the interface joins Physical Curve A (on one body) and Physical
+    /// Curve B (on another) instead of being a Physical Curve of its own.
+    pub between: Option<[String; 2]>,
+}
+
+/// `[contact]`: interfaces found from the drawing (docs/scene.md).
+#[derive(Debug, Clone)]
+pub struct ContactSpec {
+    /// The bodies (a glob over their names) whose boundaries may touch one another.
+    pub bodies: crate::input::tables::Glob,
+    /// The largest gap (length units) at which facing boundaries pair up.
+    pub search: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -319,6 +331,8 @@ pub struct Scene {
     pub bodies: Vec<BodySpec>,
     pub boundaries: Vec<BoundarySpec>,
     pub interfaces: Vec<InterfaceSpec>,
+    /// `[contact]`: find interfaces between the bodies' boundaries from the drawing.
+    pub contact: Option<ContactSpec>,
     /// Glob tables and `[defaults]`, resolved against the mesh by `model`.
     pub tables: Tables,
     pub solve: SolveSpec,
@@ -641,6 +655,14 @@ struct RawInterface {
     gap: Option<RawScalar>,
     tangential: Option<String>,
     friction: Option<RawScalar>,
+    between: Option<Vec<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RawContact {
+    bodies: Option<String>,
+    search: f64,
 }
 
 #[derive(Deserialize, Default)]
@@ -691,7 +713,7 @@ struct RawUnits {
     force: Option<String>,
 }
 
-const TOP_KEYS: [&str; 11] = [
+const TOP_KEYS: [&str; 12] = [
     "title",
     "mesh",
     "plane",
@@ -701,20 +723,23 @@ const TOP_KEYS: [&str; 11] = [
     "boundary",
     "interface",
     "defaults",
+    "contact",
     "solve",
     "output",
 ];
+const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
 const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
 const UNITS_KEYS: [&str; 2] = ["length", "force"];
 const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
 const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
-const INTERFACE_KEYS: [&str; 6] = [
+const INTERFACE_KEYS: [&str; 7] = [
     "model",
     "initial",
     "cohesion",
     "gap",
     "tangential",
     "friction",
+    "between",
 ];
 const SOLVE_KEYS: [&str; 7] = [
     "method",
@@ -847,6 +872,7 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         if Glob::is_pattern(name) {
             let key = pattern_key("interface", name, path)?;
             let raw: RawInterface = typed(v, &key, path)?;
+            no_between(&raw, &key, path)?;
             tables.interfaces.push(Pattern {
                 glob: Glob::new(name),
                 spec: interface_spec(name, raw, &key, path)?,
@@ -867,6 +893,7 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
     }
     if let Some(v) = defaults_table(&doc, "interface", path)? {
         let raw: RawInterface = typed(v, "defaults.interface", path)?;
+        no_between(&raw, "defaults.interface", path)?;
         tables.default_interface = Some(interface_spec("", raw, "defaults.interface", path)?);
     }
     for b in &boundaries {
@@ -877,6 +904,27 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
             )));
         }
     }
+
+    for i in &interfaces {
+        for g in i.between.iter().flatten() {
+            if boundaries.iter().any(|b| &b.name == g) {
+                return Err(err(format!(
+                    "`interface.{}.between` names \"{g}\", which has a [boundary.{g}] table:                      a Physical Curve is a boundary or a side of an interface; remove one",
+                    i.name
+                )));
+            }
+            if let Some(o) = interfaces.iter().find(|o| o.name == *g) {
+                return Err(err(format!(
+                    "`interface.{}.between` names \"{g}\", which is [interface.{}] itself:                      a Physical Curve is a side of one interface only",
+                    i.name, o.name
+                )));
+            }
+        }
+    }
+    let contact = match doc.get("contact") {
+        Some(v) => Some(contact_spec(typed(v, "contact", path)?, path)?),
+        None => None,
+    };
 
     let raw_solve: RawSolve = match doc.get("solve") {
         Some(v) => typed(v, "solve", path)?,
@@ -903,9 +951,48 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         bodies,
         boundaries,
         interfaces,
+        contact,
         tables,
         solve,
         output,
+    })
+}
+
+/// `between` names two Physical Curves of one interface: not in a glob or default table.
+fn no_between(raw: &RawInterface, key: &str, path: &Path) -> Result<()> {
+    if raw.between.is_some() {
+        return Err(Error::input(
+            path,
+            format!(
+                "`{key}.between` names the two Physical Curves of one interface: give it in a                  named [interface.NAME] table, not in a pattern or default table"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+fn contact_spec(raw: RawContact, path: &Path) -> Result<ContactSpec> {
+    if !(raw.search.is_finite() && raw.search > 0.0) {
+        return Err(Error::input(
+            path,
+            format!(
+                "`contact.search` = {} must be a positive length: the largest gap at which \
+                 facing boundaries pair up (e.g. search = 1e-3)",
+                raw.search
+            ),
+        ));
+    }
+    let bodies = raw.bodies.unwrap_or_else(|| "*".to_string());
+    if bodies.is_empty() {
+        return Err(Error::input(
+            path,
+            "`contact.bodies` is empty: give the bodies whose boundaries may touch, as a \
+             glob over their names (\"*\" for all, \"brick_*\")",
+        ));
+    }
+    Ok(ContactSpec {
+        bodies: crate::input::tables::Glob::new(&bodies),
+        search: raw.search,
     })
 }
 
@@ -1130,6 +1217,9 @@ fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {
     }
     if let Some(toml::Value::Table(t)) = doc.get("solve") {
         table_keys(t, "solve", &SOLVE_KEYS)?;
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("contact") {
+        table_keys(t, "contact", &CONTACT_KEYS)?;
     }
     if let Some(toml::Value::Table(t)) = doc.get("output") {
         table_keys(t, "output", &OUTPUT_KEYS)?;
@@ -1360,6 +1450,18 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
              set initial = \"closed\" or remove `cohesion`"
         )));
     }
+    let between = match raw.between {
+        None => None,
+        Some(v) => match v.as_slice() {
+            [a, b] if a != b && !a.is_empty() && !b.is_empty() => Some([a.clone(), b.clone()]),
+            _ => {
+                return Err(err(format!(
+                    "`{key}.between` = {v:?} must name two different Physical Curves, one on \
+                     each body: between = [\"A_FACE\", \"B_FACE\"]"
+                )))
+            }
+        },
+    };
     Ok(InterfaceSpec {
         name: name.to_string(),
         model,
@@ -1368,6 +1470,7 @@ fn interface_spec(name: &str, raw: RawInterface, key: &str, path: &Path) -> Resu
         gap,
         tangential,
         friction,
+        between,
     })
 }
 

@@ -41,6 +41,7 @@ use crate::input::tables::{self, Resolved};
 
 mod body;
 mod checks;
+mod detect;
 mod interface;
 mod overlap;
 
@@ -540,6 +541,9 @@ const OPEN_LOOP_HINT: &str = "gmsh drops the elements of curves that are in no P
 once any physical group exists: add every boundary curve to a named Physical Curve \
 (e.g. Physical Curve(\"free\") = {...};) and mesh again";
 
+/// The `group` of the interfaces found by `[contact]`.
+pub const FOUND_GROUP: &str = "[contact]";
+
 /// What each physical curve of the mesh is, after reading the scene.
 enum CurveUse {
     Boundary(usize),
@@ -718,31 +722,73 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             return Err(wrong_kind("boundary", &b.name, 1));
         }
     }
-    for i in &scene.interfaces {
-        if group_tag(1, &i.name).is_none() {
-            return Err(wrong_kind("interface", &i.name, 1));
-        }
-    }
+    let curves_of = |tag: i32| -> Vec<i32> {
+        mesh.curves
+            .values()
+            .filter(|c| c.physical_tags.contains(&tag))
+            .map(|c| c.tag)
+            .collect()
+    };
     let mut parts: Vec<Part> = Vec::new();
     // (the interface's table, named after its pair of bodies when the curve is split; its curves)
     let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
+    // `between = [A, B]`: one interface over two Physical Curves (group name → interface).
+    let mut between_of: HashMap<&str, usize> = HashMap::new();
+    for i in &scene.interfaces {
+        let Some(sides) = &i.between else {
+            if group_tag(1, &i.name).is_none() {
+                return Err(wrong_kind("interface", &i.name, 1));
+            }
+            continue;
+        };
+        if group_tag(1, &i.name).is_some() {
+            return Err(Error::input(
+                sfile,
+                format!(
+                    "[interface.{0}] gives `between`, but {1} also has a Physical Curve named \
+                     \"{0}\": an interface is a Physical Curve or the two curves of `between`; \
+                     rename one",
+                    i.name,
+                    mfile.display()
+                ),
+            ));
+        }
+        let mut curves = BTreeSet::new();
+        for g in sides {
+            let tag = group_tag(1, g).ok_or_else(|| {
+                Error::input(
+                    sfile,
+                    format!(
+                        "`interface.{}.between` names \"{g}\", but {} has no Physical Curve \
+                         named so{}; its Physical Curves are: {}",
+                        i.name,
+                        mfile.display(),
+                        did_you_mean(g, named(1).into_iter()),
+                        list_or_none(&named(1))
+                    ),
+                )
+            })?;
+            curves.extend(curves_of(tag));
+            between_of.insert(g.as_str(), interfaces_found.len());
+        }
+        interfaces_found.push((i.clone(), i.name.clone(), curves));
+    }
     let mut uses: HashMap<i32, CurveUse> = HashMap::new(); // group tag → use
     let mut unused_curves = Vec::new();
     for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
-        let curves: Vec<i32> = mesh
-            .curves
-            .values()
-            .filter(|c| c.physical_tags.contains(&p.tag))
-            .map(|c| c.tag)
-            .collect();
+        let curves = curves_of(p.tag);
         let on_bodies: BTreeSet<usize> = curves
             .iter()
             .filter_map(|c| curve_bodies.get(c))
             .flatten()
             .copied()
             .collect();
+        let between = between_of.get(p.name.as_str()).copied();
         if on_bodies.is_empty() {
-            if scene.boundary(&p.name).is_some() || scene.interface(&p.name).is_some() {
+            if scene.boundary(&p.name).is_some()
+                || scene.interface(&p.name).is_some()
+                || between.is_some()
+            {
                 return Err(Error::input(
                     sfile,
                     format!(
@@ -754,6 +800,10 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                 ));
             }
             unused_curves.push(p.name.clone());
+            continue;
+        }
+        if let Some(k) = between {
+            uses.insert(p.tag, CurveUse::Interface(k));
             continue;
         }
         let shared: Vec<i32> = curves
@@ -949,6 +999,27 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         bodies.push(body);
     }
 
+    // --- Interfaces found from the drawing ([contact]) ----------------------------------------
+    let declared = interfaces_found.len();
+    if let Some(cs) = &scene.contact {
+        for f in detect::find_contacts(scene, cs, &bodies, &parts, sfile)? {
+            let k = interfaces_found.len();
+            let mut curves = BTreeSet::new();
+            for (b, list) in [(f.body_a, &f.elems_a), (f.body_b, &f.elems_b)] {
+                for &e in list {
+                    let el = &mut bodies[b].elements[e];
+                    el.role = Role::Interface(k);
+                    curves.insert(el.curve);
+                }
+            }
+            resolved.push(Resolved {
+                table: "[defaults.interface]".into(),
+                group: f.spec.name.clone(),
+            });
+            interfaces_found.push((f.spec, FOUND_GROUP.to_string(), curves));
+        }
+    }
+
     // Part statistics.
     for (bi, body) in bodies.iter().enumerate() {
         for e in &body.elements {
@@ -962,6 +1033,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     // --- Interfaces ---------------------------------------------------------------------------
     let mut interfaces = Vec::new();
     for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
+        let search = scene.contact.as_ref().filter(|_| k >= declared);
         interfaces.push(build_interface(
             k,
             (spec, group),
@@ -971,11 +1043,12 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             &curve_bodies,
             scene,
             mfile,
-            None,
+            search.map(|c| c.search),
         )?);
     }
 
-    check_overlaps(&bodies, mfile, scale)?;
+    check_overlaps(&bodies, &interfaces[..declared], mfile, scale)?;
+    detect::check_found_gaps(&bodies, &interfaces[declared..], mfile, scale)?;
     mark_traction_breaks(&mut bodies);
     for body in bodies.iter_mut() {
         body.dofs = node_dofs(body, &parts);

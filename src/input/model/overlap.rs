@@ -6,11 +6,30 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-use super::{cross, fmt_point, norm, sub, Body};
+use super::{cross, fmt_num, fmt_point, norm, sub, Body, Interface, Role};
+use crate::input::pairing::segment_distance;
 
 /// Elements of different bodies (or non-neighbouring elements of one body) must not cross,
-/// and no body may lie inside another.
-pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
+/// and no body may lie inside another. The two sides of a declared interface whose sides
+/// were meshed on their own may cross (an interference fit, drawn).
+pub(super) fn check_overlaps(
+    bodies: &[Body],
+    declared: &[Interface],
+    mfile: &Path,
+    scale: f64,
+) -> Result<()> {
+    let interference = |s: &Seg, t: &Seg| -> bool {
+        let (rs, rt) = (
+            bodies[s.body].elements[s.elem].role,
+            bodies[t.body].elements[t.elem].role,
+        );
+        match (rs, rt) {
+            (Role::Interface(k), Role::Interface(l)) => {
+                k == l && s.body != t.body && declared.get(k).is_some_and(|i| i.independent())
+            }
+            _ => false,
+        }
+    };
     struct Seg {
         body: usize,
         elem: usize,
@@ -101,7 +120,7 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
                 if [t.ma, t.mb].contains(&s.ma) || [t.ma, t.mb].contains(&s.mb) {
                     continue;
                 }
-                if segments_cross(s.a, s.b, t.a, t.b) {
+                if segments_cross(s.a, s.b, t.a, t.b) && !interference(s, t) {
                     first = Some((i, j));
                 }
             }
@@ -116,7 +135,12 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
                 let what = if s.body == t.body {
                     format!("the boundary of body \"{}\" crosses itself", b1.name)
                 } else {
-                    format!("bodies \"{}\" and \"{}\" overlap", b1.name, b2.name)
+                    format!(
+                        "bodies \"{}\" and \"{}\" overlap by {}",
+                        b1.name,
+                        b2.name,
+                        fmt_num(overlap_depth(b1, b2).max(overlap_depth(b2, b1)))
+                    )
                 };
                 return Err(Error::input(
                     mfile,
@@ -231,6 +255,21 @@ fn check_crossing_at_coincident_nodes(body: &Body, mfile: &Path, scale: f64) -> 
         }
     }
     Ok(())
+}
+
+/// How deep the boundary nodes of body `a` lie inside body `b`: the largest distance from
+/// such a node to b's boundary (0 when none lies inside).
+pub(super) fn overlap_depth(a: &Body, b: &Body) -> f64 {
+    a.nodes
+        .iter()
+        .filter(|&&x| b.winding_number(x) != 0)
+        .map(|&x| {
+            b.elements
+                .iter()
+                .map(|e| segment_distance(x, x, b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// Proper crossing of two segments (touching end points and collinear overlap excluded).
