@@ -673,7 +673,7 @@ fn write_tables(
             &out_dir
                 .join("interfaces")
                 .join(format!("{}.csv", it.spec.name)),
-            csv::interface_table(it, r).as_bytes(),
+            csv::interface_table(it, r, &loaded.model.bodies).as_bytes(),
         )?;
     }
     for (name, rows) in &post.sections {

@@ -383,6 +383,31 @@ fn between_names_the_two_sides_of_an_interface() {
     let (rows, _) = run(&dir, &patch_scene(10, 7, &good), "joint");
     let (dev, tt) = deviations(&rows, q);
     assert!(dev <= 1e-8 * q && tt <= 1e-8 * q, "{dev:e} {tt:e}");
+    // The CSV says which body each row is at and the element of the other that it faces.
+    for r in &rows {
+        assert_eq!(r.0["side"], "upper");
+        let tag: usize = r.0["segment"].parse().expect("a gmsh element tag");
+        assert!(tag > 0);
+    }
+    // The archive keeps the pairing: per pair its row over the lower block's nodes, whose
+    // coefficients sum to one and reproduce the pair's position; the weights add up to the
+    // interface's length.
+    let rec = sgbem::output::archive::read_archive(&dir.join("out").join("archive.h5")).unwrap();
+    let it = &rec.interfaces[0];
+    let pr = it.pairing.as_ref().expect("the archive keeps the pairing");
+    assert_eq!(pr.offset.len(), 8 + 1);
+    let lower = &rec.bodies[it.body_b].nodes;
+    for j in 0..8 {
+        let (lo, hi) = (pr.offset[j], pr.offset[j + 1]);
+        let sum: f64 = pr.coef[lo..hi].iter().sum();
+        let x: f64 = (lo..hi).map(|m| pr.coef[m] * lower[pr.node[m]][0]).sum();
+        assert!(
+            (sum - 1.0).abs() < 1e-14 && (x - it.x[j][0]).abs() < 1e-12,
+            "pair {j}"
+        );
+    }
+    assert!((pr.weight.iter().sum::<f64>() - 2.0).abs() < 1e-12);
+    assert_eq!(pr.b_nodes.len(), 11);
     for (joint, culprit) in [
         (
             "model = \"bonded\"\nbetween = [\"upper_bottom\", \"nope\"]",

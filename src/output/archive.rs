@@ -19,7 +19,10 @@
 //!                        and the attribute n_x
 //! /interfaces/<name>/    attributes name, index, body_a, body_b (names and *_index), model,
 //!                        initial, tangential, length; node_a, node_b, x, normal, tangent
-//!                        (p×2), s, gap, cohesion (p), elements (e×2 pair indices)
+//!                        (p×2), s, gap, cohesion (p), elements (e×2 pair indices); where
+//!                        the sides were meshed on their own, pairing/{offset (p+1), node,
+//!                        coef (the pairs' rows over B's nodes), weight, gap_geometry,
+//!                        segment (p), b_nodes}
 //! /contact/operators/    one dataset per interface operator of the final status
 //! /history/              load_step, load_factor, iteration, solver (R),
 //!                        detached_length (R×interfaces);
@@ -70,7 +73,7 @@ use ndarray::{ArrayViewD, IxDyn};
 
 use super::record::{
     plane_name, Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord,
-    RunRecord, StateRecord, FORMAT_VERSION,
+    PairingRecord, RunRecord, StateRecord, FORMAT_VERSION,
 };
 use crate::error::{Error, Result};
 use crate::input::scene::{Plane, Units};
@@ -989,6 +992,63 @@ fn write_interface(g: &Group, index: usize, it: &InterfaceRecord, rec: &RunRecor
         "elements",
         &it.elements,
         "interface elements as (start pair, end pair) along body A",
+    )?;
+    match &it.pairing {
+        Some(pr) => write_pairing(&group(g, "pairing")?, pr, u),
+        None => Ok(()),
+    }
+}
+
+/// `/interfaces/<name>/pairing/`: the rows of an interface whose sides were meshed on their
+/// own (docs/formulation.md §5.6).
+fn write_pairing(g: &Group, pr: &PairingRecord, u: &U) -> R<()> {
+    put_idx(
+        g,
+        "offset",
+        &pr.offset,
+        "where each pair's partners start in node and coef (pairs + 1)",
+    )?;
+    put_idx(
+        g,
+        "node",
+        &pr.node,
+        "partner nodes of the pairs' rows in body B (body-local)",
+    )?;
+    put_f64(
+        g,
+        "coef",
+        &[pr.coef.len()],
+        &pr.coef,
+        "coefficients of the partners: u_B = sum coef u_B[node] (they sum to one per pair)",
+        "1",
+    )?;
+    put_f64(
+        g,
+        "weight",
+        &[pr.weight.len()],
+        &pr.weight,
+        "tributary length of each pair's rows (the part of body A facing body B)",
+        u.len(),
+    )?;
+    put_f64(
+        g,
+        "gap_geometry",
+        &[pr.gap_geometry.len()],
+        &pr.gap_geometry,
+        "normal gap of each pair measured from the geometry",
+        u.len(),
+    )?;
+    put_opt_idx(
+        g,
+        "segment",
+        &pr.segment,
+        "element of body B facing each pair (body-local; -1: none)",
+    )?;
+    put_idx(
+        g,
+        "b_nodes",
+        &pr.b_nodes,
+        "interface nodes of body B (body-local)",
     )
 }
 
@@ -1448,7 +1508,8 @@ fn read_body(g: &Group) -> R<BodyRecord> {
 
 fn read_interface(g: &Group) -> R<InterfaceRecord> {
     let node_a = get_idx(g, "node_a", None)?;
-    let np = Some(node_a.len());
+    let n_pairs = node_a.len();
+    let np = Some(n_pairs);
     Ok(InterfaceRecord {
         name: attr_str(g, "name")?,
         body_a: attr_usize(g, "body_a_index")?,
@@ -1465,6 +1526,22 @@ fn read_interface(g: &Group) -> R<InterfaceRecord> {
         gap: get_f64(g, "gap", np)?,
         cohesion: get_f64(g, "cohesion", np)?,
         elements: get_idx_n::<2>(g, "elements")?,
+        pairing: if g.link_exists("pairing") {
+            let pg = ctx(g.group("pairing"), || "group pairing".into())?;
+            let offset = get_idx(&pg, "offset", np.map(|n| n + 1))?;
+            let node = get_idx(&pg, "node", None)?;
+            Some(PairingRecord {
+                coef: get_f64(&pg, "coef", Some(node.len()))?,
+                weight: get_f64(&pg, "weight", np)?,
+                gap_geometry: get_f64(&pg, "gap_geometry", np)?,
+                segment: get_opt_idx(&pg, "segment", n_pairs)?,
+                b_nodes: get_idx(&pg, "b_nodes", None)?,
+                offset,
+                node,
+            })
+        } else {
+            None
+        },
     })
 }
 
