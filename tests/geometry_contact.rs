@@ -427,3 +427,36 @@ fn between_names_the_two_sides_of_an_interface() {
         );
     }
 }
+
+/// The shipped stone wall (`pipelines/stone_wall.toml` on `geo/stone_wall.geo`, written by
+/// `pipelines/stones.py`): `[contact]` finds every joint that the generator counted, and
+/// every stone is in one.
+#[test]
+fn stone_wall_joints_are_all_found() {
+    let geo_text = std::fs::read_to_string(geo("stone_wall")).unwrap();
+    let joints: usize = geo_text
+        .lines()
+        .find_map(|l| l.strip_prefix("// Joints: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .expect("the generator's joint count in the .geo header");
+    let scene = support::root().join("pipelines/stone_wall.toml");
+    let (code, out, err) = support::sgbem(&["check", scene.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let bodies = v["bodies"].as_array().unwrap().len();
+    let found = v["interfaces"].as_array().unwrap();
+    println!(
+        "stone wall: {bodies} bodies, {} interfaces found, {joints} joints drawn",
+        found.len()
+    );
+    assert!(bodies > 200);
+    assert_eq!(found.len(), joints);
+    let mut in_joint = std::collections::BTreeSet::new();
+    for i in found {
+        assert!(i["name"].as_str().unwrap().starts_with("contact["));
+        in_joint.insert(i["body_a"].as_str().unwrap().to_string());
+        in_joint.insert(i["body_b"].as_str().unwrap().to_string());
+    }
+    assert_eq!(in_joint.len(), bodies);
+}
