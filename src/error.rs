@@ -84,7 +84,7 @@ pub fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Opt
 }
 
 /// " (did you mean `x`?)" when a candidate is close to `name`, else "".
-pub fn did_you_mean<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
+pub(crate) fn did_you_mean<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> String {
     match nearest(name, candidates) {
         Some(c) => format!(" (did you mean `{c}`?)"),
         None => String::new(),

@@ -274,7 +274,7 @@ fn k_steps(scene: &Scene) -> f64 {
 const BASE_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
 
 /// Unknown counts of every body of a model (no allocation beyond a counter per body).
-pub fn body_sizes(model: &Model) -> Vec<BodySize> {
+pub(crate) fn body_sizes(model: &Model) -> Vec<BodySize> {
     let mut pair_nodes = vec![0usize; model.bodies.len()];
     for it in &model.interfaces {
         pair_nodes[it.body_a] += it.pairs.len();
@@ -382,7 +382,7 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
 /// the room left under the process's cgroup memory limit (SLURM, containers: v2
 /// `memory.max`, v1 `memory.limit_in_bytes`, of its cgroup and every parent), with where it
 /// comes from; None when none can be read.
-pub fn available_memory() -> Option<(f64, &'static str)> {
+pub(crate) fn available_memory() -> Option<(f64, &'static str)> {
     if let Ok(v) = std::env::var("SGBEM_MEMORY_LIMIT") {
         if let Ok(b) = v.trim().parse::<f64>() {
             if b.is_finite() && b > 0.0 {
@@ -496,7 +496,7 @@ fn cgroup_room() -> Option<f64> {
 }
 
 /// "1.2 GB", "340 MB", "5.0 PB".
-pub fn fmt_bytes(b: f64) -> String {
+pub(crate) fn fmt_bytes(b: f64) -> String {
     let units = ["B", "kB", "MB", "GB", "TB", "PB", "EB"];
     let mut v = b;
     let mut i = 0;
@@ -512,7 +512,7 @@ pub fn fmt_bytes(b: f64) -> String {
 }
 
 /// "0.3 s", "4 min", "2.5 h", "12 days".
-pub fn fmt_seconds(s: f64) -> String {
+pub(crate) fn fmt_seconds(s: f64) -> String {
     if s < 60.0 {
         format!("{s:.1} s")
     } else if s < 3600.0 {

@@ -21,7 +21,7 @@ use crate::input::scene::{self, Scene};
 use crate::output::archive::{ArchivePart, ArchiveWriter};
 use crate::output::folder::RunFolder;
 use crate::output::progress::Progress;
-use crate::output::record::{Array, InteriorRecord, RunRecord, StateRecord};
+use crate::output::record::{Array, InteriorRecord, IterateRecord, RunRecord};
 use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
 use crate::post::{section_points, PointSampler};
@@ -126,7 +126,7 @@ pub struct RunReport {
 }
 
 /// Assembles and condenses every body (the bem stage), with a bar per body.
-pub fn prepare_bodies(
+pub(crate) fn prepare_bodies(
     loaded: &Loaded,
     settings: &QuadratureSettings,
     timings: &mut Timings,
@@ -151,7 +151,7 @@ pub fn prepare_bodies(
 }
 
 /// The contact stage (or one linear solve) on the bodies' operators, for every load step.
-pub fn solve_contact(
+pub(crate) fn solve_contact(
     loaded: &Loaded,
     settings: &QuadratureSettings,
     ops: &Operators,
@@ -259,8 +259,9 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     match solved.failure {
         Some(f) => Err(f),
         None => Ok(RunReport {
+            summary: serde_json::to_value(&summary)
+                .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?,
             out_dir,
-            summary,
             notes: post.notes,
         }),
     }
@@ -388,14 +389,14 @@ fn record_solution(
             )
         })
         .collect();
-    let mut states: Vec<StateRecord> = Vec::new();
+    let mut states: Vec<IterateRecord> = Vec::new();
     if scene.output.history == HistoryLevel::Full {
         let recorded = solved.states.len().saturating_sub(1);
         for st in std::mem::take(&mut solved.states)
             .into_iter()
             .take(recorded)
         {
-            states.push(StateRecord::new(
+            states.push(IterateRecord::new(
                 states.len(),
                 st.load_step,
                 st.load_factor,
@@ -404,7 +405,7 @@ fn record_solution(
             ));
         }
     }
-    states.push(StateRecord::new(
+    states.push(IterateRecord::new(
         states.len(),
         final_step,
         solved.load_factor,
@@ -412,7 +413,7 @@ fn record_solution(
         solved.interfaces.clone(),
     ));
     rec.states = states;
-    // The archive's thread gets the states' fields shared, not copied (StateRecord); the
+    // The archive's thread gets the states' fields shared, not copied (IterateRecord); the
     // history goes there alone (the VTK files do not need it).
     archive.send(ArchivePart::Solved {
         contact_operators,
@@ -698,7 +699,7 @@ fn summary_of(
     ops: &Operators,
     solved: &mut ContactRun,
     post: &Post,
-) -> serde_json::Value {
+) -> summary::Summary {
     let Loaded {
         scene, model, plan, ..
     } = loaded;
@@ -713,65 +714,65 @@ fn summary_of(
         .iter()
         .map(|c| c.pivot_ratio)
         .fold(1.0, f64::min);
-    let mut summary = serde_json::json!({
-        "title": scene.title,
-        "status": solved.status,
-        "method": if plan.problem == crate::plan::ContactProblem::None { "linear" } else { scene.solve.method.name() },
-        "effects": plan.effects,
-        "problem": format!("{:?}", plan.problem).to_lowercase(),
-        "plane": match scene.plane { crate::input::scene::Plane::Strain => "strain", crate::input::scene::Plane::Stress => "stress" },
-        "thickness": scene.thickness,
-        "units": {"length": scene.units.length, "force": scene.units.force},
-        "load_factor": solved.load_factor,
-        "quadrature": scene.solve.quadrature.name(),
-        "counts": {
-            "bodies": model.bodies.len(),
-            "boundary_elements": model.element_count(),
-            "interface_pairs": model.pair_count(),
-            "dofs": dofs,
-            "field_nodes": post.field_nodes,
+    let interfaces = summary::interfaces(&model.interfaces, &solved.interfaces, scene.thickness);
+    let mut out = summary::Summary {
+        contact: solved.contact.clone(),
+        counts: summary::Counts {
+            bodies: model.bodies.len(),
+            boundary_elements: model.element_count(),
+            dofs,
+            field_nodes: post.field_nodes,
+            interface_pairs: model.pair_count(),
         },
-        "interfaces": summary::interfaces(&model.interfaces, &solved.interfaces, scene.thickness),
-        "contact": solved.contact,
-        "diagnostics": {
-            "d00_asymmetry": asym,
-            "min_pivot_ratio": pivot,
+        diagnostics: summary::Diagnostics {
+            d00_asymmetry: asym,
+            min_pivot_ratio: pivot,
         },
-        "notes": post.notes,
-        "overrides": scene.overrides,
-    });
-    summary["equilibrium"] = crate::post::equilibrium::summary(&post.balances);
-    if let Some(curves) = summary::interface_curves(&model.interfaces, &summary["interfaces"]) {
-        summary["interface_curves"] = curves;
-    }
-    if let Some(qp) = &solved.qp {
-        summary["qp"] = summary::qp(&model.interfaces, qp, scene.thickness);
-    }
-    if let Some(ts) = &scene.solve.time {
+        effects: plan.effects.clone(),
+        equilibrium: summary::equilibrium(&post.balances),
+        interface_curves: summary::interface_curves(&model.interfaces, &interfaces),
+        interfaces,
+        load_factor: solved.load_factor,
         // The load path: the pseudo-time of the final state and every step's.
-        summary["time"] = serde_json::json!(solved.time);
-        summary["load_path"] = serde_json::json!({
-            "time": ts,
-            "depends_on_t": crate::plan::time_dependent(scene),
-        });
-    }
+        load_path: scene.solve.time.as_ref().map(|ts| summary::LoadPath {
+            depends_on_t: crate::plan::time_dependent(scene),
+            time: ts.clone(),
+        }),
+        method: if plan.problem == crate::plan::ContactProblem::None {
+            "linear"
+        } else {
+            scene.solve.method.name()
+        },
+        notes: post.notes.clone(),
+        overrides: scene.overrides.clone(),
+        plane: match scene.plane {
+            crate::input::scene::Plane::Strain => "strain",
+            crate::input::scene::Plane::Stress => "stress",
+        },
+        problem: format!("{:?}", plan.problem).to_lowercase(),
+        qp: solved
+            .qp
+            .as_ref()
+            .map(|qp| summary::qp(&model.interfaces, qp, scene.thickness)),
+        quadrature: scene.solve.quadrature.name(),
+        status: solved.status,
+        thickness: scene.thickness,
+        time: scene.solve.time.as_ref().map(|_| solved.time),
+        title: scene.title.clone(),
+        units: summary::Units {
+            force: scene.units.force.clone(),
+            length: scene.units.length.clone(),
+        },
+    };
     // Figures that overflow (serialised as null): a resultant of finite tractions can.
     if solved.failure.is_none() {
-        let overflow = summary["interfaces"].as_object().and_then(|m| {
-            m.iter().find_map(|(name, fig)| {
-                fig.as_object()?
-                    .iter()
-                    .find(|(_, v)| v.is_null())
-                    .map(|(k, _)| format!("interface \"{name}\": {k}"))
-            })
-        });
-        if let Some(where_) = overflow {
+        if let Some(where_) = summary::non_finite_figure(&out.interfaces) {
             solved.status = RunStatus::NonFinite;
-            summary["status"] = serde_json::json!(solved.status);
+            out.status = solved.status;
             solved.failure = Some(non_finite_error(&where_, scene));
         }
     }
-    summary
+    out
 }
 
 /// The archive's last part, the VTK files, `timings.json` and `summary.json` (last), then the
@@ -783,7 +784,7 @@ fn write_run(
     mut rec: RunRecord,
     loaded: &Loaded,
     solved: &ContactRun,
-    summary: &serde_json::Value,
+    summary: &summary::Summary,
     progress: &Progress,
     mut timings: Timings,
 ) -> Result<PathBuf> {

@@ -89,7 +89,7 @@ impl Plan {
 }
 
 /// The prescribed values that depend on the pseudo-time `t`, as key paths.
-pub fn time_dependent(scene: &Scene) -> Vec<String> {
+pub(crate) fn time_dependent(scene: &Scene) -> Vec<String> {
     let mut out = Vec::new();
     // Exact tables, glob tables and defaults (named as in the scene).
     let t = &scene.tables;
@@ -163,12 +163,78 @@ pub fn time_dependent(scene: &Scene) -> Vec<String> {
 }
 
 /// Whether any prescribed value depends on the pseudo-time `t`.
-pub fn uses_time(scene: &Scene) -> bool {
+pub(crate) fn uses_time(scene: &Scene) -> bool {
     !time_dependent(scene).is_empty()
 }
 
 /// Decides the plan of a scene on its model.
 pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
+    let fx = effects(scene, model)?;
+    let steps = scene.solve.steps().len();
+
+    // Stages.
+    let mut stages: Vec<(&'static str, String)> = Vec::new();
+    stages.push((
+        "read",
+        format!(
+            "scene and mesh ({} bodies, {} boundary elements)",
+            model.bodies.len(),
+            model.element_count()
+        ),
+    ));
+    let mut assemble = format!(
+        "Galerkin blocks per body ({} quadrature), parallel over element pairs",
+        scene.solve.quadrature.name()
+    );
+    if !fx.loaded.is_empty() {
+        assemble.push_str(&format!("; body-force loads for {}", fx.loaded.join(", ")));
+    }
+    stages.push(("assemble", assemble));
+    stages.push(("condense", condense_stage(model)));
+    let steps_note = if steps > 1 {
+        format!(", {steps} load steps")
+    } else {
+        String::new()
+    };
+    pseudo_time_stages(scene, &mut stages)?;
+    let solve = Solve {
+        problem: fx.problem,
+        cohesive: fx.cohesive,
+        frictional: fx.frictional,
+        steps_note: &steps_note,
+    };
+    solve.stages(scene, &mut stages);
+    stages.push(("postprocess", postprocess_stage(scene, model)));
+    stages.push(("write", write_stage(scene, model)));
+
+    let (advice, worst) = advice(scene, model);
+    Ok(Plan {
+        effects: fx.effects,
+        problem: fx.problem,
+        omitted: fx.omitted,
+        stages,
+        advice,
+        contrast: worst,
+    })
+}
+
+/// What a scene calls for: the effects simulated and those left out, with what the stages
+/// say of them.
+struct Effects<'m> {
+    effects: Vec<&'static str>,
+    omitted: Vec<String>,
+    problem: ContactProblem,
+    /// The bodies with a non-zero body force.
+    loaded: Vec<&'m str>,
+    /// Whether a unilateral pair has cohesion.
+    cohesive: bool,
+    /// Whether a unilateral interface has friction.
+    frictional: bool,
+}
+
+/// The effects a scene calls for, and those left out and why; `output.field` needs the
+/// triangles of every body.
+fn effects<'m>(scene: &Scene, model: &'m Model) -> Result<Effects<'m>> {
     let mut effects = vec!["elastic"];
     let mut omitted = Vec::new();
 
@@ -227,7 +293,6 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     } else if closed {
         omitted.push("cohesion loop: cohesion = 0 on every closed zone".to_string());
     }
-    let steps = scene.solve.steps().len();
     let frictional = unilateral
         .iter()
         .any(|i| i.spec.tangential == crate::input::scene::Tangential::Friction);
@@ -249,28 +314,22 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     } else {
         omitted.push("interior field: output.field = false".to_string());
     }
+    Ok(Effects {
+        effects,
+        omitted,
+        problem,
+        loaded,
+        cohesive,
+        frictional,
+    })
+}
 
-    // Stages.
-    let mut stages: Vec<(&'static str, String)> = Vec::new();
-    stages.push((
-        "read",
-        format!(
-            "scene and mesh ({} bodies, {} boundary elements)",
-            model.bodies.len(),
-            model.element_count()
-        ),
-    ));
-    let mut assemble = format!(
-        "Galerkin blocks per body ({} quadrature), parallel over element pairs",
-        scene.solve.quadrature.name()
-    );
-    if !loaded.is_empty() {
-        assemble.push_str(&format!("; body-force loads for {}", loaded.join(", ")));
-    }
-    stages.push(("assemble", assemble));
+/// The condensation stage: onto the interface nodes, with the junctions where several
+/// bodies meet; none without an interface.
+fn condense_stage(model: &Model) -> String {
     let pairs = model.pair_count();
     if model.interfaces.is_empty() {
-        stages.push(("condense", "none (no interface): one solve per body".into()));
+        "none (no interface): one solve per body".into()
     } else {
         let junctions = model.junctions();
         let at = if junctions.is_empty() {
@@ -283,16 +342,13 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
                 junctions.len()
             )
         };
-        stages.push((
-            "condense",
-            format!("each body onto its interface nodes ({pairs} pairs): D00, Z0{at}"),
-        ));
+        format!("each body onto its interface nodes ({pairs} pairs): D00, Z0{at}")
     }
-    let steps_note = if steps > 1 {
-        format!(", {steps} load steps")
-    } else {
-        String::new()
-    };
+}
+
+/// The stages in pseudo-time: the collapse bisection (which needs a value that depends on
+/// t) and the load path of `solve.time`.
+fn pseudo_time_stages(scene: &Scene, stages: &mut Vec<(&'static str, String)>) -> Result<()> {
     if let Some(c) = scene.solve.collapse {
         let dep = time_dependent(scene);
         if dep.is_empty() {
@@ -340,56 +396,79 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
             },
         ));
     }
-    if problem == ContactProblem::None {
-        stages.push((
-            "solve",
-            format!("bonded interface system, linear (no contact solver){steps_note}"),
-        ));
-    } else {
-        let mut cohesion_note = if cohesive {
-            "; brittle-cohesion outer loop (a node that detaches loses c)"
+    Ok(())
+}
+
+/// What the solve stages depend on.
+struct Solve<'a> {
+    problem: ContactProblem,
+    cohesive: bool,
+    frictional: bool,
+    /// ", N load steps" with more than one step.
+    steps_note: &'a str,
+}
+
+impl Solve<'_> {
+    /// The solve stages: the linear bonded solve, or one stage per contact solver the
+    /// scene's method runs.
+    fn stages(&self, scene: &Scene, stages: &mut Vec<(&'static str, String)>) {
+        let (problem, cohesive, frictional) = (self.problem, self.cohesive, self.frictional);
+        let steps_note = self.steps_note;
+        if problem == ContactProblem::None {
+            stages.push((
+                "solve",
+                format!("bonded interface system, linear (no contact solver){steps_note}"),
+            ));
         } else {
-            ""
-        }
-        .to_string();
-        if frictional {
-            cohesion_note.push_str(
-                "; Coulomb friction by a Tresca fixed point (slip bound mu*normal force from \
-                 the last outer iterate), stick/slip statuses per pair",
-            );
-        }
-        let what = match problem {
-            ContactProblem::Detachment => "detachment",
-            ContactProblem::Contact => "contact",
-            _ => "contact-detachment",
-        };
-        if matches!(scene.solve.method, Method::Lcp | Method::Both) {
-            stages.push((
-                "contact_lcp",
-                format!(
-                    "evolutive LCP ({what}): real/virtual status switching, every iteration \
-                     recorded{cohesion_note}{steps_note}"
-                ),
-            ));
-        }
-        if matches!(scene.solve.method, Method::Qp | Method::Both) {
-            let form = "convex QP on the openings (the same discrete problem as the LCP)";
-            stages.push((
-                "contact_qp",
-                format!("{form} with Clarabel{cohesion_note}{steps_note}"),
-            ));
-        }
-        if scene.solve.method == Method::Sparse {
-            stages.push((
-                "contact_sparse",
-                format!(
-                    "active set on the sparse system of displacements and openings \
-                     ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
-                     {steps_note}"
-                ),
-            ));
+            let mut cohesion_note = if cohesive {
+                "; brittle-cohesion outer loop (a node that detaches loses c)"
+            } else {
+                ""
+            }
+            .to_string();
+            if frictional {
+                cohesion_note.push_str(
+                    "; Coulomb friction by a Tresca fixed point (slip bound mu*normal force from \
+                     the last outer iterate), stick/slip statuses per pair",
+                );
+            }
+            let what = match problem {
+                ContactProblem::Detachment => "detachment",
+                ContactProblem::Contact => "contact",
+                _ => "contact-detachment",
+            };
+            if matches!(scene.solve.method, Method::Lcp | Method::Both) {
+                stages.push((
+                    "contact_lcp",
+                    format!(
+                        "evolutive LCP ({what}): real/virtual status switching, every iteration \
+                         recorded{cohesion_note}{steps_note}"
+                    ),
+                ));
+            }
+            if matches!(scene.solve.method, Method::Qp | Method::Both) {
+                let form = "convex QP on the openings (the same discrete problem as the LCP)";
+                stages.push((
+                    "contact_qp",
+                    format!("{form} with Clarabel{cohesion_note}{steps_note}"),
+                ));
+            }
+            if scene.solve.method == Method::Sparse {
+                stages.push((
+                    "contact_sparse",
+                    format!(
+                        "active set on the sparse system of displacements and openings \
+                         ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
+                         {steps_note}"
+                    ),
+                ));
+            }
         }
     }
+}
+
+/// The post-processing stage: boundary stresses, the interior field and the sections.
+fn postprocess_stage(scene: &Scene, model: &Model) -> String {
     let mut post = vec!["boundary stresses and interface tractions".to_string()];
     if scene.output.field {
         let nodes: usize = model
@@ -407,7 +486,11 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     for s in &scene.output.sections {
         post.push(format!("section {} ({} points)", s.name, s.points));
     }
-    stages.push(("postprocess", post.join("; ")));
+    post.join("; ")
+}
+
+/// The write stage: the files a run writes.
+fn write_stage(scene: &Scene, model: &Model) -> String {
     let mut write = vec!["summary.json".to_string()];
     write.push(if scene.output.operators {
         "archive.h5 (with operators)".into()
@@ -426,8 +509,12 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     if !scene.output.sections.is_empty() {
         write.push("sections/*.csv".into());
     }
-    stages.push(("write", write.join(", ")));
+    write.join(", ")
+}
 
+/// Advice on the settings, and the largest stiffness contrast across an interface with that
+/// interface's name.
+fn advice(scene: &Scene, model: &Model) -> (Vec<String>, (f64, String)) {
     // Stiffness contrast across interfaces amplifies the quadrature floor (about 1e-12 of
     // the operators with "standard") in the stiff body's tractions.
     let mut advice = Vec::new();
@@ -448,12 +535,5 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
         ));
     }
     advice.extend(crate::post::plausibility::input_notes(scene, model));
-    Ok(Plan {
-        effects,
-        problem,
-        omitted,
-        stages,
-        advice,
-        contrast: worst,
-    })
+    (advice, worst)
 }

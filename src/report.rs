@@ -18,6 +18,20 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     } else {
         format!(" {}", scene.units.length)
     };
+    write_scene(&mut o, scene, model, mesh_binary, &len_unit);
+    write_bodies(&mut o, model);
+    write_sizes(&mut o, model, &len_unit);
+    write_parts(&mut o, model);
+    if !scene.tables.is_empty() {
+        write_tables(&mut o, model);
+    }
+    write_interfaces(&mut o, model);
+    write_plan(&mut o, scene, model, plan);
+    o
+}
+
+/// The scene, its mesh, the plane and the units.
+fn write_scene(o: &mut String, scene: &Scene, model: &Model, mesh_binary: bool, len_unit: &str) {
     let _ = writeln!(
         o,
         "scene     {} — \"{}\"",
@@ -55,7 +69,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
         "plane     {plane}, thickness {}{len_unit}; units {units}",
         fmt_num(scene.thickness)
     );
+}
 
+/// The bodies: material, loops, elements and the classes of their displacement components.
+fn write_bodies(o: &mut String, model: &Model) {
     let _ = writeln!(o, "\nbodies ({})", model.bodies.len());
     for b in &model.bodies {
         let holes = b.loops.iter().filter(|l| l.is_hole).count();
@@ -108,7 +125,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
             );
         }
     }
+}
 
+/// The boundary elements' sizes and grading.
+fn write_sizes(o: &mut String, model: &Model, len_unit: &str) {
     let s = &model.sizes;
     let _ = writeln!(
         o,
@@ -129,7 +149,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
              most 2–3× keeps tractions accurate (near-pair quadrature handles it either way)"
         );
     }
+}
 
+/// The boundary parts, the Physical Curves absent from the scene and those on no body.
+fn write_parts(o: &mut String, model: &Model) {
     let _ = writeln!(o, "\nboundary parts ({})", model.parts.len());
     for p in &model.parts {
         let on: Vec<String> = p
@@ -172,11 +195,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
             model.unused_curves.join(", ")
         );
     }
+}
 
-    if !scene.tables.is_empty() {
-        write_tables(&mut o, model);
-    }
-
+/// The interfaces: model, bodies, elements and pairs.
+fn write_interfaces(o: &mut String, model: &Model) {
     let _ = writeln!(o, "\ninterfaces ({})", model.interfaces.len());
     for (k, i) in model.interfaces.iter().enumerate() {
         let sp = &i.spec;
@@ -238,7 +260,10 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
     if model.interfaces.is_empty() {
         let _ = writeln!(o, "  none");
     }
+}
 
+/// The plan: effects, problem, method, stages, cost, advice and what is not simulated.
+fn write_plan(o: &mut String, scene: &Scene, model: &Model, plan: &Plan) {
     let _ = writeln!(o, "\nplan");
     let _ = writeln!(o, "  effects: {}", plan.effects_line());
     let _ = writeln!(o, "  problem: {}", plan.problem.describe());
@@ -272,7 +297,6 @@ pub fn check_report(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool
             let _ = writeln!(o, "    {w}");
         }
     }
-    o
 }
 
 /// Which table applies to each body and interface group, one line per table (scenes with

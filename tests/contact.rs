@@ -171,10 +171,10 @@ fn example_2_detachment() {
     let joint = &l.model.interfaces[0];
     let el = 40.0 / 104.0;
     let det = sgbem::output::summary::interface_figures(joint, &r.interfaces[0], 1.0);
-    let d = det["detached_length"].as_f64().unwrap();
+    let d = det.detached_length;
     println!(
         "example 2: detached {d:.4} cm, closed {}",
-        det["closed_length"]
+        det.closed_length
     );
     assert!((d - 33.85).abs() <= el + 1e-9, "detached length {d}");
     // The closed pairs are the top ones (largest y), contiguous.
@@ -348,9 +348,8 @@ fn cohesion_delays_detachment() {
             &l.model.interfaces[0],
             &r.interfaces[0],
             1.0,
-        )["detached_length"]
-            .as_f64()
-            .unwrap();
+        )
+        .detached_length;
         // Closed pairs hold a tension of at most c per tributary length (the nodal force
         // of the complementarity conditions, compression positive).
         let it = &l.model.interfaces[0];

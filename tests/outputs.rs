@@ -11,8 +11,8 @@ use hdf5_metno as h5;
 use sgbem::input::scene::{Plane, Units};
 use sgbem::output::archive::{read_archive, write_archive, ArchivePart, ArchiveWriter, FORMAT};
 use sgbem::output::record::{
-    Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, MeshRecord, RunRecord,
-    StateRecord, FORMAT_VERSION,
+    Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, IterateRecord, MeshRecord,
+    RunRecord, FORMAT_VERSION,
 };
 use sgbem::output::vtk::{export, write_vtk};
 use sgbem::solution::{BodyField, HistoryRow, InterfaceResult, PairResult, PairStatus};
@@ -177,7 +177,7 @@ fn fabricated(big_operator: usize) -> RunRecord {
                 slip: 0.0,
             })
             .collect();
-        let mut state = StateRecord::new(k, 0, 1.0, fields, vec![InterfaceResult { pairs }]);
+        let mut state = IterateRecord::new(k, 0, 1.0, fields, vec![InterfaceResult { pairs }]);
         if k == 2 {
             state.interior = (0..2)
                 .map(|b| {
@@ -946,7 +946,7 @@ fn record_from_a_model() {
         };
         4
     ];
-    rec.states.push(StateRecord::new(
+    rec.states.push(IterateRecord::new(
         0,
         0,
         1.0,
@@ -1046,7 +1046,7 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             normal_opening: vec![(0..4).map(|j| it.opening(&result, j)).collect()],
             detached_length: vec![it.detached_length(&result)],
         });
-        let mut state = StateRecord::new(k, 0, 1.0, fields, vec![result]);
+        let mut state = IterateRecord::new(k, 0, 1.0, fields, vec![result]);
         if k == 2 {
             state.interior = rec
                 .bodies

@@ -262,13 +262,109 @@ pub fn assemble_body_scaled(
     let body = &model.bodies[bi];
     let mat = material(body, plane);
     let ne = body.elements.len();
-    let nn = body.nodes.len();
 
-    // --- Interface membership of nodes: (iface, pair), several at a junction ---------------
-    // A node where this body meets two or more other bodies (a junction: the corner of a
-    // brick at a T-junction of head and bed joints) belongs to a pair of each interface. Its
-    // displacement is one unknown vector (in the frame of its first pair); its traction has
-    // one set of hats per interface, on that interface's elements.
+    let node_pairs = node_pairs(model, bi);
+    let KnownData {
+        traction: known_t,
+        constraints,
+        mut unknowns,
+    } = known_data(model, body, load_factor);
+    let known_u = known_displacements(body, &constraints, scene_file)?;
+    let n_x = number_unknowns(model, bi, &node_pairs, &mut unknowns, scene_file)?;
+    let node_elems = node_elements(body);
+    let mut entries = element_entries(model, bi, &unknowns, &node_elems);
+    let n_sys = unknowns.len();
+    let held = held_components(body, n_sys, &mut entries, &node_elems);
+
+    // --- Scaled geometry ----------------------------------------------------------------------
+    let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
+    let elems: Vec<ElementRef> = body
+        .elements
+        .iter()
+        .map(|e| {
+            ElementRef::new(
+                Segment::new(
+                    scaled(body.nodes[e.nodes[0]]),
+                    scaled(body.nodes[e.nodes[1]]),
+                ),
+                e.nodes,
+            )
+        })
+        .collect();
+    let boundary: Vec<Segment> = elems.iter().map(|e| e.seg).collect();
+    let area = boundary_area(&boundary);
+    let body_force = body
+        .body_force
+        .filter(|b| *b != [0.0, 0.0])
+        .map(|b| [load_factor * b[0], load_factor * b[1]]);
+
+    // --- Pair loop ------------------------------------------------------------------------------
+    let n = n_sys + held.len();
+    let pair_loop = PairLoop {
+        body,
+        mat: &mat,
+        settings,
+        elems: &elems,
+        boundary: &boundary,
+        area,
+        entries: &entries,
+        known_t: &known_t,
+        known_u: &known_u,
+        body_force,
+        length,
+        n,
+    };
+    let (mut g, mut load) = pair_loop.assemble(ne);
+    // (P, F) = (W, −U)ᵀ, the held rows included.
+    let is_t: Vec<bool> = unknowns
+        .iter()
+        .map(|u| u.is_traction())
+        .chain(std::iter::repeat_n(false, held.len()))
+        .collect();
+    for p in 0..n {
+        if is_t[p] {
+            continue;
+        }
+        for f in 0..n {
+            if is_t[f] {
+                g[(p, f)] = g[(f, p)];
+            }
+        }
+    }
+    // The held rows apart; the known displacements are in the loads of every row already,
+    // so their columns are dropped.
+    let nh = held.len();
+    let held_rows = g.as_ref().submatrix(n_sys, 0, nh, n_sys).to_owned();
+    let held_load = load[n_sys..].to_vec();
+    let g = g.as_ref().submatrix(0, 0, n_sys, n_sys).to_owned();
+    load.truncate(n_sys);
+    let asymmetry = relative_asymmetry(&g);
+
+    Ok(BodySystem {
+        unknowns,
+        n_x,
+        g,
+        load,
+        known_u,
+        known_t,
+        asymmetry,
+        material: mat,
+        centre,
+        length,
+        held,
+        held_rows,
+        held_load,
+    })
+}
+
+/// Interface membership of the nodes of body `bi`: (iface, pair), several at a junction.
+///
+/// A node where this body meets two or more other bodies (a junction: the corner of a brick
+/// at a T-junction of head and bed joints) belongs to a pair of each interface. Its
+/// displacement is one unknown vector (in the frame of its first pair); its traction has one
+/// set of hats per interface, on that interface's elements.
+fn node_pairs(model: &Model, bi: usize) -> Vec<Vec<(usize, usize)>> {
+    let nn = model.bodies[bi].nodes.len();
     let mut node_pairs: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nn];
     for (k, it) in model.interfaces.iter().enumerate() {
         let side_a = it.body_a == bi;
@@ -279,8 +375,24 @@ pub fn assemble_body_scaled(
             node_pairs[it.point(side_a, j).0].push((k, j));
         }
     }
+    node_pairs
+}
 
-    // --- Known data: tractions per element end, displacement constraints per node --------
+/// The known data of a body's boundary parts.
+struct KnownData {
+    /// Known traction at each element end (global x, y).
+    traction: Vec<[[f64; 2]; 2]>,
+    /// The displacement constraints (direction, value) at each node.
+    constraints: Vec<Vec<([f64; 2], f64)>>,
+    /// The traction unknowns (F1) on the elements of displacement conditions.
+    unknowns: Vec<Unknown>,
+}
+
+/// Known data: tractions per element end, displacement constraints per node, and the
+/// traction unknowns where a displacement is prescribed.
+fn known_data(model: &Model, body: &Body, load_factor: f64) -> KnownData {
+    let ne = body.elements.len();
+    let nn = body.nodes.len();
     let mut known_t = vec![[[0.0; 2]; 2]; ne];
     let mut constraints: Vec<Vec<([f64; 2], f64)>> = vec![Vec::new(); nn];
     let mut unknowns: Vec<Unknown> = Vec::new();
@@ -316,9 +428,24 @@ pub fn assemble_body_scaled(
             }
         }
     }
-    let known_u = known_displacements(body, &constraints, scene_file)?;
+    KnownData {
+        traction: known_t,
+        constraints,
+        unknowns,
+    }
+}
 
-    // --- Displacement unknowns: U2 in X, U0 (pair frame) in X0 ---------------------------
+/// Appends the displacement unknowns to the F1 unknowns: U2 in X, then the loop modes; then
+/// X0, the interface traction hats F0 and the interface displacements U0 (pair frame).
+/// Returns the size of X.
+fn number_unknowns(
+    model: &Model,
+    bi: usize,
+    node_pairs: &[Vec<(usize, usize)>],
+    unknowns: &mut Vec<Unknown>,
+    scene_file: &std::path::Path,
+) -> Result<usize> {
+    let body = &model.bodies[bi];
     let mut u0: Vec<Unknown> = Vec::new();
     for (n, d) in body.dofs.iter().enumerate() {
         for k in 0..2 {
@@ -330,51 +457,7 @@ pub fn assemble_body_scaled(
                     on: None,
                 }),
                 DofClass::Interface => {
-                    let Some(&(iface, pair)) = node_pairs[n].first() else {
-                        return Err(Error::input(
-                            scene_file,
-                            format!(
-                                "node {} of body \"{}\" is marked as an interface node but \
-                                 belongs to no interface pair",
-                                fmt_point(body.nodes[n]),
-                                body.name
-                            ),
-                        ));
-                    };
-                    // The unknown direction must be one of a pair's local directions (at a
-                    // junction, of any of its pairs; the contact problem projects it onto
-                    // the frames of the others).
-                    let frame_of = |kk: usize, jj: usize| {
-                        let it = &model.interfaces[kk];
-                        it.point(it.body_a == bi, jj).1
-                    };
-                    let found = if d.class == [DofClass::Interface; 2] {
-                        Some((iface, pair, k, frame_of(iface, pair)[k]))
-                    } else {
-                        node_pairs[n].iter().find_map(|&(kk, jj)| {
-                            let frame = frame_of(kk, jj);
-                            (0..2)
-                                .find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9)
-                                .map(|c| (kk, jj, c, frame[c]))
-                        })
-                    };
-                    let Some((iface, pair, comp, dir)) = found else {
-                        return Err(Error::input(
-                            scene_file,
-                            format!(
-                                "interface \"{}\" at {}: a displacement condition there \
-                                 prescribes a direction oblique to the interface; prescribe it \
-                                 along the interface or its normal",
-                                model.interfaces[iface].spec.name,
-                                fmt_point(body.nodes[n])
-                            ),
-                        ));
-                    };
-                    u0.push(Unknown::Displacement {
-                        node: n,
-                        dir,
-                        on: Some((iface, pair, comp)),
-                    });
+                    u0.push(interface_unknown(model, bi, node_pairs, n, k, scene_file)?);
                 }
             }
         }
@@ -400,14 +483,87 @@ pub fn assemble_body_scaled(
         }
     }
     unknowns.extend(u0);
+    Ok(n_x)
+}
 
-    // --- Entries per element ----------------------------------------------------------------
-    let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); ne];
-    let mut node_elems: Vec<Vec<(usize, usize)>> = vec![Vec::new(); nn];
+/// The interface displacement unknown (U0) of component `k` of node `n`, in the frame of
+/// one of its pairs.
+fn interface_unknown(
+    model: &Model,
+    bi: usize,
+    node_pairs: &[Vec<(usize, usize)>],
+    n: usize,
+    k: usize,
+    scene_file: &std::path::Path,
+) -> Result<Unknown> {
+    let body = &model.bodies[bi];
+    let d = &body.dofs[n];
+    let Some(&(iface, pair)) = node_pairs[n].first() else {
+        return Err(Error::input(
+            scene_file,
+            format!(
+                "node {} of body \"{}\" is marked as an interface node but belongs to no \
+                 interface pair",
+                fmt_point(body.nodes[n]),
+                body.name
+            ),
+        ));
+    };
+    // The unknown direction must be one of a pair's local directions (at a junction, of any
+    // of its pairs; the contact problem projects it onto the frames of the others).
+    // The frame of point jj of interface kk on this body's side.
+    let frame_of = |kk: usize, jj: usize| {
+        let it = &model.interfaces[kk];
+        it.point(it.body_a == bi, jj).1
+    };
+    let found = if d.class == [DofClass::Interface; 2] {
+        Some((iface, pair, k, frame_of(iface, pair)[k]))
+    } else {
+        node_pairs[n].iter().find_map(|&(kk, jj)| {
+            let frame = frame_of(kk, jj);
+            (0..2)
+                .find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9)
+                .map(|c| (kk, jj, c, frame[c]))
+        })
+    };
+    let Some((iface, pair, comp, dir)) = found else {
+        return Err(Error::input(
+            scene_file,
+            format!(
+                "interface \"{}\" at {}: a displacement condition there prescribes a direction \
+                 oblique to the interface; prescribe it along the interface or its normal",
+                model.interfaces[iface].spec.name,
+                fmt_point(body.nodes[n])
+            ),
+        ));
+    };
+    Ok(Unknown::Displacement {
+        node: n,
+        dir,
+        on: Some((iface, pair, comp)),
+    })
+}
+
+/// The elements at each node of a body, as (element, end).
+fn node_elements(body: &Body) -> Vec<Vec<(usize, usize)>> {
+    let mut node_elems: Vec<Vec<(usize, usize)>> = vec![Vec::new(); body.nodes.len()];
     for (ei, e) in body.elements.iter().enumerate() {
         node_elems[e.nodes[0]].push((ei, 0));
         node_elems[e.nodes[1]].push((ei, 1));
     }
+    node_elems
+}
+
+/// Entries per element: the unknowns whose shape functions live on each element of body
+/// `bi`.
+fn element_entries(
+    model: &Model,
+    bi: usize,
+    unknowns: &[Unknown],
+    node_elems: &[Vec<(usize, usize)>],
+) -> Vec<Vec<Entry>> {
+    let body = &model.bodies[bi];
+    let mut entries: Vec<Vec<Entry>> = vec![Vec::new(); body.elements.len()];
     for (index, u) in unknowns.iter().enumerate() {
         match *u {
             Unknown::LoopMode { loop_index, .. } => {
@@ -457,9 +613,17 @@ pub fn assemble_body_scaled(
             }
         }
     }
+    entries
+}
 
-    // --- Held components: rows only (index n + q), never unknowns ------------------------
-    let n_sys = unknowns.len();
+/// Held components: rows only (index `n_sys + q`), never unknowns. Adds their entries and
+/// returns them as (node, direction).
+fn held_components(
+    body: &Body,
+    n_sys: usize,
+    entries: &mut [Vec<Entry>],
+    node_elems: &[Vec<(usize, usize)>],
+) -> Vec<(usize, [f64; 2])> {
     let mut held: Vec<(usize, [f64; 2])> = Vec::new();
     for (node, d) in body.dofs.iter().enumerate() {
         for k in 0..2 {
@@ -477,35 +641,63 @@ pub fn assemble_body_scaled(
             }
         }
     }
+    held
+}
 
-    // --- Scaled geometry ----------------------------------------------------------------------
-    let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
-    let elems: Vec<ElementRef> = body
-        .elements
-        .iter()
-        .map(|e| {
-            ElementRef::new(
-                Segment::new(
-                    scaled(body.nodes[e.nodes[0]]),
-                    scaled(body.nodes[e.nodes[1]]),
-                ),
-                e.nodes,
-            )
-        })
-        .collect();
-    let boundary: Vec<Segment> = elems.iter().map(|e| e.seg).collect();
-    let area = boundary_area(&boundary);
-    let body_force = body
-        .body_force
-        .filter(|b| *b != [0.0, 0.0])
-        .map(|b| [load_factor * b[0], load_factor * b[1]]);
+/// What the pair loop reads: the body's elements in scaled coordinates, the entries of the
+/// unknowns on each, and the known data; `n` rows and columns, the held rows included.
+struct PairLoop<'a> {
+    body: &'a Body,
+    mat: &'a Material,
+    settings: &'a QuadratureSettings,
+    elems: &'a [ElementRef],
+    boundary: &'a [Segment],
+    area: f64,
+    entries: &'a [Vec<Entry>],
+    known_t: &'a [[[f64; 2]; 2]],
+    known_u: &'a [[f64; 2]],
+    body_force: Option<[f64; 2]>,
+    length: f64,
+    n: usize,
+}
 
-    // --- Pair loop ------------------------------------------------------------------------------
-    let n = n_sys + held.len();
-    let mut g = Mat::<f64>::zeros(n, n);
-    let mut load = vec![0.0; n];
-    let l2 = length * length;
-    let strip = |ei: usize| -> (Vec<usize>, Vec<f64>, Vec<f64>) {
+impl PairLoop<'_> {
+    /// G and the load over the `ne` test elements: their strips, computed in parallel by
+    /// chunks and added in element order.
+    fn assemble(&self, ne: usize) -> (Mat<f64>, Vec<f64>) {
+        let n = self.n;
+        let mut g = Mat::<f64>::zeros(n, n);
+        let mut load = vec![0.0; n];
+        let chunk = 32;
+        for start in (0..ne).step_by(chunk) {
+            let end = (start + chunk).min(ne);
+            let strips: Vec<_> = (start..end)
+                .into_par_iter()
+                .map(|ei| self.strip(ei))
+                .collect();
+            for (rows, vals, ld) in strips {
+                for (ri, &r) in rows.iter().enumerate() {
+                    for c in 0..n {
+                        g[(r, c)] += vals[ri * n + c];
+                    }
+                }
+                for (l, x) in load.iter_mut().zip(ld) {
+                    *l += x;
+                }
+            }
+        }
+        (g, load)
+    }
+
+    /// The strip of test element `ei`: the indices of the unknowns supported on it, their
+    /// partial rows (row by row, `n` values each) and their partial load, integrated against
+    /// every element.
+    fn strip(&self, ei: usize) -> (Vec<usize>, Vec<f64>, Vec<f64>) {
+        let (body, mat, settings) = (self.body, self.mat, self.settings);
+        let (elems, entries, known_t, known_u) =
+            (self.elems, self.entries, self.known_t, self.known_u);
+        let (n, length) = (self.n, self.length);
+        let l2 = length * length;
         let rows: Vec<&Entry> = entries[ei].iter().collect();
         let mut vals = vec![0.0; rows.len() * n];
         let mut ld = vec![0.0; n];
@@ -514,7 +706,7 @@ pub fn assemble_body_scaled(
         let te = known_t[ei];
         let t_nonzero = te.iter().any(|t| t[0] != 0.0 || t[1] != 0.0);
         for (fi, f) in elems.iter().enumerate() {
-            let raw: PairBlocks = pair_blocks(&mat, e, f, settings);
+            let raw: PairBlocks = pair_blocks(mat, e, f, settings);
             let (v, k, d) = (scale4(&raw.v, l2), scale4(&raw.k, length), raw.d);
             let same = ei == fi;
             let tf = known_t[fi];
@@ -567,8 +759,8 @@ pub fn assemble_body_scaled(
                 }
             }
         }
-        if let Some(b) = body_force {
-            let bl = body_force_loads(&mat, &e.seg, &boundary, b, area, settings);
+        if let Some(b) = self.body_force {
+            let bl = body_force_loads(mat, &e.seg, self.boundary, b, self.area, settings);
             for r in &rows {
                 let (w, p) = (bl.w[r.end], bl.p[r.end]);
                 ld[r.index] += if r.traction {
@@ -579,62 +771,7 @@ pub fn assemble_body_scaled(
             }
         }
         (rows.iter().map(|r| r.index).collect(), vals, ld)
-    };
-    let chunk = 32;
-    for start in (0..ne).step_by(chunk) {
-        let end = (start + chunk).min(ne);
-        let strips: Vec<_> = (start..end).into_par_iter().map(strip).collect();
-        for (rows, vals, ld) in strips {
-            for (ri, &r) in rows.iter().enumerate() {
-                for c in 0..n {
-                    g[(r, c)] += vals[ri * n + c];
-                }
-            }
-            for (l, x) in load.iter_mut().zip(ld) {
-                *l += x;
-            }
-        }
     }
-    // (P, F) = (W, −U)ᵀ, the held rows included.
-    let is_t: Vec<bool> = unknowns
-        .iter()
-        .map(|u| u.is_traction())
-        .chain(std::iter::repeat_n(false, held.len()))
-        .collect();
-    for p in 0..n {
-        if is_t[p] {
-            continue;
-        }
-        for f in 0..n {
-            if is_t[f] {
-                g[(p, f)] = g[(f, p)];
-            }
-        }
-    }
-    // The held rows apart; the known displacements are in the loads of every row already,
-    // so their columns are dropped.
-    let nh = held.len();
-    let held_rows = g.as_ref().submatrix(n_sys, 0, nh, n_sys).to_owned();
-    let held_load = load[n_sys..].to_vec();
-    let g = g.as_ref().submatrix(0, 0, n_sys, n_sys).to_owned();
-    load.truncate(n_sys);
-    let asymmetry = relative_asymmetry(&g);
-
-    Ok(BodySystem {
-        unknowns,
-        n_x,
-        g,
-        load,
-        known_u,
-        known_t,
-        asymmetry,
-        material: mat,
-        centre,
-        length,
-        held,
-        held_rows,
-        held_load,
-    })
 }
 
 /// Degenerate-scale detector (docs/formulation.md §8.4, §7 item 15): the single-layer block V over
@@ -675,7 +812,7 @@ pub fn check_single_layer(sys: &BodySystem, body: &str) -> Result<f64> {
 }
 
 /// The physical segment of element `ei`.
-pub fn body_segment(body: &Body, ei: usize) -> Segment {
+pub(crate) fn body_segment(body: &Body, ei: usize) -> Segment {
     let e = &body.elements[ei];
     Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
 }

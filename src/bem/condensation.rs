@@ -148,7 +148,7 @@ impl Condensed {
 }
 
 /// Nodal displacements and element-end tractions of a body from its unknowns.
-pub fn recover(
+pub(crate) fn recover(
     model: &Model,
     b: usize,
     sys: &BodySystem,

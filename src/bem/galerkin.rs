@@ -583,7 +583,7 @@ pub fn point_integrals(
 /// A segment with its unit normal and length, computed once for the many field points of
 /// the post-processing.
 #[derive(Debug, Clone, Copy, PartialEq)]
-pub struct ElementFrame {
+pub(crate) struct ElementFrame {
     pub segment: Segment,
     pub normal: Vec2,
     pub length: f64,
@@ -600,7 +600,7 @@ impl ElementFrame {
 }
 
 /// [`point_integrals`] on an element whose normal and length are known.
-pub fn point_integrals_on(
+pub(crate) fn point_integrals_on(
     m: &Material,
     x: Vec2,
     frame: &ElementFrame,

@@ -29,7 +29,7 @@ pub type Vec2 = [f64; 2];
 /// A 2×2 matrix, indexed `[row][column]`.
 pub type Mat2 = [[f64; 2]; 2];
 /// A third-order 2D tensor, indexed `[first][second][third]`.
-pub type Tensor3 = [[[f64; 2]; 2]; 2];
+pub(crate) type Tensor3 = [[[f64; 2]; 2]; 2];
 
 /// Isotropic linear elastic material in the plane-strain form used by all kernels.
 ///
@@ -109,7 +109,7 @@ impl Material {
 /// boundary lies within a unit disk during assembly, and within the model's coordinates,
 /// far below 1e150, after it), which costs several times a square root.
 #[inline(always)]
-pub fn norm2(a: f64, b: f64) -> f64 {
+pub(crate) fn norm2(a: f64, b: f64) -> f64 {
     (a * a + b * b).sqrt()
 }
 

@@ -150,7 +150,7 @@ pub fn duffy_graded(n: usize) -> SquareRule {
 /// `[a, b]`: Gauss–Legendre with n points on `[a, b]` has error `O(ρ^(−2n))` for an integrand
 /// analytic inside the ellipse with foci a, b through z.
 #[inline]
-pub fn bernstein_rho(z: [f64; 2], a: f64, b: f64) -> f64 {
+pub(crate) fn bernstein_rho(z: [f64; 2], a: f64, b: f64) -> f64 {
     let h = 0.5 * (b - a);
     let x = (z[0] - 0.5 * (a + b)) / h;
     let y = z[1] / h;
@@ -160,7 +160,7 @@ pub fn bernstein_rho(z: [f64; 2], a: f64, b: f64) -> f64 {
 }
 
 /// Most sub-intervals [`split_towards_pole`] produces.
-pub const MAX_POLE_INTERVALS: usize = 40;
+pub(crate) const MAX_POLE_INTERVALS: usize = 40;
 
 /// Sub-intervals of \[0,1\] produced by [`split_towards_pole`].
 #[derive(Debug, Clone, Copy)]
@@ -220,7 +220,7 @@ pub fn graded_both_ends(n: usize) -> Rule {
 
 /// Maps one Gauss point `(u, w)` of \[0,1\] to the [`graded_both_ends`] rule.
 #[inline]
-pub fn graded_point(u: f64, w: f64) -> (f64, f64) {
+pub(crate) fn graded_point(u: f64, w: f64) -> (f64, f64) {
     let v = 1.0 - u;
     (
         u * u * u * (10.0 - 15.0 * u + 6.0 * u * u),

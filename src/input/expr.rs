@@ -16,7 +16,7 @@ use evalexpr::{
 };
 
 /// Functions an expression may call, with their number of arguments.
-pub const FUNCTIONS: [(&str, usize); 15] = [
+pub(crate) const FUNCTIONS: [(&str, usize); 15] = [
     ("sqrt", 1),
     ("sin", 1),
     ("cos", 1),
@@ -35,7 +35,7 @@ pub const FUNCTIONS: [(&str, usize); 15] = [
 ];
 
 /// Variables an expression may read.
-pub const VARIABLES: [&str; 4] = ["x", "y", "t", "pi"];
+pub(crate) const VARIABLES: [&str; 4] = ["x", "y", "t", "pi"];
 
 /// A prescribed scalar: constant or a function of the point (x, y) and the pseudo-time t.
 #[derive(Debug, Clone)]
@@ -184,9 +184,9 @@ impl Expr {
 /// Longest expression accepted, in characters.
 pub const MAX_LEN: usize = 10_000;
 /// Deepest nesting of parentheses, and longest run of signs.
-pub const MAX_DEPTH: usize = 200;
+pub(crate) const MAX_DEPTH: usize = 200;
 /// Deepest parsed tree (a sum of n terms is n deep; each parenthesis or call adds 1 or 2).
-pub const MAX_TREE_DEPTH: usize = 1000;
+pub(crate) const MAX_TREE_DEPTH: usize = 1000;
 
 /// Refuses, before the parser sees it, a text too long, nested too deep in parentheses, or
 /// with a run of signs (`- - - x`) longer than [`MAX_DEPTH`]: the parser's and the

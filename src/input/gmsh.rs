@@ -10,7 +10,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use crate::error::{Error, Result};
 
 /// Whether `path` names a gmsh geometry file (`.geo`).
-pub fn is_geo(path: &Path) -> bool {
+pub(crate) fn is_geo(path: &Path) -> bool {
     path.extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("geo"))
 }
@@ -18,7 +18,7 @@ pub fn is_geo(path: &Path) -> bool {
 /// Meshes `geo` into `dir/<stem>.msh` (MSH 4.1, 2D) with the given `-setnumber`
 /// parameters (gmsh's log is not kept: it holds timings). Returns the mesh path. A missing
 /// gmsh or a failing one is bad input (exit 2) with gmsh's message.
-pub fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<PathBuf> {
+pub(crate) fn mesh_geo(geo: &Path, params: &[(String, f64)], dir: &Path) -> Result<PathBuf> {
     if !geo.is_file() {
         return Err(Error::input(
             geo,
@@ -159,7 +159,7 @@ fn without_comments(text: &str, blank: bool) -> String {
 
 /// Refuses, unless allowed ([`allow_shell_commands`]), a `.geo` (or a file it includes)
 /// that calls a command of `COMMANDS`: gmsh would run it as a shell command while meshing.
-pub fn check_commands(geo: &Path) -> Result<()> {
+pub(crate) fn check_commands(geo: &Path) -> Result<()> {
     if SHELL_ALLOWED.load(Ordering::Relaxed) {
         return Ok(());
     }

@@ -341,7 +341,7 @@ pub fn resolve_interfaces(
 /// (interfaces) take `[defaults.body]` (`[defaults.interface]`): such a table applies whole
 /// (keys are never merged across tables), so the key belongs in the defaults. `doc` is the
 /// scene's document before the overrides.
-pub fn defaults_hint(doc: &toml::Table, set: &str) -> Option<String> {
+pub(crate) fn defaults_hint(doc: &toml::Table, set: &str) -> Option<String> {
     let (path, value) = set.split_once('=')?;
     let parts: Vec<&str> = path.trim().split('.').collect();
     let [kind @ ("body" | "interface"), name, key] = parts[..] else {

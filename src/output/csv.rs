@@ -62,10 +62,10 @@ pub fn interface_table(it: &Interface, r: &InterfaceResult, bodies: &[Body]) -> 
 }
 
 /// One sampled point: position, displacement, stress (xx, yy, xy); `None` outside the bodies.
-pub type SectionRow = ([f64; 2], Option<([f64; 2], [f64; 3])>);
+pub(crate) type SectionRow = ([f64; 2], Option<([f64; 2], [f64; 3])>);
 
 /// `x,y,ux,uy,sxx,syy,sxy`; points outside every body get `nan`.
-pub fn section_table(rows: &[SectionRow]) -> String {
+pub(crate) fn section_table(rows: &[SectionRow]) -> String {
     let mut o = String::from("x,y,ux,uy,sxx,syy,sxy\n");
     for (x, v) in rows {
         match v {

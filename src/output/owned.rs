@@ -10,7 +10,7 @@ use std::path::{Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// The name of the marker file.
-pub const MARKER: &str = ".sgbem-run.json";
+pub(crate) const MARKER: &str = ".sgbem-run.json";
 
 /// The marker that lists the entries of a folder.
 pub struct Owner {
@@ -72,7 +72,7 @@ fn read_marker(marker: &Path) -> Result<Option<BTreeSet<String>>> {
 }
 
 /// The marker that owns `folder`: its own, else its parent's when that lists the folder.
-pub fn owner(folder: &Path) -> Result<Option<Owner>> {
+pub(crate) fn owner(folder: &Path) -> Result<Option<Owner>> {
     let own = folder.join(MARKER);
     if let Some(entries) = read_marker(&own)? {
         return Ok(Some(Owner {
@@ -155,7 +155,7 @@ pub fn foreign(folder: &Path, owner: Option<&Owner>) -> Vec<String> {
 }
 
 /// The refusal for `folder` holding `strangers`.
-pub fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error {
+pub(crate) fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error {
     let shown: Vec<String> = strangers.iter().take(5).map(|s| format!("`{s}`")).collect();
     let more = if strangers.len() > 5 {
         format!(" and {} more", strangers.len() - 5)
@@ -182,7 +182,7 @@ pub fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error {
 }
 
 /// The marker text listing `entries`.
-pub fn marker_text(entries: &BTreeSet<String>) -> String {
+pub(crate) fn marker_text(entries: &BTreeSet<String>) -> String {
     let v = serde_json::json!({
         "tool": "sgbem",
         "tool_version": env!("CARGO_PKG_VERSION"),
@@ -204,7 +204,7 @@ pub fn listing(dir: &Path) -> BTreeSet<String> {
 
 /// Removes from `dir` the listed `entries` (files, then the folders they leave empty), its
 /// marker, and `dir` itself if nothing else is left; anything not listed stays.
-pub fn remove_listed(dir: &Path, entries: &BTreeSet<String>) {
+pub(crate) fn remove_listed(dir: &Path, entries: &BTreeSet<String>) {
     for f in entries.iter().filter(|e| !e.ends_with('/')) {
         if std::fs::symlink_metadata(dir.join(f)).is_ok_and(|m| m.is_file()) {
             let _ = std::fs::remove_file(dir.join(f));

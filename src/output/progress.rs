@@ -174,7 +174,7 @@ impl Stage {
 }
 
 /// The text of a contact tick: `step 1/2, iteration 7/100, open 12/105 pairs, detached 33.8`.
-pub fn contact_message(t: &ContactTick) -> String {
+pub(crate) fn contact_message(t: &ContactTick) -> String {
     format!(
         "step {}/{}, iteration {}/{}, open {}/{} pairs, detached {:.4}",
         t.load_step + 1,

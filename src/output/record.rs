@@ -189,7 +189,7 @@ impl BodyOperators {
 }
 
 /// A readable description of one unknown, e.g. `F1 element 3 end 0 dir (1, 0)`.
-pub fn describe_unknown(u: &Unknown) -> String {
+pub(crate) fn describe_unknown(u: &Unknown) -> String {
     let d = |v: [f64; 2]| format!("({}, {})", fmt_num(v[0]), fmt_num(v[1]));
     match *u {
         Unknown::Traction1 { elem, end, dir } => {
@@ -416,10 +416,11 @@ impl InteriorRecord {
     }
 }
 
-/// One solved state: the boundary solution of every body and the interface results after
-/// one contact iteration (or the final state).
+/// One solved state, the record of an iterate (`contact::RecordedState`): the boundary
+/// solution of every body and the interface results after one contact iteration (or the
+/// final state).
 #[derive(Debug, Clone, Default)]
-pub struct StateRecord {
+pub struct IterateRecord {
     /// Iteration number counted over the whole run (strictly increasing from state to
     /// state): the time of the state in `vtk/history.pvd`.
     pub iteration: usize,
@@ -435,15 +436,15 @@ pub struct StateRecord {
     pub interior: Vec<InteriorRecord>,
 }
 
-impl StateRecord {
+impl IterateRecord {
     pub fn new(
         iteration: usize,
         load_step: usize,
         load_factor: f64,
         fields: Vec<BodyField>,
         interfaces: Vec<InterfaceResult>,
-    ) -> StateRecord {
-        StateRecord {
+    ) -> IterateRecord {
+        IterateRecord {
             iteration,
             load_step,
             load_factor,
@@ -474,7 +475,7 @@ pub struct RunRecord {
     pub bodies: Vec<BodyRecord>,
     pub interfaces: Vec<InterfaceRecord>,
     /// Solved states in order; the last one is the final solution.
-    pub states: Vec<StateRecord>,
+    pub states: Vec<IterateRecord>,
     pub history: History,
     /// Interface operators of the final status (`K00` and its blocks, `Ktilde_urur`,
     /// `Ktilde_fvfv`, loads), by name, in the order given.
@@ -566,6 +567,15 @@ impl RunRecord {
     /// Checks every size and cross-reference the writers rely on, so that writing a record
     /// read from a damaged archive fails with a message instead of a panic.
     pub fn validate(&self) -> std::result::Result<(), String> {
+        self.validate_mesh()?;
+        self.validate_bodies()?;
+        self.validate_interfaces()?;
+        self.validate_states()?;
+        self.validate_history()
+    }
+
+    /// The mesh: per-node, per-line and per-triangle arrays of one length, indices in range.
+    fn validate_mesh(&self) -> std::result::Result<(), String> {
         let m = &self.mesh;
         let nm = m.nodes.len();
         let ng = m.group_names.len();
@@ -607,7 +617,13 @@ impl RunRecord {
             ng,
             "groups",
         )?;
-        let nb = self.bodies.len();
+        Ok(())
+    }
+
+    /// The bodies: their nodes in the mesh, their elements and triangles in range, and the
+    /// shapes of their operators.
+    fn validate_bodies(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
         for b in &self.bodies {
             let w = |s: &str| format!("body \"{}\" {s}", b.name);
             let nn = b.nodes.len();
@@ -639,6 +655,12 @@ impl RunRecord {
                 same_len(&w("Z0"), op.z0.len(), "interface unknowns", n0)?;
             }
         }
+        Ok(())
+    }
+
+    /// The interfaces: two existing bodies, one value per pair, nodes and elements in range.
+    fn validate_interfaces(&self) -> std::result::Result<(), String> {
+        let nb = self.bodies.len();
         for it in &self.interfaces {
             let w = |s: &str| format!("interface \"{}\" {s}", it.name);
             if it.body_a >= nb || it.body_b >= nb {
@@ -702,6 +724,14 @@ impl RunRecord {
                 )?;
             }
         }
+        Ok(())
+    }
+
+    /// The recorded states: increasing iterations, one field per body and one result per
+    /// interface of the right sizes, interior values at every triangle node.
+    fn validate_states(&self) -> std::result::Result<(), String> {
+        let nm = self.mesh.nodes.len();
+        let nb = self.bodies.len();
         let mut last: Option<usize> = None;
         for (k, st) in self.states.iter().enumerate() {
             let w = |s: &str| format!("state {k} {s}");
@@ -765,6 +795,11 @@ impl RunRecord {
                 }
             }
         }
+        Ok(())
+    }
+
+    /// The history rows: one value per interface and per pair.
+    fn validate_history(&self) -> std::result::Result<(), String> {
         let ni = self.interfaces.len();
         for (k, row) in self.history.rows.iter().enumerate() {
             let w = |s: &str| format!("history row {k} {s}");
@@ -933,7 +968,7 @@ fn or_dash(s: &str) -> &str {
 }
 
 /// "strain" | "stress".
-pub fn plane_name(p: Plane) -> &'static str {
+pub(crate) fn plane_name(p: Plane) -> &'static str {
     match p {
         Plane::Strain => "strain",
         Plane::Stress => "stress",
@@ -992,7 +1027,7 @@ fn array_shape(what: &str, a: &Array, shape: &[usize]) -> std::result::Result<()
 // Time stamp and SHA-256, written here to avoid two dependencies for two small functions.
 
 /// The current UTC time, ISO 8601 to the second.
-pub fn utc_now() -> String {
+pub(crate) fn utc_now() -> String {
     let secs = std::time::SystemTime::now()
         .duration_since(std::time::UNIX_EPOCH)
         .map(|d| d.as_secs())
@@ -1001,7 +1036,7 @@ pub fn utc_now() -> String {
 }
 
 /// ISO 8601 UTC text of a Unix time (civil-from-days, proleptic Gregorian calendar).
-pub fn utc_from_unix(secs: u64) -> String {
+pub(crate) fn utc_from_unix(secs: u64) -> String {
     let days = (secs / 86_400) as i64;
     let rem = secs % 86_400;
     let z = days + 719_468;
@@ -1022,7 +1057,7 @@ pub fn utc_from_unix(secs: u64) -> String {
 }
 
 /// SHA-256 of a file, lowercase hex.
-pub fn sha256_file(path: &Path) -> Result<String> {
+pub(crate) fn sha256_file(path: &Path) -> Result<String> {
     let bytes = std::fs::read(path)
         .map_err(|e| Error::io(path, format!("cannot read the mesh to hash it: {e}")))?;
     Ok(sha256_hex(&bytes))

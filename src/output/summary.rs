@@ -1,14 +1,196 @@
-//! `summary.json`: the headline results of a run (SPEC.md "Outputs").
+//! `summary.json`: the headline results of a run (SPEC.md "Outputs"), as typed records.
+//!
+//! This module alone knows the file's shape: the pipeline fills a [`Summary`] and writes it
+//! with `serde_json::to_string_pretty`. Key order: serde_json keeps the keys of an object
+//! value sorted, and `summary.json` has always been written so; a struct is written in the
+//! order of its fields, so every record here declares its fields in alphabetical order (the
+//! test `keys_are_sorted` holds them to it). A figure that is not finite is written as
+//! `null`.
 
-use serde_json::{json, Map, Value};
+use std::collections::BTreeMap;
+
+use serde::Serialize;
+use serde_json::Value;
 
 use crate::contact::driver::QpCheck;
 use crate::input::model::Interface;
-use crate::solution::{InterfaceResult, PairStatus};
+use crate::post::equilibrium::{BodyBalance, Wrench};
+use crate::solution::{InterfaceResult, PairStatus, RunStatus};
+
+/// The whole of `summary.json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct Summary {
+    /// The contact stage's own block (solver, iterations, cross-checks, ...).
+    pub contact: Value,
+    pub counts: Counts,
+    pub diagnostics: Diagnostics,
+    pub effects: Vec<&'static str>,
+    /// Per body: its loads and imbalance.
+    pub equilibrium: BTreeMap<String, BodyEquilibrium>,
+    /// Per Physical Curve split into one interface per pair of bodies, when there is one.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub interface_curves: Option<BTreeMap<String, CurveFigures>>,
+    pub interfaces: BTreeMap<String, InterfaceFigures>,
+    pub load_factor: f64,
+    /// With `[solve] time`: every step's pseudo-time and what depends on it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub load_path: Option<LoadPath>,
+    /// "linear" without a unilateral interface, else the scene's method.
+    pub method: &'static str,
+    pub notes: Vec<String>,
+    /// The `--set KEY=VALUE` applied to the scene.
+    pub overrides: Vec<String>,
+    pub plane: &'static str,
+    pub problem: String,
+    /// The QP's figures at the last load step, when the QP ran as a cross-check.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub qp: Option<QpSummary>,
+    pub quadrature: &'static str,
+    pub status: RunStatus,
+    pub thickness: f64,
+    /// With `[solve] time`: the pseudo-time of the final state.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub time: Option<f64>,
+    pub title: String,
+    pub units: Units,
+}
+
+/// The problem's sizes.
+#[derive(Debug, Clone, Serialize)]
+pub struct Counts {
+    pub bodies: usize,
+    pub boundary_elements: usize,
+    /// The unknowns of all bodies' systems.
+    pub dofs: usize,
+    /// The mesh nodes where the interior field was evaluated.
+    pub field_nodes: usize,
+    pub interface_pairs: usize,
+}
+
+/// Figures of the operators' quality.
+#[derive(Debug, Clone, Serialize)]
+pub struct Diagnostics {
+    /// The largest relative asymmetry of a condensed operator D00.
+    pub d00_asymmetry: f64,
+    /// The smallest pivot ratio of the condensations.
+    pub min_pivot_ratio: f64,
+}
+
+/// The scene's units, as written in it (empty when not given).
+#[derive(Debug, Clone, Serialize)]
+pub struct Units {
+    pub force: String,
+    pub length: String,
+}
+
+/// The load path of `[solve] time`.
+#[derive(Debug, Clone, Serialize)]
+pub struct LoadPath {
+    /// The prescribed values that depend on the pseudo-time.
+    pub depends_on_t: Vec<String>,
+    /// Every step's pseudo-time.
+    pub time: Vec<f64>,
+}
+
+/// Per-interface figures: detached and closed lengths, open pairs, resultants, extreme
+/// normal tractions (tension positive; resultants times the thickness); with friction the
+/// stick and slip lengths and the largest accumulated slip.
+#[derive(Debug, Clone, Serialize)]
+pub struct InterfaceFigures {
+    pub closed_length: f64,
+    pub detached_length: f64,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_accumulated_slip: Option<f64>,
+    pub max_normal_traction: f64,
+    pub min_normal_traction: f64,
+    pub normal_resultant: f64,
+    pub open_pairs: usize,
+    pub pairs: usize,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip_length: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stick_length: Option<f64>,
+    pub tangential_resultant: f64,
+}
+
+impl InterfaceFigures {
+    /// The floating-point figures by key, in key order (`None` where one is not written).
+    fn floats(&self) -> [(&'static str, Option<f64>); 9] {
+        [
+            ("closed_length", Some(self.closed_length)),
+            ("detached_length", Some(self.detached_length)),
+            ("max_accumulated_slip", self.max_accumulated_slip),
+            ("max_normal_traction", Some(self.max_normal_traction)),
+            ("min_normal_traction", Some(self.min_normal_traction)),
+            ("normal_resultant", Some(self.normal_resultant)),
+            ("slip_length", self.slip_length),
+            ("stick_length", self.stick_length),
+            ("tangential_resultant", Some(self.tangential_resultant)),
+        ]
+    }
+}
+
+/// A Physical Curve joining several pairs of bodies: its parts (interfaces `CURVE[A|B]`)
+/// and their figures combined. A figure is `None` (written `null`) where a sum was not
+/// finite; the next part's sum starts again from 0 there.
+#[derive(Debug, Clone, Serialize)]
+pub struct CurveFigures {
+    pub closed_length: Option<f64>,
+    pub detached_length: Option<f64>,
+    pub max_normal_traction: Option<f64>,
+    pub min_normal_traction: Option<f64>,
+    pub normal_resultant: Option<f64>,
+    pub open_pairs: u64,
+    pub pairs: u64,
+    pub parts: Vec<String>,
+    pub tangential_resultant: Option<f64>,
+}
+
+/// The summary's `qp` block.
+#[derive(Debug, Clone, Serialize)]
+pub struct QpSummary {
+    pub converged: bool,
+    /// Pairs whose status differs from the main solver's.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub differing_pairs_from_lcp: Option<usize>,
+    pub form: &'static str,
+    /// The solver's figures (iterations, status).
+    pub info: Value,
+    pub interfaces: BTreeMap<String, InterfaceFigures>,
+}
+
+/// One body's balance in the `equilibrium` block.
+#[derive(Debug, Clone, Serialize)]
+pub struct BodyEquilibrium {
+    pub imbalance: WrenchFigures,
+    /// Each load by name (`body_force`, `boundary NAME`, `interface NAME`).
+    pub loads: BTreeMap<String, WrenchFigures>,
+    /// The point moments are taken about: the centroid.
+    pub moments_about: [f64; 2],
+    pub relative_imbalance: f64,
+}
+
+/// Force (x, y) and moment of one load.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct WrenchFigures {
+    pub fx: f64,
+    pub fy: f64,
+    pub m: f64,
+}
+
+impl From<&Wrench> for WrenchFigures {
+    fn from(w: &Wrench) -> WrenchFigures {
+        WrenchFigures {
+            fx: w.fx,
+            fy: w.fy,
+            m: w.m,
+        }
+    }
+}
 
 /// Per-interface figures: detached and closed lengths, open pairs, resultants, extreme
 /// normal tractions (tension positive; resultants times the thickness).
-pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) -> Value {
+pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) -> InterfaceFigures {
     let mut detached = 0.0;
     let mut closed = 0.0;
     let mut normal = 0.0;
@@ -44,16 +226,19 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
         .iter()
         .filter(|p| p.status == PairStatus::Open)
         .count();
-    let mut out = json!({
-        "detached_length": detached,
-        "closed_length": closed,
-        "open_pairs": open,
-        "pairs": it.pairs.len(),
-        "normal_resultant": normal * thickness,
-        "tangential_resultant": tangential * thickness,
-        "max_normal_traction": tn.iter().copied().fold(f64::NEG_INFINITY, f64::max),
-        "min_normal_traction": tn.iter().copied().fold(f64::INFINITY, f64::min),
-    });
+    let mut out = InterfaceFigures {
+        closed_length: closed,
+        detached_length: detached,
+        max_accumulated_slip: None,
+        max_normal_traction: tn.iter().copied().fold(f64::NEG_INFINITY, f64::max),
+        min_normal_traction: tn.iter().copied().fold(f64::INFINITY, f64::min),
+        normal_resultant: normal * thickness,
+        open_pairs: open,
+        pairs: it.pairs.len(),
+        slip_length: None,
+        stick_length: None,
+        tangential_resultant: tangential * thickness,
+    };
     if r.pairs.iter().any(|p| p.slipping.is_some()) {
         // Lengths of elements whose two ends stick / slip (an element with one end of each
         // counts half to both).
@@ -71,76 +256,251 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
             }
         }
         let max_slip = r.pairs.iter().map(|p| p.slip).fold(0.0, f64::max);
-        out["stick_length"] = json!(stick);
-        out["slip_length"] = json!(slip);
-        out["max_accumulated_slip"] = json!(max_slip);
+        out.stick_length = Some(stick);
+        out.slip_length = Some(slip);
+        out.max_accumulated_slip = Some(max_slip);
     }
     out
 }
 
-/// Builds the `interfaces` object.
-pub fn interfaces(its: &[Interface], results: &[InterfaceResult], thickness: f64) -> Value {
-    let mut m = Map::new();
+/// The `interfaces` block: each interface's figures by name.
+pub fn interfaces(
+    its: &[Interface],
+    results: &[InterfaceResult],
+    thickness: f64,
+) -> BTreeMap<String, InterfaceFigures> {
+    let mut m = BTreeMap::new();
     for (it, r) in its.iter().zip(results) {
         m.insert(it.spec.name.clone(), interface_figures(it, r, thickness));
     }
-    Value::Object(m)
+    m
 }
 
 /// The summary's `qp` block: the QP's figures at the last load step.
-pub fn qp(its: &[Interface], q: &QpCheck, thickness: f64) -> Value {
-    let mut block = json!({
-        "form": "primal (openings, symmetric Steklov-Poincare stiffness)",
-        "interfaces": interfaces(its, &q.interfaces, thickness),
-        "converged": q.converged,
-        "info": q.info,
-    });
-    if let Some(d) = q.differing_pairs {
-        block["differing_pairs_from_lcp"] = json!(d);
+pub fn qp(its: &[Interface], q: &QpCheck, thickness: f64) -> QpSummary {
+    QpSummary {
+        converged: q.converged,
+        differing_pairs_from_lcp: q.differing_pairs,
+        form: "primal (openings, symmetric Steklov-Poincare stiffness)",
+        info: q.info.clone(),
+        interfaces: interfaces(its, &q.interfaces, thickness),
     }
-    block
+}
+
+/// The first interface figure (interfaces by name, figures by key) that is not finite and
+/// so is written as `null`, as `interface "NAME": KEY`: a resultant of finite tractions can
+/// overflow.
+pub(crate) fn non_finite_figure(interfaces: &BTreeMap<String, InterfaceFigures>) -> Option<String> {
+    interfaces.iter().find_map(|(name, fig)| {
+        fig.floats()
+            .into_iter()
+            .find(|(_, v)| v.is_some_and(|v| !v.is_finite()))
+            .map(|(k, _)| format!("interface \"{name}\": {k}"))
+    })
+}
+
+/// A figure as `summary.json` holds it: `None` (null) where it is not finite.
+fn written(x: f64) -> Option<f64> {
+    x.is_finite().then_some(x)
 }
 
 /// Per Physical Curve that joins several pairs of bodies (split into interfaces
 /// `CURVE[A|B]`): its parts and their figures combined (lengths, pairs and resultants
-/// summed, extreme tractions over all parts). `None` when no curve is split.
-pub fn interface_curves(its: &[Interface], figures: &Value) -> Option<Value> {
-    let mut m = Map::new();
+/// summed, extreme tractions over all parts), each figure taken as written. `None` when no
+/// curve is split.
+pub fn interface_curves(
+    its: &[Interface],
+    figures: &BTreeMap<String, InterfaceFigures>,
+) -> Option<BTreeMap<String, CurveFigures>> {
+    let mut m: BTreeMap<String, CurveFigures> = BTreeMap::new();
     for it in its.iter().filter(|it| it.spec.name != it.group) {
-        let fig = &figures[it.spec.name.as_str()];
-        let entry = m.entry(it.group.clone()).or_insert_with(|| {
-            json!({
-                "parts": [], "detached_length": 0.0, "closed_length": 0.0, "open_pairs": 0,
-                "pairs": 0, "normal_resultant": 0.0, "tangential_resultant": 0.0,
-                "max_normal_traction": null, "min_normal_traction": null,
-            })
+        let fig = figures.get(it.spec.name.as_str());
+        // A part's figure as written (NaN where it is null or missing).
+        let get =
+            |f: fn(&InterfaceFigures) -> f64| fig.and_then(|g| written(f(g))).unwrap_or(f64::NAN);
+        let entry = m.entry(it.group.clone()).or_insert_with(|| CurveFigures {
+            closed_length: Some(0.0),
+            detached_length: Some(0.0),
+            max_normal_traction: None,
+            min_normal_traction: None,
+            normal_resultant: Some(0.0),
+            open_pairs: 0,
+            pairs: 0,
+            parts: Vec::new(),
+            tangential_resultant: Some(0.0),
         });
-        if let Some(parts) = entry["parts"].as_array_mut() {
-            parts.push(json!(it.spec.name));
-        }
-        for key in [
-            "detached_length",
-            "closed_length",
-            "normal_resultant",
-            "tangential_resultant",
+        entry.parts.push(it.spec.name.clone());
+        for (sum, part) in [
+            (&mut entry.detached_length, get(|g| g.detached_length)),
+            (&mut entry.closed_length, get(|g| g.closed_length)),
+            (&mut entry.normal_resultant, get(|g| g.normal_resultant)),
+            (
+                &mut entry.tangential_resultant,
+                get(|g| g.tangential_resultant),
+            ),
         ] {
-            let sum = entry[key].as_f64().unwrap_or(0.0) + fig[key].as_f64().unwrap_or(f64::NAN);
-            entry[key] = json!(sum);
+            *sum = written(sum.unwrap_or(0.0) + part);
         }
-        for key in ["open_pairs", "pairs"] {
-            let sum = entry[key].as_u64().unwrap_or(0) + fig[key].as_u64().unwrap_or(0);
-            entry[key] = json!(sum);
-        }
-        let hi = fig["max_normal_traction"].as_f64().unwrap_or(f64::NAN);
-        let lo = fig["min_normal_traction"].as_f64().unwrap_or(f64::NAN);
-        entry["max_normal_traction"] =
-            json!(entry["max_normal_traction"].as_f64().unwrap_or(hi).max(hi));
-        entry["min_normal_traction"] =
-            json!(entry["min_normal_traction"].as_f64().unwrap_or(lo).min(lo));
+        entry.open_pairs += fig.map_or(0, |g| g.open_pairs as u64);
+        entry.pairs += fig.map_or(0, |g| g.pairs as u64);
+        let hi = get(|g| g.max_normal_traction);
+        let lo = get(|g| g.min_normal_traction);
+        entry.max_normal_traction = written(entry.max_normal_traction.unwrap_or(hi).max(hi));
+        entry.min_normal_traction = written(entry.min_normal_traction.unwrap_or(lo).min(lo));
     }
     if m.is_empty() {
         None
     } else {
-        Some(Value::Object(m))
+        Some(m)
+    }
+}
+
+/// The `equilibrium` block: per body the point, each load's `fx fy m`, the imbalance and
+/// its relative size.
+pub fn equilibrium(balances: &[BodyBalance]) -> BTreeMap<String, BodyEquilibrium> {
+    let mut m = BTreeMap::new();
+    for b in balances {
+        let loads: BTreeMap<String, WrenchFigures> = b
+            .loads
+            .iter()
+            .map(|(n, w)| (n.clone(), WrenchFigures::from(w)))
+            .collect();
+        m.insert(
+            b.body.clone(),
+            BodyEquilibrium {
+                imbalance: WrenchFigures::from(&b.imbalance),
+                loads,
+                moments_about: b.point,
+                relative_imbalance: b.relative,
+            },
+        );
+    }
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Whether every object in `v`, at every depth, is written with its keys sorted.
+    fn sorted_everywhere(text: &str) -> bool {
+        let ordered = |v: &Value| serde_json::to_string_pretty(v).unwrap_or_default();
+        let v: Value = serde_json::from_str(text).unwrap_or(Value::Null);
+        text == ordered(&v)
+    }
+
+    fn figures(friction: bool) -> InterfaceFigures {
+        InterfaceFigures {
+            closed_length: 1.0,
+            detached_length: 2.0,
+            max_accumulated_slip: friction.then_some(0.5),
+            max_normal_traction: 3.0,
+            min_normal_traction: -4.0,
+            normal_resultant: 5.0,
+            open_pairs: 6,
+            pairs: 7,
+            slip_length: friction.then_some(0.25),
+            stick_length: friction.then_some(0.75),
+            tangential_resultant: 8.0,
+        }
+    }
+
+    /// Every record is written with its keys in the sorted order that `summary.json` has
+    /// always had (a struct is written in its fields' order).
+    #[test]
+    fn keys_are_sorted() {
+        let wrench = WrenchFigures {
+            fx: 1.0,
+            fy: 2.0,
+            m: 3.0,
+        };
+        let summary = Summary {
+            contact: serde_json::json!({"solver": "lcp", "iterations": 3}),
+            counts: Counts {
+                bodies: 2,
+                boundary_elements: 10,
+                dofs: 40,
+                field_nodes: 0,
+                interface_pairs: 3,
+            },
+            diagnostics: Diagnostics {
+                d00_asymmetry: 1e-15,
+                min_pivot_ratio: 0.5,
+            },
+            effects: vec!["elastic", "detachment"],
+            equilibrium: BTreeMap::from([(
+                "A".to_string(),
+                BodyEquilibrium {
+                    imbalance: wrench,
+                    loads: BTreeMap::from([("body_force".to_string(), wrench)]),
+                    moments_about: [0.0, 1.0],
+                    relative_imbalance: 1e-12,
+                },
+            )]),
+            interface_curves: Some(BTreeMap::from([(
+                "joint".to_string(),
+                CurveFigures {
+                    closed_length: Some(1.0),
+                    detached_length: None,
+                    max_normal_traction: Some(2.0),
+                    min_normal_traction: Some(-2.0),
+                    normal_resultant: Some(3.0),
+                    open_pairs: 1,
+                    pairs: 2,
+                    parts: vec!["joint[A|B]".into()],
+                    tangential_resultant: Some(0.0),
+                },
+            )])),
+            interfaces: BTreeMap::from([
+                ("a".to_string(), figures(true)),
+                ("b".to_string(), figures(false)),
+            ]),
+            load_factor: 1.0,
+            load_path: Some(LoadPath {
+                depends_on_t: vec!["boundary.top.ty".into()],
+                time: vec![0.5, 1.0],
+            }),
+            method: "lcp",
+            notes: vec!["a note".into()],
+            overrides: vec![],
+            plane: "strain",
+            problem: "detachment".into(),
+            qp: Some(QpSummary {
+                converged: true,
+                differing_pairs_from_lcp: Some(0),
+                form: "primal",
+                info: serde_json::json!({"iterations": 9}),
+                interfaces: BTreeMap::from([("a".to_string(), figures(false))]),
+            }),
+            quadrature: "standard",
+            status: RunStatus::Converged,
+            thickness: 1.0,
+            time: Some(1.0),
+            title: "t".into(),
+            units: Units {
+                force: "N".into(),
+                length: "m".into(),
+            },
+        };
+        let text = serde_json::to_string_pretty(&summary).unwrap_or_default();
+        assert!(sorted_everywhere(&text), "{text}");
+    }
+
+    /// A figure that is not finite is written as null and named.
+    #[test]
+    fn a_non_finite_figure_is_null_and_named() {
+        let mut fig = figures(false);
+        fig.normal_resultant = f64::INFINITY;
+        let text = serde_json::to_string(&fig).unwrap_or_default();
+        assert!(text.contains("\"normal_resultant\":null"), "{text}");
+        let interfaces = BTreeMap::from([("b".to_string(), fig), ("a".to_string(), figures(true))]);
+        let floats: Vec<&str> = figures(true).floats().iter().map(|f| f.0).collect();
+        let mut keys = floats.clone();
+        keys.sort_unstable();
+        assert_eq!(floats, keys);
+        assert_eq!(
+            non_finite_figure(&interfaces).as_deref(),
+            Some("interface \"b\": normal_resultant")
+        );
     }
 }

@@ -52,17 +52,17 @@ use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
 use crate::solution::PairStatus;
 
 /// File name of the boundary file of state `k`.
-pub fn boundary_name(k: usize) -> String {
+pub(crate) fn boundary_name(k: usize) -> String {
     format!("boundary_{k:04}.vtu")
 }
 
 /// File name of the field file of state `k`.
-pub fn field_name(k: usize) -> String {
+pub(crate) fn field_name(k: usize) -> String {
     format!("field_{k:04}.vtu")
 }
 
 /// File name of the multiblock of state `k` (`states.pvd`'s entry).
-pub fn state_name(k: usize) -> String {
+pub(crate) fn state_name(k: usize) -> String {
     format!("state_{k:04}.vtm")
 }
 
@@ -92,7 +92,7 @@ pub fn write_vtk(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
 }
 
 /// [`write_vtk`] into a run's staging folder: not synced (the folder's commit syncs it).
-pub fn write_vtk_staged(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
+pub(crate) fn write_vtk_staged(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBuf>> {
     write_vtk_with(dir, rec, false)
 }
 

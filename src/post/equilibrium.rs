@@ -26,7 +26,7 @@
 //!   hold exactly for the P1 hats, so no quadrature enters.
 //! * **Body force**: `b |Ω|` at the centroid (no moment about it).
 
-use crate::input::model::{Body, Model, Role};
+use crate::input::model::{Body, Interface, Model, Role};
 use crate::solution::{BodyField, InterfaceResult};
 
 /// Force (x, y) and moment of one load.
@@ -207,88 +207,109 @@ pub fn balances(
             }
         }
         for (it, r) in model.interfaces.iter().zip(interfaces) {
-            let sign = if it.body_a == bi {
-                1.0
-            } else if it.body_b == bi {
-                -1.0
-            } else {
-                continue;
-            };
-            let w = it.weights();
-            let mut total = Wrench::default();
-            for (j, ((p, res), wj)) in it.pairs.iter().zip(&r.pairs).zip(&w).enumerate() {
-                let [mut ts, mut tn] = res.traction;
-                if reactions {
-                    // A component held on this side is in the node's reaction.
-                    let node = if it.body_a == bi { p.node_a } else { p.node_b };
-                    let d = body.dofs[node];
-                    for k in 0..2 {
-                        if d.class[k] != crate::input::model::DofClass::Known {
-                            continue;
-                        }
-                        let h = d.frame[k];
-                        if (h[0] * p.tangent[0] + h[1] * p.tangent[1]).abs() > 1.0 - 1e-9 {
-                            ts = 0.0;
-                        }
-                        if (h[0] * p.normal[0] + h[1] * p.normal[1]).abs() > 1.0 - 1e-9 {
-                            tn = 0.0;
-                        }
-                    }
-                }
-                let f = [
-                    sign * wj * (ts * p.tangent[0] + tn * p.normal[0]),
-                    sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
-                ];
-                // Where the sides were meshed on their own, B takes the force where its
-                // partners are.
-                let x = if sign < 0.0 && it.independent() {
-                    it.b_point(body, j)
-                } else {
-                    p.x
-                };
-                total.add(Wrench {
-                    fx: f[0],
-                    fy: f[1],
-                    m: cross([x[0] - c[0], x[1] - c[1]], f),
-                });
+            if let Some(total) = interface_wrench(body, bi, it, r, c, reactions) {
+                add(format!("interface {}", it.spec.name), total);
             }
-            add(format!("interface {}", it.spec.name), total);
         }
-        let loads: Vec<(String, Wrench)> = loads
-            .into_iter()
-            .map(|(n, w)| (n, w.scaled(thickness)))
-            .collect();
-        let mut imbalance = Wrench::default();
-        for (_, w) in &loads {
-            imbalance.add(*w);
-        }
-        let scale: f64 = loads.iter().map(|(_, w)| w.force()).sum();
-        let d = diagonal(body);
-        let relative = if scale > 0.0 && d > 0.0 {
-            (imbalance.force() / scale).max(imbalance.m.abs() / (scale * d))
-        } else {
-            0.0
-        };
-        out.push(BodyBalance {
-            body: body.name.clone(),
-            point: c,
-            loads,
-            imbalance,
-            relative,
-        });
+        out.push(balance(body, c, loads, thickness));
     }
     out
 }
 
+/// The wrench of interface `it` (its solved result `r`) on body `bi`, about `c`: its pair
+/// tractions as nodal forces, without the components held on this side where the nodes'
+/// reactions are known; `None` when the interface does not touch the body.
+fn interface_wrench(
+    body: &Body,
+    bi: usize,
+    it: &Interface,
+    r: &InterfaceResult,
+    c: [f64; 2],
+    reactions: bool,
+) -> Option<Wrench> {
+    let sign = if it.body_a == bi {
+        1.0
+    } else if it.body_b == bi {
+        -1.0
+    } else {
+        return None;
+    };
+    let w = it.weights();
+    let mut total = Wrench::default();
+    for (j, ((p, res), wj)) in it.pairs.iter().zip(&r.pairs).zip(&w).enumerate() {
+        let [mut ts, mut tn] = res.traction;
+        if reactions {
+            // A component held on this side is in the node's reaction.
+            let node = if it.body_a == bi { p.node_a } else { p.node_b };
+            let d = body.dofs[node];
+            for k in 0..2 {
+                if d.class[k] != crate::input::model::DofClass::Known {
+                    continue;
+                }
+                let h = d.frame[k];
+                if (h[0] * p.tangent[0] + h[1] * p.tangent[1]).abs() > 1.0 - 1e-9 {
+                    ts = 0.0;
+                }
+                if (h[0] * p.normal[0] + h[1] * p.normal[1]).abs() > 1.0 - 1e-9 {
+                    tn = 0.0;
+                }
+            }
+        }
+        let f = [
+            sign * wj * (ts * p.tangent[0] + tn * p.normal[0]),
+            sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
+        ];
+        // Where the sides were meshed on their own, B takes the force where its partners are.
+        let x = if sign < 0.0 && it.independent() {
+            it.b_point(body, j)
+        } else {
+            p.x
+        };
+        total.add(Wrench {
+            fx: f[0],
+            fy: f[1],
+            m: cross([x[0] - c[0], x[1] - c[1]], f),
+        });
+    }
+    Some(total)
+}
+
+/// A body's balance: its loads (summed per name, in first-seen order) times the thickness,
+/// their imbalance about `c`, and that imbalance relative to the loads.
+fn balance(body: &Body, c: [f64; 2], loads: Vec<(String, Wrench)>, thickness: f64) -> BodyBalance {
+    let loads: Vec<(String, Wrench)> = loads
+        .into_iter()
+        .map(|(n, w)| (n, w.scaled(thickness)))
+        .collect();
+    let mut imbalance = Wrench::default();
+    for (_, w) in &loads {
+        imbalance.add(*w);
+    }
+    let scale: f64 = loads.iter().map(|(_, w)| w.force()).sum();
+    let d = diagonal(body);
+    let relative = if scale > 0.0 && d > 0.0 {
+        (imbalance.force() / scale).max(imbalance.m.abs() / (scale * d))
+    } else {
+        0.0
+    };
+    BodyBalance {
+        body: body.name.clone(),
+        point: c,
+        loads,
+        imbalance,
+        relative,
+    }
+}
+
 /// Relative imbalance above which a body that no displacement condition holds is reported:
 /// such bodies balance to round-off in a solved discrete problem.
-pub const UNBALANCED: f64 = 1e-6;
+pub(crate) const UNBALANCED: f64 = 1e-6;
 
 /// A note naming the bodies held by interfaces and tractions only whose loads do not
 /// balance (a contact solution that is no equilibrium, e.g. past the collapse load); `None`
 /// when every such body balances. Bodies with displacement conditions are left out: their
 /// reactions balance only up to the discretisation error (module doc).
-pub fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
+pub(crate) fn unbalanced_note(model: &Model, balances: &[BodyBalance]) -> Option<String> {
     let held = |body: &Body| {
         body.elements.iter().any(|e| match e.role {
             Role::Boundary(pi) => model.parts[pi]
@@ -331,30 +352,6 @@ fn diagonal(body: &Body) -> f64 {
         }
     }
     (hi[0] - lo[0]).hypot(hi[1] - lo[1])
-}
-
-/// The `equilibrium` object of `summary.json`: per body the point, each load's `fx fy m`,
-/// the imbalance and its relative size.
-pub fn summary(balances: &[BodyBalance]) -> serde_json::Value {
-    let wrench = |w: &Wrench| serde_json::json!({"fx": w.fx, "fy": w.fy, "m": w.m});
-    let mut m = serde_json::Map::new();
-    for b in balances {
-        let loads: serde_json::Map<String, serde_json::Value> = b
-            .loads
-            .iter()
-            .map(|(n, w)| (n.clone(), wrench(w)))
-            .collect();
-        m.insert(
-            b.body.clone(),
-            serde_json::json!({
-                "moments_about": b.point,
-                "loads": loads,
-                "imbalance": wrench(&b.imbalance),
-                "relative_imbalance": b.relative,
-            }),
-        );
-    }
-    serde_json::Value::Object(m)
 }
 
 #[cfg(test)]

@@ -810,7 +810,7 @@ pub fn winding_number(body: &Body, x: Vec2) -> i32 {
 }
 
 /// Distance from x to the boundary of `body`.
-pub fn boundary_distance(body: &Body, x: Vec2) -> f64 {
+pub(crate) fn boundary_distance(body: &Body, x: Vec2) -> f64 {
     (0..body.elements.len())
         .map(|ei| project(&segment(body, ei), x).0)
         .fold(f64::INFINITY, f64::min)
@@ -856,7 +856,7 @@ pub fn evaluate_points(
 /// Memory that the cached kernel integrals of one [`PointSampler`] may take: 256 MB (about
 /// 700 000 point–element pairs). Points beyond it are integrated again for every state:
 /// the same values, in more time.
-pub const SAMPLER_CACHE_BYTES: usize = 256 << 20;
+pub(crate) const SAMPLER_CACHE_BYTES: usize = 256 << 20;
 
 /// Fixed points evaluated for many states of the same bodies, e.g. a section at every
 /// contact iteration.
@@ -985,7 +985,7 @@ pub fn field_at_nodes(
 }
 
 /// The number of nodes [`field_at_nodes`] evaluates for a body (its triangles' nodes).
-pub fn field_node_count(body: &crate::input::model::Body) -> usize {
+pub(crate) fn field_node_count(body: &crate::input::model::Body) -> usize {
     let mut ids: Vec<usize> = body.triangles.iter().flatten().copied().collect();
     ids.sort_unstable();
     ids.dedup();
@@ -994,7 +994,7 @@ pub fn field_node_count(body: &crate::input::model::Body) -> usize {
 
 /// [`field_at_nodes`] calling `done(1)` after each node (from the worker threads), for a
 /// progress bar.
-pub fn field_at_nodes_with(
+pub(crate) fn field_at_nodes_with(
     input: &BodyInput,
     settings: &QuadratureSettings,
     mesh_nodes: &[Vec2],

@@ -47,7 +47,7 @@ const YOUNG_PA: (f64, f64) = (1e3, 2e12);
 /// theory's reach. The error of the linear theory grows with the square of the rotations
 /// (about u/size): at 5 % it is a few tenths of a percent. (1 % would flag the paper's own
 /// example 2, 4.55 cm on a 4 m clamped beam: 1.13 %.)
-pub const SMALL_DISPLACEMENT: f64 = 0.05;
+pub(crate) const SMALL_DISPLACEMENT: f64 = 0.05;
 
 fn factor(list: &[(&str, f64)], unit: &str) -> Option<f64> {
     list.iter()
@@ -57,7 +57,7 @@ fn factor(list: &[(&str, f64)], unit: &str) -> Option<f64> {
 
 /// Notes on the scene: units that are not units, Young's moduli implausible for the
 /// declared units, and a model that nothing loads.
-pub fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
+pub(crate) fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
     let mut notes = Vec::new();
     let names = |list: &[(&str, f64)]| list.iter().map(|(u, _)| *u).collect::<Vec<_>>().join(" ");
     let (len, force) = (&scene.units.length, &scene.units.force);
@@ -155,7 +155,7 @@ fn loaded(model: &Model) -> bool {
 
 /// A note when the largest displacement exceeds [`SMALL_DISPLACEMENT`] of the model's size
 /// (its bounding box's diagonal).
-pub fn displacement_note(model: &Model, fields: &[BodyField]) -> Option<String> {
+pub(crate) fn displacement_note(model: &Model, fields: &[BodyField]) -> Option<String> {
     let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
     for b in &model.bodies {
         for p in &b.nodes {

@@ -19,6 +19,9 @@ const CORNER_ANGLE_IN_CURVE: f64 = 10.0 * std::f64::consts::PI / 180.0;
 /// Turning angle above which two elements meet at a corner, where two gmsh curves join.
 const CORNER_ANGLE_AT_JOIN: f64 = 1.0 * std::f64::consts::PI / 180.0;
 
+/// One body of the model from its boundary curves: its elements, chained into loops and
+/// oriented by nesting (docs/formulation.md §1.1). Material, body force and surfaces are the
+/// caller's to set.
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build_body(
     name: &str,
@@ -29,6 +32,7 @@ pub(super) fn build_body(
     mfile: &Path,
     scale: f64,
 ) -> Result<Body> {
+    // The line elements of the boundary curves, their nodes numbered per body.
     let mut node_of_mesh: HashMap<usize, usize> = HashMap::new();
     let mut nodes: Vec<[f64; 2]> = Vec::new();
     let mut mesh_nodes: Vec<usize> = Vec::new();
@@ -39,7 +43,8 @@ pub(super) fn build_body(
             return Err(Error::input(
                 mfile,
                 format!(
-                    "curve {c} bounds body \"{name}\" but has no line elements: {OPEN_LOOP_HINT}"
+                    "curve {c} bounds body \"{name}\" but has no line elements: \
+                     {OPEN_LOOP_HINT}"
                 ),
             ));
         }
@@ -68,8 +73,8 @@ pub(super) fn build_body(
                 return Err(Error::input(
                     mfile,
                     format!(
-                        "line element {} (curve {c}, body \"{name}\") has zero length: its nodes \
-                         {} and {} coincide; remove duplicate points in the .geo",
+                        "line element {} (curve {c}, body \"{name}\") has zero length: its \
+                         nodes {} and {} coincide; remove duplicate points in the .geo",
                         line.tag, mesh.node_tags[line.nodes[0]], mesh.node_tags[line.nodes[1]]
                     ),
                 ));
@@ -89,147 +94,20 @@ pub(super) fn build_body(
             });
         }
     }
-
-    // Node → incident elements; each boundary node must join exactly two elements.
-    let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
-    for (ei, e) in elements.iter().enumerate() {
-        incident[e.nodes[0]].push(ei);
-        incident[e.nodes[1]].push(ei);
-    }
-    for (n, inc) in incident.iter().enumerate() {
-        let tag = mesh.node_tags[mesh_nodes[n]];
-        match inc.len() {
-            2 => {}
-            1 => {
-                // Two nodes at one point, each ending a curve: duplicates, not a gap.
-                let ends = |m: usize| {
-                    let curve = elements[incident[m][0]].curve;
-                    (mesh.node_tags[mesh_nodes[m]], nodes[m], curve)
-                };
-                let twin = (0..nodes.len()).find(|&m| {
-                    m != n
-                        && incident[m].len() == 1
-                        && norm(sub(nodes[m], nodes[n])) <= 1e-12 * scale
-                });
-                if let Some(m) = twin {
-                    return Err(duplicate_nodes(mfile, name, ends(n), ends(m)));
-                }
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                    "the boundary of body \"{name}\" is open at node {tag} {} (end of curve {}): \
-                         {OPEN_LOOP_HINT}",
-                    fmt_point(nodes[n]),
-                    elements[inc[0]].curve
-                ),
-                ));
-            }
-            k => {
-                let curves: BTreeSet<i32> = inc.iter().map(|&e| elements[e].curve).collect();
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "node {tag} {} joins {k} boundary elements of body \"{name}\" (curves \
-                         {curves:?}): the boundary touches itself or a curve is meshed twice; \
-                         each boundary node must join exactly two elements",
-                        fmt_point(nodes[n])
-                    ),
-                ));
-            }
-        }
-    }
-
-    // Chain elements into loops, flipping elements to follow the chain.
-    let mut loops: Vec<Loop> = Vec::new();
-    let mut visited = vec![false; elements.len()];
-    for start in 0..elements.len() {
-        if visited[start] {
-            continue;
-        }
-        let mut chain = vec![start];
-        visited[start] = true;
-        let mut current = start;
-        loop {
-            let end = elements[current].nodes[1];
-            let next = incident[end]
-                .iter()
-                .copied()
-                .find(|&e| e != current)
-                .unwrap_or(current);
-            if next == start || visited[next] {
-                break;
-            }
-            if elements[next].nodes[0] != end {
-                flip(&mut elements[next]);
-            }
-            visited[next] = true;
-            chain.push(next);
-            current = next;
-        }
-        let area = loop_area(&chain, &elements, &nodes);
-        loops.push(Loop {
-            elements: chain,
-            area,
-            is_hole: false,
-        });
-    }
-
-    // Orientation by nesting: a loop inside an odd number of others is a hole (clockwise).
-    let mut outer = 0;
-    for li in 0..loops.len() {
-        let probe = nodes[elements[loops[li].elements[0]].nodes[0]];
-        let depth = (0..loops.len())
-            .filter(|&o| o != li && point_in_loop(probe, &loops[o], &elements, &nodes))
-            .count();
-        let hole = depth % 2 == 1;
-        let want_positive = !hole;
-        if (loops[li].area > 0.0) != want_positive {
-            let chain = std::mem::take(&mut loops[li].elements);
-            for &e in &chain {
-                flip(&mut elements[e]);
-            }
-            loops[li].elements = chain.into_iter().rev().collect();
-            loops[li].area = -loops[li].area;
-        }
-        loops[li].is_hole = hole;
-        if !hole {
-            outer += 1;
-        }
-    }
-    if outer != 1 {
-        return Err(Error::input(
-            mfile,
-            format!(
-                "body \"{name}\" consists of {outer} separate regions: make each region a Physical \
-                 Surface (a body) of its own"
-            ),
-        ));
-    }
-    for (li, l) in loops.iter().enumerate() {
-        for &e in &l.elements {
-            elements[e].loop_index = li;
-        }
-        // A loop that turns back on itself (two consecutive elements on top of each other)
-        // encloses nothing there and has no normal at the fold.
-        let n = l.elements.len();
-        for k in 0..n {
-            let (p, q) = (&elements[l.elements[k]], &elements[l.elements[(k + 1) % n]]);
-            if dot(p.tangent, q.tangent) < -1.0 + 1e-9 {
-                let node = q.nodes[0];
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "the boundary of body \"{name}\" folds back on itself at node {} {} \
-                         (elements {} and {} overlap): fix the curves there",
-                        mesh.node_tags[mesh_nodes[node]],
-                        fmt_point(nodes[node]),
-                        p.tag,
-                        q.tag
-                    ),
-                ));
-            }
-        }
-    }
+    let mut boundary = Boundary {
+        nodes,
+        mesh_nodes,
+        elements,
+    };
+    let incident = boundary.incidence(name, mesh, mfile, scale)?;
+    let mut loops = boundary.chain_loops(&incident);
+    boundary.orient_loops(&mut loops, name, mfile)?;
+    boundary.check_folds(&loops, name, mesh, mfile)?;
+    let Boundary {
+        nodes,
+        mesh_nodes,
+        elements,
+    } = boundary;
     let area = loops.iter().map(|l| l.area).sum();
     Ok(Body {
         name: name.to_string(),
@@ -246,6 +124,184 @@ pub(super) fn build_body(
         triangles: Vec::new(),
         area,
     })
+}
+
+/// A body's boundary while it is built: its nodes (numbered per body), the mesh node of
+/// each, and its line elements.
+struct Boundary {
+    nodes: Vec<[f64; 2]>,
+    mesh_nodes: Vec<usize>,
+    elements: Vec<Element>,
+}
+
+impl Boundary {
+    /// Node → incident elements; each boundary node must join exactly two elements.
+    fn incidence(
+        &self,
+        name: &str,
+        mesh: &Mesh,
+        mfile: &Path,
+        scale: f64,
+    ) -> Result<Vec<Vec<usize>>> {
+        let (nodes, mesh_nodes, elements) = (&self.nodes, &self.mesh_nodes, &self.elements);
+        let mut incident: Vec<Vec<usize>> = vec![Vec::new(); nodes.len()];
+        for (ei, e) in elements.iter().enumerate() {
+            incident[e.nodes[0]].push(ei);
+            incident[e.nodes[1]].push(ei);
+        }
+        for (n, inc) in incident.iter().enumerate() {
+            let tag = mesh.node_tags[mesh_nodes[n]];
+            match inc.len() {
+                2 => {}
+                1 => {
+                    // Two nodes at one point, each ending a curve: duplicates, not a gap.
+                    let ends = |m: usize| {
+                        let curve = elements[incident[m][0]].curve;
+                        (mesh.node_tags[mesh_nodes[m]], nodes[m], curve)
+                    };
+                    let twin = (0..nodes.len()).find(|&m| {
+                        m != n
+                            && incident[m].len() == 1
+                            && norm(sub(nodes[m], nodes[n])) <= 1e-12 * scale
+                    });
+                    if let Some(m) = twin {
+                        return Err(duplicate_nodes(mfile, name, ends(n), ends(m)));
+                    }
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "the boundary of body \"{name}\" is open at node {tag} {} (end of \
+                             curve {}): {OPEN_LOOP_HINT}",
+                            fmt_point(nodes[n]),
+                            elements[inc[0]].curve
+                        ),
+                    ));
+                }
+                k => {
+                    let curves: BTreeSet<i32> = inc.iter().map(|&e| elements[e].curve).collect();
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "node {tag} {} joins {k} boundary elements of body \"{name}\" \
+                             (curves {curves:?}): the boundary touches itself or a curve is \
+                             meshed twice; each boundary node must join exactly two elements",
+                            fmt_point(nodes[n])
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(incident)
+    }
+
+    /// Chains the elements into loops, flipping elements to follow the chain.
+    fn chain_loops(&mut self, incident: &[Vec<usize>]) -> Vec<Loop> {
+        let (nodes, elements) = (&self.nodes, &mut self.elements);
+        let mut loops: Vec<Loop> = Vec::new();
+        let mut visited = vec![false; elements.len()];
+        for start in 0..elements.len() {
+            if visited[start] {
+                continue;
+            }
+            let mut chain = vec![start];
+            visited[start] = true;
+            let mut current = start;
+            loop {
+                let end = elements[current].nodes[1];
+                let next = incident[end]
+                    .iter()
+                    .copied()
+                    .find(|&e| e != current)
+                    .unwrap_or(current);
+                if next == start || visited[next] {
+                    break;
+                }
+                if elements[next].nodes[0] != end {
+                    flip(&mut elements[next]);
+                }
+                visited[next] = true;
+                chain.push(next);
+                current = next;
+            }
+            let area = loop_area(&chain, elements, nodes);
+            loops.push(Loop {
+                elements: chain,
+                area,
+                is_hole: false,
+            });
+        }
+        loops
+    }
+
+    /// Orientation by nesting: a loop inside an odd number of others is a hole (clockwise),
+    /// the rest run counter-clockwise; a body has exactly one outer loop.
+    fn orient_loops(&mut self, loops: &mut [Loop], name: &str, mfile: &Path) -> Result<()> {
+        let (nodes, elements) = (&self.nodes, &mut self.elements);
+        let mut outer = 0;
+        for li in 0..loops.len() {
+            let probe = nodes[elements[loops[li].elements[0]].nodes[0]];
+            let depth = (0..loops.len())
+                .filter(|&o| o != li && point_in_loop(probe, &loops[o], elements, nodes))
+                .count();
+            let hole = depth % 2 == 1;
+            let want_positive = !hole;
+            if (loops[li].area > 0.0) != want_positive {
+                let chain = std::mem::take(&mut loops[li].elements);
+                for &e in &chain {
+                    flip(&mut elements[e]);
+                }
+                loops[li].elements = chain.into_iter().rev().collect();
+                loops[li].area = -loops[li].area;
+            }
+            loops[li].is_hole = hole;
+            if !hole {
+                outer += 1;
+            }
+        }
+        if outer != 1 {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "body \"{name}\" consists of {outer} separate regions: make each region a \
+                     Physical Surface (a body) of its own"
+                ),
+            ));
+        }
+        Ok(())
+    }
+
+    /// Sets each element's loop index, and refuses a loop that turns back on itself (two
+    /// consecutive elements on top of each other): it encloses nothing there and has no
+    /// normal at the fold.
+    fn check_folds(&mut self, loops: &[Loop], name: &str, mesh: &Mesh, mfile: &Path) -> Result<()> {
+        let (nodes, mesh_nodes, elements) = (&self.nodes, &self.mesh_nodes, &mut self.elements);
+        for (li, l) in loops.iter().enumerate() {
+            for &e in &l.elements {
+                elements[e].loop_index = li;
+            }
+            // A loop that turns back on itself (two consecutive elements on top of each other)
+            // encloses nothing there and has no normal at the fold.
+            let n = l.elements.len();
+            for k in 0..n {
+                let (p, q) = (&elements[l.elements[k]], &elements[l.elements[(k + 1) % n]]);
+                if dot(p.tangent, q.tangent) < -1.0 + 1e-9 {
+                    let node = q.nodes[0];
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "the boundary of body \"{name}\" folds back on itself at node {} {} \
+                             (elements {} and {} overlap): fix the curves there",
+                            mesh.node_tags[mesh_nodes[node]],
+                            fmt_point(nodes[node]),
+                            p.tag,
+                            q.tag
+                        ),
+                    ));
+                }
+            }
+        }
+        Ok(())
+    }
 }
 
 fn flip(e: &mut Element) {

@@ -6,7 +6,7 @@
 //! of different bodies that face each other within `search`. Elements on a declared interface, on a displacement condition or under a load are
 //! not candidates: a declared interface between the same boundaries wins.
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use crate::error::{Error, Result};
@@ -23,6 +23,21 @@ pub(super) struct Found {
     pub body_b: usize,
     pub elems_a: Vec<usize>,
     pub elems_b: Vec<usize>,
+}
+
+impl Found {
+    /// Gives the found elements the role of interface k; returns their curves.
+    pub fn assign(&self, k: usize, bodies: &mut [Body]) -> BTreeSet<i32> {
+        let mut curves = BTreeSet::new();
+        for (b, list) in [(self.body_a, &self.elems_a), (self.body_b, &self.elems_b)] {
+            for &e in list {
+                let el = &mut bodies[b].elements[e];
+                el.role = Role::Interface(k);
+                curves.insert(el.curve);
+            }
+        }
+        curves
+    }
 }
 
 /// True when a boundary part leaves its elements free to touch another body: traction-free

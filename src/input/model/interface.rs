@@ -30,171 +30,30 @@ pub(super) fn build_interface(
     let sfile = scene.path.as_path();
     let name = spec.name.as_str();
     let t0 = first_time(scene);
-    let mut involved: BTreeSet<usize> = BTreeSet::new();
-    for c in curves {
-        let on = curve_bodies.get(c).cloned().unwrap_or_default();
-        if on.len() > 2 {
-            return Err(Error::input(
-                mfile,
-                format!(
-                    "interface \"{name}\": curve {c} bounds {} bodies; an interface joins exactly two",
-                    on.len()
-                ),
-            ));
-        }
-        involved.extend(on);
-    }
-    let names = |set: &BTreeSet<usize>| -> String {
-        set.iter()
-            .map(|&b| format!("\"{}\"", bodies[b].name))
-            .collect::<Vec<_>>()
-            .join(", ")
-    };
-    if involved.len() != 2 {
-        return Err(Error::input(
-            sfile,
-            format!(
-                "[interface.{name}]: its curves bound {} bod{} ({}); an interface must be a curve \
-                 shared by exactly two bodies (draw the joint once and use it in both surfaces' \
-                 curve loops)",
-                involved.len(),
-                if involved.len() == 1 { "y" } else { "ies" },
-                names(&involved)
-            ),
-        ));
-    }
-    let mut it = involved.iter();
-    let (ba, bb) = match (it.next(), it.next()) {
-        (Some(&a), Some(&b)) => (a.min(b), a.max(b)),
-        _ => {
-            return Err(Error::input(
-                sfile,
-                format!("[interface.{name}]: needs two bodies"),
-            ))
-        }
-    };
+    let (ba, bb) = interface_bodies(name, curves, bodies, curve_bodies, sfile, mfile)?;
     let (a, b) = (&bodies[ba], &bodies[bb]);
     let on_interface = |body: &Body| -> Vec<usize> {
         (0..body.elements.len())
             .filter(|&e| body.elements[e].role == Role::Interface(k))
             .collect()
     };
-    let elems_a = on_interface(a);
-    let elems_b = on_interface(b);
-
-    // Match B's interface nodes to A's: same mesh node, else same position.
-    let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
-    for &e in &elems_b {
-        for n in b.elements[e].nodes {
-            b_by_mesh.insert(b.mesh_nodes[n], n);
-        }
-    }
-    let min_len = elems_a
-        .iter()
-        .map(|&e| a.elements[e].length)
-        .chain(elems_b.iter().map(|&e| b.elements[e].length))
-        .fold(f64::INFINITY, f64::min);
-    let tol = 1e-6 * min_len;
-    let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
-    let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
-    let mut by_position = false;
+    let sides = Sides {
+        name,
+        a,
+        b,
+        elems_a: on_interface(a),
+        elems_b: on_interface(b),
+        mfile,
+    };
     // Where a node of A has no node of B at its place, the sides were meshed on their own:
     // rows over B's segments (`independent_sides`).
-    let mut matching = true;
-    for &e in &elems_a {
-        for n in a.elements[e].nodes {
-            if a_to_b.contains_key(&n) {
-                continue;
-            }
-            let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
-                Some(&m) => Some(m),
-                None => {
-                    by_position = true;
-                    let x = a.nodes[n];
-                    b_nodes
-                        .iter()
-                        .copied()
-                        .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
-                }
-            };
-            match partner {
-                Some(m) => {
-                    a_to_b.insert(n, m);
-                }
-                None => {
-                    matching = false;
-                    a_to_b.insert(n, usize::MAX);
-                }
-            }
-        }
-    }
-    if a_to_b.len() != b_nodes.len() {
-        matching = false;
-    }
-    if !matching {
-        by_position = false;
-    }
-
-    // Order A's interface elements along the curve direction as drawn (mesh order).
-    let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
-    let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
-    for &e in &elems_a {
-        let el = &a.elements[e];
-        let (s, t) = if !el.reversed {
-            (el.nodes[0], el.nodes[1])
-        } else {
-            (el.nodes[1], el.nodes[0])
-        };
-        next_of.insert(s, (e, t));
-        has_incoming.insert(t);
-    }
-    let mut starts: Vec<usize> = next_of
-        .keys()
-        .copied()
-        .filter(|n| !has_incoming.contains(n))
-        .collect();
-    starts.sort_by_key(|&n| a.mesh_nodes[n]);
-    if starts.is_empty() {
-        // A closed interface (a whole inclusion): start anywhere.
-        if let Some(&n) = next_of.keys().min() {
-            starts.push(n);
-        }
-    }
-    let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
-    let mut s_of: Vec<f64> = Vec::new();
-    let mut seen: BTreeSet<usize> = BTreeSet::new();
-    let mut s_acc = 0.0;
-    for &s0 in &starts {
-        let mut n = s0;
-        if seen.insert(n) {
-            order.push(n);
-            s_of.push(s_acc);
-        }
-        while let Some(&(e, t)) = next_of.get(&n) {
-            s_acc += a.elements[e].length;
-            if !seen.insert(t) {
-                break;
-            }
-            order.push(t);
-            s_of.push(s_acc);
-            n = t;
-        }
-    }
-    if order.len() != a_to_b.len() {
-        return Err(Error::input(
-            mfile,
-            format!(
-                "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
-                 (a node joins more than two interface elements)",
-                a.name
-            ),
-        ));
-    }
+    let (a_to_b, by_position, matching) = sides.match_nodes();
+    let (order, s_of) = sides.curve_order(a_to_b.len())?;
     let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
 
     // Pairs with averaged normals of A.
     let mut normals = vec![[0.0f64; 2]; order.len()];
-    for &e in &elems_a {
+    for &e in &sides.elems_a {
         let el = &a.elements[e];
         for n in el.nodes {
             let j = pair_of[&n];
@@ -203,30 +62,14 @@ pub(super) fn build_interface(
         }
     }
     let normals: Vec<[f64; 2]> = normals.into_iter().map(unit).collect();
-    // How far B may lie from A: `search` for a found interface; for a declared one any gap,
-    // and an interference up to the size of the elements.
-    let reach = match search {
-        Some(d) => Reach {
-            ahead: d,
-            behind: d,
-        },
-        None => Reach {
-            ahead: f64::INFINITY,
-            behind: elems_a
-                .iter()
-                .map(|&e| a.elements[e].length)
-                .chain(elems_b.iter().map(|&e| b.elements[e].length))
-                .fold(0.0, f64::max),
-        },
-    };
     let rows = if matching {
         None
     } else {
         Some(independent_sides(
             name,
-            (a, &elems_a, &order, &normals),
-            (b, &elems_b),
-            reach,
+            (a, &sides.elems_a, &order, &normals),
+            (b, &sides.elems_b),
+            sides.reach(search),
             mfile,
         )?)
     };
@@ -266,30 +109,29 @@ pub(super) fn build_interface(
         }
         pairs.push(pair);
     }
+
     let (elements, b_nodes) = match rows {
         // Sides meshed on their own: A's elements, each with the element of B facing its
         // start.
         Some((rows, b_side)) => (
-            elems_a
+            sides
+                .elems_a
                 .iter()
                 .map(|&e| {
                     let [s, t] = a.elements[e].nodes;
                     let first = pair_of[&s];
                     InterfaceElement {
                         elem_a: e,
-                        elem_b: rows[first].segment.unwrap_or(elems_b[0]),
+                        elem_b: rows[first].segment.unwrap_or(sides.elems_b[0]),
                         pairs: [first, pair_of[&t]],
                     }
                 })
                 .collect(),
             b_side,
         ),
-        None => (
-            matched_elements(name, (a, &elems_a), (b, &elems_b), &a_to_b, &pair_of, mfile)?,
-            Vec::new(),
-        ),
+        None => (sides.elements(&a_to_b, &pair_of)?, Vec::new()),
     };
-    let length = elems_a.iter().map(|&e| a.elements[e].length).sum();
+    let length = sides.elems_a.iter().map(|&e| a.elements[e].length).sum();
     Ok(Interface {
         spec: spec.clone(),
         group: group.to_string(),
@@ -303,56 +145,249 @@ pub(super) fn build_interface(
     })
 }
 
-/// Interface elements of matched nodes: A's element and B's element on the same node pair.
-fn matched_elements(
+/// The two bodies an interface joins, lower index first: every curve of the interface
+/// bounds at most two bodies, and all its curves together exactly two.
+fn interface_bodies(
     name: &str,
-    (a, elems_a): (&Body, &[usize]),
-    (b, elems_b): (&Body, &[usize]),
-    a_to_b: &BTreeMap<usize, usize>,
-    pair_of: &HashMap<usize, usize>,
+    curves: &BTreeSet<i32>,
+    bodies: &[Body],
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    sfile: &Path,
     mfile: &Path,
-) -> Result<Vec<InterfaceElement>> {
-    let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
-    for &e in elems_b {
-        let [s, t] = b.elements[e].nodes;
-        b_elem_of.insert((s.min(t), s.max(t)), e);
-    }
-    let mut elements = Vec::with_capacity(elems_a.len());
-    for &e in elems_a {
-        let [s, t] = a.elements[e].nodes;
-        let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
-        let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
-            Some(&eb) => eb,
-            None => {
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "interface \"{name}\": element {} of body \"{}\" has no counterpart on \
-                         body \"{}\" joining the same nodes",
-                        a.elements[e].tag, a.name, b.name
-                    ),
-                ))
-            }
-        };
-        let ea = &a.elements[e];
-        let eb = &b.elements[elem_b];
-        if dot(ea.normal, eb.normal) > -0.999 {
+) -> Result<(usize, usize)> {
+    let mut involved: BTreeSet<usize> = BTreeSet::new();
+    for c in curves {
+        let on = curve_bodies.get(c).cloned().unwrap_or_default();
+        if on.len() > 2 {
             return Err(Error::input(
                 mfile,
                 format!(
-                    "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of element \
-                     {}: the bodies overlap there",
-                    a.name, b.name, ea.tag
+                    "interface \"{name}\": curve {c} bounds {} bodies; an interface joins exactly two",
+                    on.len()
                 ),
             ));
         }
-        elements.push(InterfaceElement {
-            elem_a: e,
-            elem_b,
-            pairs: [pair_of[&s], pair_of[&t]],
-        });
+        involved.extend(on);
     }
-    Ok(elements)
+    let names = |set: &BTreeSet<usize>| -> String {
+        set.iter()
+            .map(|&b| format!("\"{}\"", bodies[b].name))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    if involved.len() != 2 {
+        return Err(Error::input(
+            sfile,
+            format!(
+                "[interface.{name}]: its curves bound {} bod{} ({}); an interface must be a curve \
+                 shared by exactly two bodies (draw the joint once and use it in both surfaces' \
+                 curve loops)",
+                involved.len(),
+                if involved.len() == 1 { "y" } else { "ies" },
+                names(&involved)
+            ),
+        ));
+    }
+    let mut it = involved.iter();
+    match (it.next(), it.next()) {
+        (Some(&a), Some(&b)) => Ok((a.min(b), a.max(b))),
+        _ => Err(Error::input(
+            sfile,
+            format!("[interface.{name}]: needs two bodies"),
+        )),
+    }
+}
+
+/// The two sides of one interface: its bodies A and B and their elements on it.
+struct Sides<'a> {
+    name: &'a str,
+    a: &'a Body,
+    b: &'a Body,
+    elems_a: Vec<usize>,
+    elems_b: Vec<usize>,
+    mfile: &'a Path,
+}
+
+impl Sides<'_> {
+    /// Matches B's interface nodes to A's: same mesh node, else same position. Returns A's
+    /// node → B's node (`usize::MAX` where none), whether any pair was matched by position,
+    /// and whether every node found its partner (else the sides were meshed on their own).
+    fn match_nodes(&self) -> (BTreeMap<usize, usize>, bool, bool) {
+        let (a, b) = (self.a, self.b);
+        let (elems_a, elems_b) = (&self.elems_a, &self.elems_b);
+        let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
+        for &e in elems_b {
+            for n in b.elements[e].nodes {
+                b_by_mesh.insert(b.mesh_nodes[n], n);
+            }
+        }
+        let min_len = elems_a
+            .iter()
+            .map(|&e| a.elements[e].length)
+            .chain(elems_b.iter().map(|&e| b.elements[e].length))
+            .fold(f64::INFINITY, f64::min);
+        let tol = 1e-6 * min_len;
+        let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
+        let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
+        let mut by_position = false;
+        let mut matching = true;
+        for &e in elems_a {
+            for n in a.elements[e].nodes {
+                if a_to_b.contains_key(&n) {
+                    continue;
+                }
+                let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
+                    Some(&m) => Some(m),
+                    None => {
+                        by_position = true;
+                        let x = a.nodes[n];
+                        b_nodes
+                            .iter()
+                            .copied()
+                            .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
+                    }
+                };
+                matching &= partner.is_some();
+                a_to_b.insert(n, partner.unwrap_or(usize::MAX));
+            }
+        }
+        if a_to_b.len() != b_nodes.len() {
+            matching = false;
+        }
+        (a_to_b, by_position && matching, matching)
+    }
+
+    /// How far B may lie from A: `search` for a found interface; for a declared one any gap,
+    /// and an interference up to the size of the elements.
+    fn reach(&self, search: Option<f64>) -> Reach {
+        match search {
+            Some(d) => Reach {
+                ahead: d,
+                behind: d,
+            },
+            None => Reach {
+                ahead: f64::INFINITY,
+                behind: self
+                    .elems_a
+                    .iter()
+                    .map(|&e| self.a.elements[e].length)
+                    .chain(self.elems_b.iter().map(|&e| self.b.elements[e].length))
+                    .fold(0.0, f64::max),
+            },
+        }
+    }
+
+    /// Orders A's interface nodes along the curve direction as drawn (mesh order), with
+    /// their arc length; all `matched` nodes must lie on simple chains.
+    fn curve_order(&self, matched: usize) -> Result<(Vec<usize>, Vec<f64>)> {
+        let (name, a, mfile) = (self.name, self.a, self.mfile);
+        let mut next_of: HashMap<usize, (usize, usize)> = HashMap::new(); // node → (elem, next node)
+        let mut has_incoming: BTreeSet<usize> = BTreeSet::new();
+        for &e in &self.elems_a {
+            let el = &a.elements[e];
+            let (s, t) = if !el.reversed {
+                (el.nodes[0], el.nodes[1])
+            } else {
+                (el.nodes[1], el.nodes[0])
+            };
+            next_of.insert(s, (e, t));
+            has_incoming.insert(t);
+        }
+        let mut starts: Vec<usize> = next_of
+            .keys()
+            .copied()
+            .filter(|n| !has_incoming.contains(n))
+            .collect();
+        starts.sort_by_key(|&n| a.mesh_nodes[n]);
+        if starts.is_empty() {
+            // A closed interface (a whole inclusion): start anywhere.
+            if let Some(&n) = next_of.keys().min() {
+                starts.push(n);
+            }
+        }
+        let mut order: Vec<usize> = Vec::new(); // A nodes in curve order
+        let mut s_of: Vec<f64> = Vec::new();
+        let mut seen: BTreeSet<usize> = BTreeSet::new();
+        let mut s_acc = 0.0;
+        for &s0 in &starts {
+            let mut n = s0;
+            if seen.insert(n) {
+                order.push(n);
+                s_of.push(s_acc);
+            }
+            while let Some(&(e, t)) = next_of.get(&n) {
+                s_acc += a.elements[e].length;
+                if !seen.insert(t) {
+                    break;
+                }
+                order.push(t);
+                s_of.push(s_acc);
+                n = t;
+            }
+        }
+        if order.len() != matched {
+            return Err(Error::input(
+                mfile,
+                format!(
+                    "interface \"{name}\": its elements on body \"{}\" do not form simple chains \
+                     (a node joins more than two interface elements)",
+                    a.name
+                ),
+            ));
+        }
+        Ok((order, s_of))
+    }
+
+    /// Interface elements: A's element and B's element on the same node pair, which must
+    /// lie on opposite sides.
+    fn elements(
+        &self,
+        a_to_b: &BTreeMap<usize, usize>,
+        pair_of: &HashMap<usize, usize>,
+    ) -> Result<Vec<InterfaceElement>> {
+        let (name, a, b, mfile) = (self.name, self.a, self.b, self.mfile);
+        let mut b_elem_of: HashMap<(usize, usize), usize> = HashMap::new();
+        for &e in &self.elems_b {
+            let [s, t] = b.elements[e].nodes;
+            b_elem_of.insert((s.min(t), s.max(t)), e);
+        }
+        let mut elements = Vec::with_capacity(self.elems_a.len());
+        for &e in &self.elems_a {
+            let [s, t] = a.elements[e].nodes;
+            let (bs, bt) = (a_to_b[&s], a_to_b[&t]);
+            let elem_b = match b_elem_of.get(&(bs.min(bt), bs.max(bt))) {
+                Some(&eb) => eb,
+                None => {
+                    return Err(Error::input(
+                        mfile,
+                        format!(
+                            "interface \"{name}\": element {} of body \"{}\" has no counterpart \
+                             on body \"{}\" joining the same nodes",
+                            a.elements[e].tag, a.name, b.name
+                        ),
+                    ))
+                }
+            };
+            let ea = &a.elements[e];
+            let eb = &b.elements[elem_b];
+            if dot(ea.normal, eb.normal) > -0.999 {
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "interface \"{name}\": bodies \"{}\" and \"{}\" lie on the same side of \
+                         element {}: the bodies overlap there",
+                        a.name, b.name, ea.tag
+                    ),
+                ));
+            }
+            elements.push(InterfaceElement {
+                elem_a: e,
+                elem_b,
+                pairs: [pair_of[&s], pair_of[&t]],
+            });
+        }
+        Ok(elements)
+    }
 }
 
 /// The row of one pair of an interface whose sides were meshed on their own.
@@ -482,7 +517,7 @@ fn independent_sides(
 
 /// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
 /// the curve joins several pairs of bodies: `joints[brick_1|brick_2]`.
-pub fn split_name(group: &str, a: &str, b: &str) -> String {
+pub(super) fn split_name(group: &str, a: &str, b: &str) -> String {
     format!("{group}[{a}|{b}]")
 }
 

@@ -47,7 +47,7 @@ mod overlap;
 
 use body::{build_body, mark_traction_breaks, node_dofs, winding};
 use checks::{check_held, check_values};
-pub use interface::split_name;
+use interface::split_name;
 use interface::{align_pair_frames, build_interface, check_one_sided, pairs_of_bodies};
 use overlap::check_overlaps;
 
@@ -523,7 +523,7 @@ fn fmt_point(p: [f64; 2]) -> String {
     format!("({}, {})", fmt_num(p[0]), fmt_num(p[1]))
 }
 /// Compact number formatting for messages and reports.
-pub fn fmt_num(v: f64) -> String {
+pub(crate) fn fmt_num(v: f64) -> String {
     if v == 0.0 {
         return "0".into();
     }
@@ -559,27 +559,159 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     let scene = &with_bodies;
     let mfile = mesh_path;
     let sfile = scene.path.as_path();
-    let named = |dim: i32| -> Vec<&str> {
-        mesh.physical_names
+    let groups = Groups { mesh, mfile, sfile };
+
+    let body_surfaces = body_surfaces(scene, &groups)?;
+    let body_curves = boundary_curves(scene, mesh, &body_surfaces, mfile)?;
+    let curve_bodies = curve_bodies(&body_curves);
+
+    // --- Interface tables from globs and defaults, now that shared curves are known -------
+    let shared_groups = shared_groups(mesh, &curve_bodies);
+    let (with_interfaces, from_tables) = tables::resolve_interfaces(scene, mesh, &shared_groups)?;
+    resolved.extend(from_tables);
+    let scene = &with_interfaces;
+
+    let found = classify_curves(scene, &groups, &curve_bodies)?;
+    let curve_role = curve_roles(scene, &groups, &body_curves, &curve_bodies, &found)?;
+    let CurveUses {
+        mut parts,
+        interfaces: mut interfaces_found,
+        unused: unused_curves,
+        ..
+    } = found;
+
+    let curve_lines = curve_lines(mesh);
+    let scale = model_scale(mesh, &body_curves, &curve_lines, mfile)?;
+
+    // --- Bodies: nodes, loops, orientation -------------------------------------------------
+    let mut bodies: Vec<Body> = Vec::new();
+    for (bi, spec) in scene.bodies.iter().enumerate() {
+        let mut body = build_body(
+            spec.name.as_str(),
+            &body_curves[bi],
+            &curve_lines,
+            &curve_role,
+            mesh,
+            mfile,
+            scale,
+        )?;
+        body.young = spec.young;
+        body.poisson = spec.poisson;
+        body.body_force = spec.body_force_at(t0);
+        body.body_force_spec = spec.body_force.clone();
+        body.surfaces = body_surfaces[bi].clone();
+        body.triangles = mesh
+            .triangles
+            .iter()
+            .filter(|t| body.surfaces.contains(&t.surface))
+            .map(|t| t.nodes)
+            .collect();
+        bodies.push(body);
+    }
+    // Interfaces found from the drawing ([contact]) follow the declared ones.
+    let declared = interfaces_found.len();
+    if let Some(cs) = &scene.contact {
+        for f in detect::find_contacts(scene, cs, &bodies, &parts, sfile)? {
+            let k = interfaces_found.len();
+            let curves = f.assign(k, &mut bodies);
+            resolved.push(Resolved {
+                table: "[defaults.interface]".into(),
+                group: f.spec.name.clone(),
+            });
+            interfaces_found.push((f.spec, FOUND_GROUP.to_string(), curves));
+        }
+    }
+    part_statistics(&bodies, &mut parts);
+
+    // --- Interfaces ---------------------------------------------------------------------------
+    let mut interfaces = Vec::new();
+    for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
+        let search = scene.contact.as_ref().filter(|_| k >= declared);
+        interfaces.push(build_interface(
+            k,
+            (spec, group),
+            curves,
+            &bodies,
+            mesh,
+            &curve_bodies,
+            scene,
+            mfile,
+            search.map(|c| c.search),
+        )?);
+    }
+
+    check_overlaps(&bodies, &interfaces[..declared], mfile, scale)?;
+    detect::check_found_gaps(&bodies, &interfaces[declared..], mfile, scale)?;
+    mark_traction_breaks(&mut bodies);
+    for body in bodies.iter_mut() {
+        body.dofs = node_dofs(body, &parts);
+    }
+    align_pair_frames(&bodies, &mut interfaces);
+    check_one_sided(&bodies, &interfaces, &parts, sfile)?;
+    check_values(&bodies, &parts, sfile, t0)?;
+    check_held(&bodies, &interfaces, sfile, scale)?;
+    let sizes = size_stats(&bodies);
+
+    let model = Model {
+        tables: resolved,
+        mesh_path: mesh_path.to_path_buf(),
+        bodies,
+        parts,
+        interfaces,
+        scale,
+        sizes,
+        unused_curves,
+        time: t0,
+    };
+    // Every step's values must be valid, not only the first's.
+    if scene.solve.time.is_some() {
+        for (_, t) in scene.solve.steps().into_iter().skip(1) {
+            model.at_time(scene, t)?;
+        }
+    }
+    Ok(model)
+}
+
+/// The mesh's physical groups, looked up by dimension and name, with the files that input
+/// errors name.
+struct Groups<'a> {
+    mesh: &'a Mesh,
+    mfile: &'a Path,
+    sfile: &'a Path,
+}
+
+impl<'a> Groups<'a> {
+    /// The names of the physical groups of dimension `dim`.
+    fn named(&self, dim: i32) -> Vec<&'a str> {
+        self.mesh
+            .physical_names
             .iter()
             .filter(|p| p.dim == dim)
             .map(|p| p.name.as_str())
             .collect()
-    };
-    let group_tag = |dim: i32, name: &str| -> Option<i32> {
-        mesh.physical_names
+    }
+
+    /// The tag of the physical group `name` of dimension `dim`.
+    fn tag(&self, dim: i32, name: &str) -> Option<i32> {
+        self.mesh
+            .physical_names
             .iter()
             .find(|p| p.dim == dim && p.name == name)
             .map(|p| p.tag)
-    };
-    let wrong_kind = |key: &str, name: &str, want: i32| -> Error {
+    }
+
+    /// The error for a scene table `[key.name]` whose group is not a physical group of
+    /// dimension `want`: one of another kind, or none of that name.
+    fn wrong_kind(&self, key: &str, name: &str, want: i32) -> Error {
+        let (sfile, mfile) = (self.sfile, self.mfile);
         let kinds = [
             "Physical Point",
             "Physical Curve",
             "Physical Surface",
             "Physical Volume",
         ];
-        let found = mesh
+        let found = self
+            .mesh
             .physical_names
             .iter()
             .find(|p| p.name == name)
@@ -598,18 +730,24 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                 format!(
                     "[{key}.{name}]: {} has no {want_s} named \"{name}\"{}; its {want_s}s are: {}",
                     mfile.display(),
-                    did_you_mean(name, named(want).into_iter()),
-                    list_or_none(&named(want))
+                    did_you_mean(name, self.named(want).into_iter()),
+                    list_or_none(&self.named(want))
                 ),
             ),
         }
-    };
+    }
+}
 
-    // --- Bodies: physical surfaces -----------------------------------------------------
+/// Bodies: the surface entities of each body's Physical Surface, in scene order. Every
+/// Physical Surface must be a body of the scene, and no surface may belong to two bodies.
+fn body_surfaces(scene: &Scene, groups: &Groups) -> Result<Vec<Vec<i32>>> {
+    let (mesh, mfile, sfile) = (groups.mesh, groups.mfile, groups.sfile);
     let mut surface_owner: HashMap<i32, usize> = HashMap::new();
     let mut body_surfaces: Vec<Vec<i32>> = Vec::new();
     for (bi, spec) in scene.bodies.iter().enumerate() {
-        let tag = group_tag(2, &spec.name).ok_or_else(|| wrong_kind("body", &spec.name, 2))?;
+        let tag = groups
+            .tag(2, &spec.name)
+            .ok_or_else(|| groups.wrong_kind("body", &spec.name, 2))?;
         let surfaces: Vec<i32> = mesh
             .surfaces
             .values()
@@ -657,8 +795,17 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             ));
         }
     }
+    Ok(body_surfaces)
+}
 
-    // --- Boundary curves of each body ---------------------------------------------------
+/// The boundary curves of each body: the bounding curves of its surfaces, less those that
+/// bound two surfaces of the same body (internal to it).
+fn boundary_curves(
+    scene: &Scene,
+    mesh: &Mesh,
+    body_surfaces: &[Vec<i32>],
+    mfile: &Path,
+) -> Result<Vec<BTreeSet<i32>>> {
     let mut body_curves: Vec<BTreeSet<i32>> = Vec::new();
     for (bi, surfaces) in body_surfaces.iter().enumerate() {
         let mut count: BTreeMap<i32, usize> = BTreeMap::new();
@@ -692,16 +839,27 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                 .collect(),
         );
     }
+    Ok(body_curves)
+}
+
+/// The bodies each boundary curve bounds (two for a shared curve), in body order.
+fn curve_bodies(body_curves: &[BTreeSet<i32>]) -> BTreeMap<i32, Vec<usize>> {
     let mut curve_bodies: BTreeMap<i32, Vec<usize>> = BTreeMap::new();
     for (bi, curves) in body_curves.iter().enumerate() {
         for &c in curves {
             curve_bodies.entry(c).or_default().push(bi);
         }
     }
+    curve_bodies
+}
 
-    // --- Interface tables from globs and defaults, now that shared curves are known -------
-    let shared_groups: BTreeSet<&str> = mesh
-        .physical_names
+/// The Physical Curves that hold a curve shared by two or more bodies: the groups that
+/// interface tables from globs and defaults may apply to.
+fn shared_groups<'m>(
+    mesh: &'m Mesh,
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+) -> BTreeSet<&'m str> {
+    mesh.physical_names
         .iter()
         .filter(|p| p.dim == 1)
         .filter(|p| {
@@ -711,37 +869,40 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             })
         })
         .map(|p| p.name.as_str())
-        .collect();
-    let (with_interfaces, from_tables) = tables::resolve_interfaces(scene, mesh, &shared_groups)?;
-    resolved.extend(from_tables);
-    let scene = &with_interfaces;
+        .collect()
+}
 
-    // --- What each physical curve is -----------------------------------------------------
-    for b in &scene.boundaries {
-        if group_tag(1, &b.name).is_none() {
-            return Err(wrong_kind("boundary", &b.name, 1));
-        }
-    }
-    let curves_of = |tag: i32| -> Vec<i32> {
-        mesh.curves
-            .values()
-            .filter(|c| c.physical_tags.contains(&tag))
-            .map(|c| c.tag)
-            .collect()
-    };
-    let mut parts: Vec<Part> = Vec::new();
-    // (the interface's table, named after its pair of bodies when the curve is split; its curves)
-    let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
-    // `between = [A, B]`: one interface over two Physical Curves (group name → interface).
-    let mut between_of: HashMap<&str, usize> = HashMap::new();
+/// What the scene makes of the mesh's Physical Curves.
+struct CurveUses {
+    /// The boundary parts: the listed ones and the traction-free rest.
+    parts: Vec<Part>,
+    /// Each interface's table (named after its pair of bodies when the curve is split), the
+    /// Physical Curve it comes from, and its curves.
+    interfaces: Vec<(InterfaceSpec, String, BTreeSet<i32>)>,
+    /// Group tag → use.
+    uses: HashMap<i32, CurveUse>,
+    /// The Physical Curves that lie on no body boundary.
+    unused: Vec<String>,
+}
+
+/// Checks that every `[interface]` names a Physical Curve, or with `between = [A, B]` two
+/// of them (and is not one itself); adds the `between` interfaces to `found` (their curves:
+/// those of A and B) and returns each side's group name → its interface.
+fn between_interfaces<'s>(
+    scene: &'s Scene,
+    groups: &Groups,
+    found: &mut Vec<(InterfaceSpec, String, BTreeSet<i32>)>,
+) -> Result<HashMap<&'s str, usize>> {
+    let (mesh, mfile, sfile) = (groups.mesh, groups.mfile, groups.sfile);
+    let mut between_of = HashMap::new();
     for i in &scene.interfaces {
         let Some(sides) = &i.between else {
-            if group_tag(1, &i.name).is_none() {
-                return Err(wrong_kind("interface", &i.name, 1));
+            if groups.tag(1, &i.name).is_none() {
+                return Err(groups.wrong_kind("interface", &i.name, 1));
             }
             continue;
         };
-        if group_tag(1, &i.name).is_some() {
+        if groups.tag(1, &i.name).is_some() {
             return Err(Error::input(
                 sfile,
                 format!(
@@ -755,7 +916,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
         let mut curves = BTreeSet::new();
         for g in sides {
-            let tag = group_tag(1, g).ok_or_else(|| {
+            let tag = groups.tag(1, g).ok_or_else(|| {
                 Error::input(
                     sfile,
                     format!(
@@ -763,20 +924,50 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
                          named so{}; its Physical Curves are: {}",
                         i.name,
                         mfile.display(),
-                        did_you_mean(g, named(1).into_iter()),
-                        list_or_none(&named(1))
+                        did_you_mean(g, groups.named(1).into_iter()),
+                        list_or_none(&groups.named(1))
                     ),
                 )
             })?;
-            curves.extend(curves_of(tag));
-            between_of.insert(g.as_str(), interfaces_found.len());
+            curves.extend(
+                mesh.curves
+                    .values()
+                    .filter(|c| c.physical_tags.contains(&tag))
+                    .map(|c| c.tag),
+            );
+            between_of.insert(g.as_str(), found.len());
         }
-        interfaces_found.push((i.clone(), i.name.clone(), curves));
+        found.push((i.clone(), i.name.clone(), curves));
     }
-    let mut uses: HashMap<i32, CurveUse> = HashMap::new(); // group tag → use
+    Ok(between_of)
+}
+
+/// What each physical curve is: a boundary part (listed, or traction-free), an interface, or
+/// one interface per pair of bodies it joins. A curve shared by two bodies must be an
+/// interface of the scene.
+fn classify_curves(
+    scene: &Scene,
+    groups: &Groups,
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+) -> Result<CurveUses> {
+    let (mesh, mfile, sfile) = (groups.mesh, groups.mfile, groups.sfile);
+    for b in &scene.boundaries {
+        if groups.tag(1, &b.name).is_none() {
+            return Err(groups.wrong_kind("boundary", &b.name, 1));
+        }
+    }
+    let mut parts: Vec<Part> = Vec::new();
+    let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
+    let between_of = between_interfaces(scene, groups, &mut interfaces_found)?;
+    let mut uses: HashMap<i32, CurveUse> = HashMap::new();
     let mut unused_curves = Vec::new();
     for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
-        let curves = curves_of(p.tag);
+        let curves: Vec<i32> = mesh
+            .curves
+            .values()
+            .filter(|c| c.physical_tags.contains(&p.tag))
+            .map(|c| c.tag)
+            .collect();
         let on_bodies: BTreeSet<usize> = curves
             .iter()
             .filter_map(|c| curve_bodies.get(c))
@@ -812,7 +1003,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             .filter(|c| curve_bodies.get(c).is_some_and(|b| b.len() >= 2))
             .collect();
         if let Some(spec) = scene.interface(&p.name) {
-            let by_pair = pairs_of_bodies(&p.name, &curves, &curve_bodies, scene, sfile)?;
+            let by_pair = pairs_of_bodies(&p.name, &curves, curve_bodies, scene, sfile)?;
             if by_pair.len() <= 1 {
                 uses.insert(p.tag, CurveUse::Interface(interfaces_found.len()));
                 interfaces_found.push((
@@ -872,8 +1063,26 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             });
         }
     }
+    Ok(CurveUses {
+        parts,
+        interfaces: interfaces_found,
+        uses,
+        unused: unused_curves,
+    })
+}
 
-    // The role of each boundary curve (through its physical group).
+/// The role of each boundary curve (through its physical group). Groups the scene uses win
+/// over unlisted (traction-free) ones; a curve in no named group, or in two groups the scene
+/// uses, is an input error.
+fn curve_roles(
+    scene: &Scene,
+    groups: &Groups,
+    body_curves: &[BTreeSet<i32>],
+    curve_bodies: &BTreeMap<i32, Vec<usize>>,
+    found: &CurveUses,
+) -> Result<HashMap<i32, Role>> {
+    let (mesh, mfile, sfile) = (groups.mesh, groups.mfile, groups.sfile);
+    let (parts, uses) = (&found.parts, &found.uses);
     let mut curve_role: HashMap<i32, Role> = HashMap::new();
     for (bi, curves) in body_curves.iter().enumerate() {
         for &c in curves {
@@ -947,15 +1156,28 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             }
         }
     }
+    Ok(curve_role)
+}
 
-    // --- Line elements per curve ----------------------------------------------------------
+/// The line elements of the mesh per curve, as indices into `mesh.lines`.
+fn curve_lines(mesh: &Mesh) -> HashMap<i32, Vec<usize>> {
     let mut curve_lines: HashMap<i32, Vec<usize>> = HashMap::new();
     for (li, l) in mesh.lines.iter().enumerate() {
         curve_lines.entry(l.curve).or_default().push(li);
     }
+    curve_lines
+}
 
+/// The model's length scale: the diagonal of the bounding box of the bodies' boundary
+/// nodes, which must be positive and finite; the mesh must also resolve its coordinates.
+fn model_scale(
+    mesh: &Mesh,
+    body_curves: &[BTreeSet<i32>],
+    curve_lines: &HashMap<i32, Vec<usize>>,
+    mfile: &Path,
+) -> Result<f64> {
     let mut all_nodes: Vec<[f64; 2]> = Vec::new();
-    for curves in &body_curves {
+    for curves in body_curves {
         for c in curves {
             for &li in curve_lines.get(c).map(Vec::as_slice).unwrap_or(&[]) {
                 for &n in &mesh.lines[li].nodes {
@@ -965,62 +1187,18 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         }
     }
     let scale = bbox_diagonal(&all_nodes);
-    check_resolution(mesh, &body_curves, &curve_lines, mfile)?;
+    check_resolution(mesh, body_curves, curve_lines, mfile)?;
     if !(scale > 0.0 && scale.is_finite()) {
         return Err(Error::input(
             mfile,
             "the bodies have no boundary elements of positive size: mesh with `gmsh -2` (or -1)",
         ));
     }
+    Ok(scale)
+}
 
-    // --- Bodies: nodes, loops, orientation -------------------------------------------------
-    let mut bodies: Vec<Body> = Vec::new();
-    for (bi, spec) in scene.bodies.iter().enumerate() {
-        let mut body = build_body(
-            spec.name.as_str(),
-            &body_curves[bi],
-            &curve_lines,
-            &curve_role,
-            mesh,
-            mfile,
-            scale,
-        )?;
-        body.young = spec.young;
-        body.poisson = spec.poisson;
-        body.body_force = spec.body_force_at(t0);
-        body.body_force_spec = spec.body_force.clone();
-        body.surfaces = body_surfaces[bi].clone();
-        body.triangles = mesh
-            .triangles
-            .iter()
-            .filter(|t| body.surfaces.contains(&t.surface))
-            .map(|t| t.nodes)
-            .collect();
-        bodies.push(body);
-    }
-
-    // --- Interfaces found from the drawing ([contact]) ----------------------------------------
-    let declared = interfaces_found.len();
-    if let Some(cs) = &scene.contact {
-        for f in detect::find_contacts(scene, cs, &bodies, &parts, sfile)? {
-            let k = interfaces_found.len();
-            let mut curves = BTreeSet::new();
-            for (b, list) in [(f.body_a, &f.elems_a), (f.body_b, &f.elems_b)] {
-                for &e in list {
-                    let el = &mut bodies[b].elements[e];
-                    el.role = Role::Interface(k);
-                    curves.insert(el.curve);
-                }
-            }
-            resolved.push(Resolved {
-                table: "[defaults.interface]".into(),
-                group: f.spec.name.clone(),
-            });
-            interfaces_found.push((f.spec, FOUND_GROUP.to_string(), curves));
-        }
-    }
-
-    // Part statistics.
+/// Part statistics: each part's element count per body and its total length.
+fn part_statistics(bodies: &[Body], parts: &mut [Part]) {
     for (bi, body) in bodies.iter().enumerate() {
         for e in &body.elements {
             if let Role::Boundary(pi) = e.role {
@@ -1029,54 +1207,6 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             }
         }
     }
-
-    // --- Interfaces ---------------------------------------------------------------------------
-    let mut interfaces = Vec::new();
-    for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
-        let search = scene.contact.as_ref().filter(|_| k >= declared);
-        interfaces.push(build_interface(
-            k,
-            (spec, group),
-            curves,
-            &bodies,
-            mesh,
-            &curve_bodies,
-            scene,
-            mfile,
-            search.map(|c| c.search),
-        )?);
-    }
-
-    check_overlaps(&bodies, &interfaces[..declared], mfile, scale)?;
-    detect::check_found_gaps(&bodies, &interfaces[declared..], mfile, scale)?;
-    mark_traction_breaks(&mut bodies);
-    for body in bodies.iter_mut() {
-        body.dofs = node_dofs(body, &parts);
-    }
-    align_pair_frames(&bodies, &mut interfaces);
-    check_one_sided(&bodies, &interfaces, &parts, sfile)?;
-    check_values(&bodies, &parts, sfile, t0)?;
-    check_held(&bodies, &interfaces, sfile, scale)?;
-    let sizes = size_stats(&bodies);
-
-    let model = Model {
-        tables: resolved,
-        mesh_path: mesh_path.to_path_buf(),
-        bodies,
-        parts,
-        interfaces,
-        scale,
-        sizes,
-        unused_curves,
-        time: t0,
-    };
-    // Every step's values must be valid, not only the first's.
-    if scene.solve.time.is_some() {
-        for (_, t) in scene.solve.steps().into_iter().skip(1) {
-            model.at_time(scene, t)?;
-        }
-    }
-    Ok(model)
 }
 
 fn list_or_none(names: &[&str]) -> String {

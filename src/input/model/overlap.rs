@@ -18,6 +18,8 @@ pub(super) fn check_overlaps(
     mfile: &Path,
     scale: f64,
 ) -> Result<()> {
+    let segs = segments(bodies);
+    let grid = segment_grid(&segs, scale);
     let interference = |s: &Seg, t: &Seg| -> bool {
         let (rs, rt) = (
             bodies[s.body].elements[s.elem].role,
@@ -30,15 +32,53 @@ pub(super) fn check_overlaps(
             _ => false,
         }
     };
-    struct Seg {
-        body: usize,
-        elem: usize,
-        a: [f64; 2],
-        b: [f64; 2],
-        ma: usize,
-        mb: usize,
-        xmin: f64,
+    if let Some((i, j)) = first_crossing(&segs, &grid, &interference) {
+        {
+            let (s, t) = (&segs[i], &segs[j]);
+            {
+                let (b1, b2) = (&bodies[s.body], &bodies[t.body]);
+                let (e1, e2) = (&b1.elements[s.elem], &b2.elements[t.elem]);
+                let what = if s.body == t.body {
+                    format!("the boundary of body \"{}\" crosses itself", b1.name)
+                } else {
+                    format!(
+                        "bodies \"{}\" and \"{}\" overlap by {}",
+                        b1.name,
+                        b2.name,
+                        fmt_num(overlap_depth(b1, b2).max(overlap_depth(b2, b1)))
+                    )
+                };
+                return Err(Error::input(
+                    mfile,
+                    format!(
+                        "{what}: element {} (curve {}) crosses element {} (curve {}); fix the \
+                         geometry so that bodies meet only along shared curves",
+                        e1.tag, e1.curve, e2.tag, e2.curve
+                    ),
+                ));
+            }
+        }
     }
+    for body in bodies {
+        check_crossing_at_coincident_nodes(body, mfile, scale)?;
+    }
+    check_nesting(bodies, mfile)
+}
+
+/// A boundary element as a segment, for the crossing search.
+struct Seg {
+    body: usize,
+    elem: usize,
+    a: [f64; 2],
+    b: [f64; 2],
+    /// The mesh nodes of its ends.
+    ma: usize,
+    mb: usize,
+    xmin: f64,
+}
+
+/// Every boundary element of every body as a segment, sorted by smallest x (the sweep order).
+fn segments(bodies: &[Body]) -> Vec<Seg> {
     let mut segs: Vec<Seg> = Vec::new();
     for (bi, body) in bodies.iter().enumerate() {
         for (ei, e) in body.elements.iter().enumerate() {
@@ -56,9 +96,12 @@ pub(super) fn check_overlaps(
         }
     }
     segs.sort_by(|p, q| p.xmin.total_cmp(&q.xmin));
-    // Candidate pairs from a uniform grid of cells about one mean element long (a sweep
-    // along x alone is quadratic for a column of vertical elements); the first crossing in
-    // sweep order is reported.
+    segs
+}
+
+/// Candidate pairs from a uniform grid of cells about one mean element long (a sweep along x
+/// alone is quadratic for a column of vertical elements): cell → the segments that reach it.
+fn segment_grid(segs: &[Seg], scale: f64) -> HashMap<(i64, i64), Vec<usize>> {
     let n = segs.len();
     let mean = segs.iter().map(|g| norm(sub(g.b, g.a))).sum::<f64>() / n.max(1) as f64;
     let h = mean.max(1e-12 * scale).max(f64::MIN_POSITIVE);
@@ -108,6 +151,16 @@ pub(super) fn check_overlaps(
             grid.entry(c).or_default().push(i);
         }
     }
+    grid
+}
+
+/// The first pair of crossing segments in sweep order that share no mesh node, if any, but
+/// those `allowed` to cross.
+fn first_crossing(
+    segs: &[Seg],
+    grid: &HashMap<(i64, i64), Vec<usize>>,
+    allowed: &dyn Fn(&Seg, &Seg) -> bool,
+) -> Option<(usize, usize)> {
     let mut first: Option<(usize, usize)> = None;
     for members in grid.values() {
         for (k, &i) in members.iter().enumerate() {
@@ -120,43 +173,32 @@ pub(super) fn check_overlaps(
                 if [t.ma, t.mb].contains(&s.ma) || [t.ma, t.mb].contains(&s.mb) {
                     continue;
                 }
-                if segments_cross(s.a, s.b, t.a, t.b) && !interference(s, t) {
+                if segments_cross(s.a, s.b, t.a, t.b) && !allowed(s, t) {
                     first = Some((i, j));
                 }
             }
         }
     }
-    if let Some((i, j)) = first {
-        {
-            let (s, t) = (&segs[i], &segs[j]);
-            {
-                let (b1, b2) = (&bodies[s.body], &bodies[t.body]);
-                let (e1, e2) = (&b1.elements[s.elem], &b2.elements[t.elem]);
-                let what = if s.body == t.body {
-                    format!("the boundary of body \"{}\" crosses itself", b1.name)
-                } else {
-                    format!(
-                        "bodies \"{}\" and \"{}\" overlap by {}",
-                        b1.name,
-                        b2.name,
-                        fmt_num(overlap_depth(b1, b2).max(overlap_depth(b2, b1)))
-                    )
-                };
-                return Err(Error::input(
-                    mfile,
-                    format!(
-                        "{what}: element {} (curve {}) crosses element {} (curve {}); fix the \
-                         geometry so that bodies meet only along shared curves",
-                        e1.tag, e1.curve, e2.tag, e2.curve
-                    ),
-                ));
-            }
-        }
-    }
-    for body in bodies {
-        check_crossing_at_coincident_nodes(body, mfile, scale)?;
-    }
-    // A body entirely inside another: probe a point just inside each body.
+    first
+}
+
+/// How deep the boundary nodes of body `a` lie inside body `b`: the largest distance from
+/// such a node to b's boundary (0 when none lies inside).
+pub(super) fn overlap_depth(a: &Body, b: &Body) -> f64 {
+    a.nodes
+        .iter()
+        .filter(|&&x| b.winding_number(x) != 0)
+        .map(|&x| {
+            b.elements
+                .iter()
+                .map(|e| segment_distance(x, x, b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
+}
+
+/// A body entirely inside another: probe a point just inside each body.
+fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
     for (bi, body) in bodies.iter().enumerate() {
         let outer = match body.loops.iter().find(|l| !l.is_hole) {
             Some(l) => l,
@@ -255,21 +297,6 @@ fn check_crossing_at_coincident_nodes(body: &Body, mfile: &Path, scale: f64) -> 
         }
     }
     Ok(())
-}
-
-/// How deep the boundary nodes of body `a` lie inside body `b`: the largest distance from
-/// such a node to b's boundary (0 when none lies inside).
-pub(super) fn overlap_depth(a: &Body, b: &Body) -> f64 {
-    a.nodes
-        .iter()
-        .filter(|&&x| b.winding_number(x) != 0)
-        .map(|&x| {
-            b.elements
-                .iter()
-                .map(|e| segment_distance(x, x, b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
-                .fold(f64::INFINITY, f64::min)
-        })
-        .fold(0.0, f64::max)
 }
 
 /// Proper crossing of two segments (touching end points and collinear overlap excluded).
