@@ -107,6 +107,9 @@ test: setup mesh lint
 	@# A running-bond wall: 22 bodies, T-junctions, friction, compact archived states.
 	$(SGBEM) run pipelines/wall_running_bond.toml --set mesh.courses=4 --set mesh.bricks=5 --out out/test/wall_running_bond --quiet
 	$(PY) pipelines/check_outputs.py out/test/wall_running_bond
+	@# Contact from the drawing: 220 stones drawn each on its own, joints found by [contact].
+	$(SGBEM) run pipelines/stone_wall.toml --out out/test/stone_wall --quiet
+	$(PY) pipelines/check_outputs.py out/test/stone_wall
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
 	  for run in clamped_beam_joint wall_running_bond; do \
@@ -154,6 +157,7 @@ bench:
 	$(CARGO) bench --bench stages
 	$(CARGO) bench --bench contact
 	$(CARGO) bench --bench masonry
+	$(CARGO) bench --bench detect
 
 # Refinement levels x quadrature presets of the closed-form benchmarks and of the paper's
 # examples 1 and 2: error (or detached length) against run time, in out/accuracy/

@@ -431,14 +431,14 @@ fn record_solution(
 }
 
 /// The paper's mixed interface operators of the final status, where they are archived:
-/// scenes without junctions (no place in the paper's layout, one displacement per pair) of up
-/// to 3000 interface unknowns.
+/// scenes without junctions (no place in the paper's layout, one displacement per pair) and
+/// with node pairs only (the paper pairs nodes), of up to 3000 interface unknowns.
 fn mixed_operators(
     model: &Model,
     ops: &Operators,
     solved: &ContactRun,
 ) -> Result<Option<Vec<(String, Array)>>> {
-    if !model.junctions().is_empty() {
+    if !model.junctions().is_empty() || model.interfaces.iter().any(|i| i.independent()) {
         return Ok(None);
     }
     let final_status = final_status(model, solved);
@@ -674,7 +674,7 @@ fn write_tables(
             &out_dir
                 .join("interfaces")
                 .join(format!("{}.csv", it.spec.name)),
-            csv::interface_table(it, r).as_bytes(),
+            csv::interface_table(it, r, &loaded.model.bodies).as_bytes(),
         )?;
     }
     for (name, rows) in &post.sections {

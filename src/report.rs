@@ -200,7 +200,7 @@ fn write_parts(o: &mut String, model: &Model) {
 /// The interfaces: model, bodies, elements and pairs.
 fn write_interfaces(o: &mut String, model: &Model) {
     let _ = writeln!(o, "\ninterfaces ({})", model.interfaces.len());
-    for i in &model.interfaces {
+    for (k, i) in model.interfaces.iter().enumerate() {
         let sp = &i.spec;
         let kind = match sp.model {
             InterfaceModel::Bonded => "bonded".to_string(),
@@ -231,9 +231,29 @@ fn write_interfaces(o: &mut String, model: &Model) {
             i.pairs.len(),
             fmt_num(i.length),
             if i.matched_by_position {
-                "; sides matched by position"
+                "; sides matched by position".to_string()
+            } else if i.independent() {
+                let found = if i.group == crate::input::model::FOUND_GROUP {
+                    "; found by [contact]"
+                } else {
+                    ""
+                };
+                let (facing, lo, hi) = independent_figures(i);
+                format!(
+                    "{found}; sides meshed on their own, paired from the geometry: {facing} of \
+                     {} pairs face {} ({} elements), gap from the geometry {} to {}",
+                    i.pairs.len(),
+                    model.bodies[i.body_b].name,
+                    model.bodies[i.body_b]
+                        .elements
+                        .iter()
+                        .filter(|e| e.role == crate::input::model::Role::Interface(k))
+                        .count(),
+                    fmt_num(lo),
+                    fmt_num(hi)
+                )
             } else {
-                ""
+                String::new()
             }
         );
     }
@@ -391,9 +411,23 @@ fn body_json(b: &crate::input::model::Body) -> Value {
     })
 }
 
+/// Pairs of an interface with independent sides that face B, and the range of their
+/// gaps measured from the geometry.
+fn independent_figures(i: &crate::input::model::Interface) -> (usize, f64, f64) {
+    let facing: Vec<f64> = i
+        .pairs
+        .iter()
+        .filter(|p| !p.partners.is_empty())
+        .map(|p| p.gap_geometry)
+        .collect();
+    let lo = facing.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = facing.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    (facing.len(), lo, hi)
+}
+
 fn interface_json(model: &Model, i: &crate::input::model::Interface) -> Value {
     let sp = &i.spec;
-    json!({
+    let mut out = json!({
         "name": sp.name,
         "model": match sp.model {
             InterfaceModel::Bonded => "bonded",
@@ -413,5 +447,14 @@ fn interface_json(model: &Model, i: &crate::input::model::Interface) -> Value {
         "pairs": i.pairs.len(),
         "length": i.length,
         "matched_by_position": i.matched_by_position,
-    })
+    });
+    if i.independent() {
+        let (facing, lo, hi) = independent_figures(i);
+        out["independent_sides"] = json!({
+            "facing_pairs": facing,
+            "b_nodes": i.b_nodes.len(),
+            "gap_geometry": [lo, hi],
+        });
+    }
+    out
 }

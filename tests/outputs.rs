@@ -145,6 +145,7 @@ fn fabricated(big_operator: usize) -> RunRecord {
         gap: vec![0.0, 0.01],
         cohesion: vec![0.5, 0.5],
         elements: vec![[1, 0]],
+        pairing: None,
     }];
     let statuses = [
         [PairStatus::Closed, PairStatus::Closed],
@@ -1092,7 +1093,11 @@ fn fabricated_run(dir: &Path) -> PathBuf {
     std::fs::write(run.join("timings.json"), timings.to_string()).unwrap();
     std::fs::write(
         run.join("interfaces").join("joint.csv"),
-        sgbem::output::csv::interface_table(&model.interfaces[0], &last.interfaces[0]),
+        sgbem::output::csv::interface_table(
+            &model.interfaces[0],
+            &last.interfaces[0],
+            &model.bodies,
+        ),
     )
     .unwrap();
     write_archive(&run.join("archive.h5"), &rec).unwrap();

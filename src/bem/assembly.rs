@@ -270,7 +270,7 @@ pub fn assemble_body_scaled(
         mut unknowns,
     } = known_data(model, body, load_factor);
     let known_u = known_displacements(body, &constraints, scene_file)?;
-    let n_x = number_unknowns(model, body, &node_pairs, &mut unknowns, scene_file)?;
+    let n_x = number_unknowns(model, bi, &node_pairs, &mut unknowns, scene_file)?;
     let node_elems = node_elements(body);
     let mut entries = element_entries(model, bi, &unknowns, &node_elems);
     let n_sys = unknowns.len();
@@ -371,9 +371,8 @@ fn node_pairs(model: &Model, bi: usize) -> Vec<Vec<(usize, usize)>> {
         if !side_a && it.body_b != bi {
             continue;
         }
-        for (j, p) in it.pairs.iter().enumerate() {
-            let n = if side_a { p.node_a } else { p.node_b };
-            node_pairs[n].push((k, j));
+        for j in 0..it.point_count(side_a) {
+            node_pairs[it.point(side_a, j).0].push((k, j));
         }
     }
     node_pairs
@@ -441,11 +440,12 @@ fn known_data(model: &Model, body: &Body, load_factor: f64) -> KnownData {
 /// Returns the size of X.
 fn number_unknowns(
     model: &Model,
-    body: &Body,
+    bi: usize,
     node_pairs: &[Vec<(usize, usize)>],
     unknowns: &mut Vec<Unknown>,
     scene_file: &std::path::Path,
 ) -> Result<usize> {
+    let body = &model.bodies[bi];
     let mut u0: Vec<Unknown> = Vec::new();
     for (n, d) in body.dofs.iter().enumerate() {
         for k in 0..2 {
@@ -457,9 +457,7 @@ fn number_unknowns(
                     on: None,
                 }),
                 DofClass::Interface => {
-                    u0.push(interface_unknown(
-                        model, body, node_pairs, n, k, scene_file,
-                    )?);
+                    u0.push(interface_unknown(model, bi, node_pairs, n, k, scene_file)?);
                 }
             }
         }
@@ -474,8 +472,8 @@ fn number_unknowns(
         .collect();
     pairs_here.sort_unstable();
     for &(k, j, _) in &pairs_here {
-        let p = &model.interfaces[k].pairs[j];
-        for (comp, dir) in [p.tangent, p.normal].into_iter().enumerate() {
+        let it = &model.interfaces[k];
+        for (comp, dir) in it.point(it.body_a == bi, j).1.into_iter().enumerate() {
             unknowns.push(Unknown::Traction0 {
                 iface: k,
                 pair: j,
@@ -492,12 +490,13 @@ fn number_unknowns(
 /// one of its pairs.
 fn interface_unknown(
     model: &Model,
-    body: &Body,
+    bi: usize,
     node_pairs: &[Vec<(usize, usize)>],
     n: usize,
     k: usize,
     scene_file: &std::path::Path,
 ) -> Result<Unknown> {
+    let body = &model.bodies[bi];
     let d = &body.dofs[n];
     let Some(&(iface, pair)) = node_pairs[n].first() else {
         return Err(Error::input(
@@ -512,13 +511,16 @@ fn interface_unknown(
     };
     // The unknown direction must be one of a pair's local directions (at a junction, of any
     // of its pairs; the contact problem projects it onto the frames of the others).
+    // The frame of point jj of interface kk on this body's side.
+    let frame_of = |kk: usize, jj: usize| {
+        let it = &model.interfaces[kk];
+        it.point(it.body_a == bi, jj).1
+    };
     let found = if d.class == [DofClass::Interface; 2] {
-        let p = &model.interfaces[iface].pairs[pair];
-        Some((iface, pair, k, [p.tangent, p.normal][k]))
+        Some((iface, pair, k, frame_of(iface, pair)[k]))
     } else {
         node_pairs[n].iter().find_map(|&(kk, jj)| {
-            let p = &model.interfaces[kk].pairs[jj];
-            let frame = [p.tangent, p.normal];
+            let frame = frame_of(kk, jj);
             (0..2)
                 .find(|&c| dot(d.frame[k], frame[c]).abs() > 1.0 - 1e-9)
                 .map(|c| (kk, jj, c, frame[c]))
@@ -597,11 +599,7 @@ fn element_entries(
                 iface, pair, dir, ..
             } => {
                 let it = &model.interfaces[iface];
-                let node = if it.body_a == bi {
-                    it.pairs[pair].node_a
-                } else {
-                    it.pairs[pair].node_b
-                };
+                let node = it.point(it.body_a == bi, pair).0;
                 for &(ei, end) in &node_elems[node] {
                     if body.elements[ei].role == Role::Interface(iface) {
                         entries[ei].push(Entry {

@@ -194,11 +194,7 @@ pub(crate) fn recover(
                 iface, pair, dir, ..
             } => {
                 let it = &model.interfaces[iface];
-                let node = if it.body_a == b {
-                    it.pairs[pair].node_a
-                } else {
-                    it.pairs[pair].node_b
-                };
+                let node = it.point(it.body_a == b, pair).0;
                 for (e, el) in body.elements.iter().enumerate() {
                     if el.role != crate::input::model::Role::Interface(iface) {
                         continue;

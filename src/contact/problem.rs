@@ -260,19 +260,6 @@ fn body_op(sys: &BodySystem, d00: &Mat<f64>, z0: &[f64], name: &str) -> Result<B
     })
 }
 
-/// Tributary length of each pair of an interface (half of each adjacent element).
-fn weights(model: &Model, k: usize) -> Vec<f64> {
-    let it = &model.interfaces[k];
-    let mut w = vec![0.0; it.pairs.len()];
-    for e in &it.elements {
-        let (a, b) = (it.pairs[e.pairs[0]].x, it.pairs[e.pairs[1]].x);
-        let l = (b[0] - a[0]).hypot(b[1] - a[1]);
-        w[e.pairs[0]] += 0.5 * l;
-        w[e.pairs[1]] += 0.5 * l;
-    }
-    w
-}
-
 impl Problem {
     /// Builds the problem from the prepared bodies and factorises the glued base.
     ///
@@ -317,7 +304,7 @@ impl Problem {
         }
         let mut cands: Vec<Candidate> = Vec::new();
         for (k, it) in model.interfaces.iter().enumerate() {
-            let w = weights(model, k);
+            let w = it.weights();
             for (j, pr) in it.pairs.iter().enumerate() {
                 for c in 0..2 {
                     let e = if c == 1 { pr.normal } else { pr.tangent };
@@ -334,10 +321,27 @@ impl Problem {
                         }
                         (coefs, free)
                     };
-                    let (cb, fb) = side(it.body_b, pr.node_b);
                     let (ca, fa) = side(it.body_a, pr.node_a);
                     let none = |f: f64| f < 1e-9;
                     let full = |f: f64| f > 1.0 - 1e-9;
+                    let (cb, fb) = if it.independent() {
+                        // Sides meshed on their own (docs/formulation.md §5.6): B's part of
+                        // the row is Σ c_k u^B_k over the partners, less what B holds; no
+                        // row where A holds the component, or where nothing of B faces A.
+                        if pr.partners.is_empty() || none(fa) {
+                            continue;
+                        }
+                        let mut cb = Vec::new();
+                        for &(node, w) in &pr.partners {
+                            for (d, x) in side(it.body_b, node).0 {
+                                add_to(&mut cb, d, w * x);
+                            }
+                        }
+                        let fb = if cb.is_empty() { 0.0 } else { 1.0 };
+                        (cb, fb)
+                    } else {
+                        side(it.body_b, pr.node_b)
+                    };
                     if none(fa) && none(fb) {
                         continue;
                     }
@@ -932,10 +936,17 @@ impl Problem {
                                 }
                             }
                         }
-                        let (ua, ub) = (
-                            fields[it.body_a].u[pr.node_a],
-                            fields[it.body_b].u[pr.node_b],
-                        );
+                        let ua = fields[it.body_a].u[pr.node_a];
+                        let ub = if !it.independent() {
+                            fields[it.body_b].u[pr.node_b]
+                        } else if pr.partners.is_empty() {
+                            ua
+                        } else {
+                            pr.partners.iter().fold([0.0, 0.0], |acc, &(n, c)| {
+                                let u = fields[it.body_b].u[n];
+                                [acc[0] + c * u[0], acc[1] + c * u[1]]
+                            })
+                        };
                         let d = [ub[0] - ua[0], ub[1] - ua[1]];
                         let jump = [
                             d[0] * pr.tangent[0] + d[1] * pr.tangent[1],
@@ -947,6 +958,8 @@ impl Problem {
                             None if self.implied_at.contains(&(k, j, 1)) => {
                                 pr.gap + jump[1] <= 1e-9 * model.scale
                             }
+                            // Nothing of B faces the node: no row, open.
+                            None if it.independent() && pr.partners.is_empty() => false,
                             _ => true,
                         };
                         // Nodal normal force on B (compression positive).

@@ -4,5 +4,6 @@ pub mod expr;
 pub mod gmsh;
 pub mod mesh;
 pub mod model;
+pub mod pairing;
 pub mod scene;
 pub mod tables;

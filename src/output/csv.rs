@@ -2,7 +2,7 @@
 
 use std::fmt::Write;
 
-use crate::input::model::Interface;
+use crate::input::model::{Body, Interface};
 use crate::solution::{InterfaceResult, PairStatus};
 
 /// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:
@@ -10,17 +10,22 @@ use crate::solution::{InterfaceResult, PairStatus};
 /// distance `gap + n·(u_B − u_A)`; the slip `s·(u_B − u_A)`.
 ///
 /// Friction interfaces add `tangential_status` (`stick`, `slip`, `open`) and `slip`, the
-/// accumulated slip path Σ|Δs| over the load steps while the pair is closed.
-pub fn interface_table(it: &Interface, r: &InterfaceResult) -> String {
+/// accumulated slip path Σ|Δs| over the load steps while the pair is closed. Where the two
+/// sides were meshed on their own (rows of A's nodes over B's segments), `side` (the body
+/// whose node the row is at) and `segment` (the gmsh element of the other body that the node
+/// faces; empty where none) follow.
+pub fn interface_table(it: &Interface, r: &InterfaceResult, bodies: &[Body]) -> String {
     let friction = r.pairs.iter().any(|p| p.slipping.is_some());
     let mut o = String::from(
         "x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap",
     );
-    o.push_str(if friction {
-        ",tangential_status,slip\n"
-    } else {
-        "\n"
-    });
+    if friction {
+        o.push_str(",tangential_status,slip");
+    }
+    if it.independent() {
+        o.push_str(",side,segment");
+    }
+    o.push('\n');
     for (p, q) in it.pairs.iter().zip(&r.pairs) {
         let status = match q.status {
             PairStatus::Closed => "closed",
@@ -43,6 +48,13 @@ pub fn interface_table(it: &Interface, r: &InterfaceResult) -> String {
                 q.tangential_status().unwrap_or("none"),
                 q.slip
             );
+        }
+        if it.independent() {
+            let segment = p
+                .segment
+                .map(|e| bodies[it.body_b].elements[e].tag.to_string())
+                .unwrap_or_default();
+            let _ = write!(o, ",{},{segment}", bodies[it.body_a].name);
         }
         o.push('\n');
     }

@@ -269,6 +269,52 @@ pub struct InterfaceRecord {
     pub cohesion: Vec<f64>,
     /// Interface elements as pairs of pair indices (A's start, A's end).
     pub elements: Vec<[usize; 2]>,
+    /// Sides meshed on their own: the rows of the pairs over B's nodes (None for node pairs).
+    pub pairing: Option<PairingRecord>,
+}
+
+/// The pairing of an interface whose sides were meshed on their own (docs/formulation.md
+/// §5.6): each pair's row `u^B = Σ coef·u^B_node` over B's nodes, its tributary length and
+/// its gap measured from the geometry.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct PairingRecord {
+    /// Where each pair's partners start in `node` and `coef` (pairs + 1 offsets).
+    pub offset: Vec<usize>,
+    /// B's nodes (body-local) and their coefficients.
+    pub node: Vec<usize>,
+    pub coef: Vec<f64>,
+    /// Per pair: the tributary length of its rows and the gap measured from the geometry.
+    pub weight: Vec<f64>,
+    pub gap_geometry: Vec<f64>,
+    /// Per pair: B's element facing it (body-local), None where nothing of B faces it.
+    pub segment: Vec<Option<usize>>,
+    /// B's interface nodes (body-local).
+    pub b_nodes: Vec<usize>,
+}
+
+impl PairingRecord {
+    /// The pairing of a model interface, if its sides were meshed on their own.
+    pub fn of(it: &Interface) -> Option<PairingRecord> {
+        if !it.independent() {
+            return None;
+        }
+        let mut r = PairingRecord {
+            offset: vec![0],
+            b_nodes: it.b_nodes.iter().map(|p| p.node).collect(),
+            ..Default::default()
+        };
+        for p in &it.pairs {
+            for &(n, c) in &p.partners {
+                r.node.push(n);
+                r.coef.push(c);
+            }
+            r.offset.push(r.node.len());
+            r.weight.push(p.weight);
+            r.gap_geometry.push(p.gap_geometry);
+            r.segment.push(p.segment);
+        }
+        Some(r)
+    }
 }
 
 impl InterfaceRecord {
@@ -298,6 +344,7 @@ impl InterfaceRecord {
             gap: it.pairs.iter().map(|p| p.gap).collect(),
             cohesion: it.pairs.iter().map(|p| p.cohesion).collect(),
             elements: it.elements.iter().map(|e| e.pairs).collect(),
+            pairing: PairingRecord::of(it),
         }
     }
 
@@ -638,6 +685,44 @@ impl RunRecord {
             in_range(&w("node_a"), it.node_a.iter(), na, "nodes of body A")?;
             in_range(&w("node_b"), it.node_b.iter(), nbn, "nodes of body B")?;
             in_range(&w("elements"), it.elements.iter().flatten(), np, "pairs")?;
+            if let Some(pr) = &it.pairing {
+                same_len(&w("pairing offsets"), pr.offset.len(), "pairs + 1", np + 1)?;
+                for (s, l) in [
+                    ("pairing weight", pr.weight.len()),
+                    ("pairing gap_geometry", pr.gap_geometry.len()),
+                    ("pairing segment", pr.segment.len()),
+                ] {
+                    same_len(&w(s), l, "pairs", np)?;
+                }
+                same_len(
+                    &w("pairing coef"),
+                    pr.coef.len(),
+                    "partner nodes",
+                    pr.node.len(),
+                )?;
+                if pr.offset.windows(2).any(|o| o[0] > o[1])
+                    || pr.offset.last().is_some_and(|&l| l != pr.node.len())
+                {
+                    return Err(format!(
+                        "{}: offsets must grow up to the partner count",
+                        w("pairing")
+                    ));
+                }
+                in_range(&w("pairing node"), pr.node.iter(), nbn, "nodes of body B")?;
+                in_range(
+                    &w("pairing b_nodes"),
+                    pr.b_nodes.iter(),
+                    nbn,
+                    "nodes of body B",
+                )?;
+                let ne = self.bodies[it.body_b].elements.len();
+                in_range(
+                    &w("pairing segment"),
+                    pr.segment.iter().flatten(),
+                    ne,
+                    "elements of B",
+                )?;
+            }
         }
         Ok(())
     }

@@ -213,6 +213,13 @@ pub fn interface_figures(it: &Interface, r: &InterfaceResult, thickness: f64) ->
         normal += 0.5 * l * (r.pairs[j].traction[1] + r.pairs[k].traction[1]);
         tangential += 0.5 * l * (r.pairs[j].traction[0] + r.pairs[k].traction[0]);
     }
+    if it.independent() {
+        // Sides meshed on their own: the pairs' tributary lengths are the parts of A's
+        // elements that face B, so the resultants are the sums of the row forces.
+        let w = it.weights();
+        normal = r.pairs.iter().zip(&w).map(|(p, w)| p.traction[1] * w).sum();
+        tangential = r.pairs.iter().zip(&w).map(|(p, w)| p.traction[0] * w).sum();
+    }
     let tn: Vec<f64> = r.pairs.iter().map(|p| p.traction[1]).collect();
     let open = r
         .pairs

@@ -45,7 +45,7 @@
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
 
-use super::record::RunRecord;
+use super::record::{InterfaceRecord, RunRecord};
 use super::write_files;
 use crate::error::{Error, Result};
 use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
@@ -547,14 +547,14 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         let mut node_ts = vec![-1i32; n];
         let mut node_slip = vec![0.0; n];
         for (it, r) in rec.interfaces.iter().zip(st.interfaces.iter()) {
-            let side = if it.body_a == bi {
-                &it.node_a
+            let side: Vec<(usize, usize)> = if it.body_a == bi {
+                it.node_a.iter().copied().enumerate().collect()
             } else if it.body_b == bi {
-                &it.node_b
+                b_side_pairs(it)
             } else {
                 continue;
             };
-            for (j, &node) in side.iter().enumerate() {
+            for (j, node) in side {
                 st_code[node] = match r.pairs[j].status {
                     PairStatus::Closed => 1,
                     PairStatus::Open => 0,
@@ -681,6 +681,25 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
         ],
         active: ["von_mises", "displacement", "stress"],
     }
+}
+
+/// The pair that each of body B's interface nodes shows (pair index, node): its pair's node
+/// where nodes pair up; where the sides were meshed on their own, every interface node of B
+/// shows the pair whose row gives it the largest coefficient.
+fn b_side_pairs(it: &InterfaceRecord) -> Vec<(usize, usize)> {
+    let Some(pr) = &it.pairing else {
+        return it.node_b.iter().copied().enumerate().collect();
+    };
+    let mut best: std::collections::BTreeMap<usize, (f64, usize)> = Default::default();
+    for j in 0..pr.offset.len().saturating_sub(1) {
+        for m in pr.offset[j]..pr.offset[j + 1] {
+            let e = best.entry(pr.node[m]).or_insert((f64::NEG_INFINITY, j));
+            if pr.coef[m] > e.0 {
+                *e = (pr.coef[m], j);
+            }
+        }
+    }
+    best.into_iter().map(|(node, (_, j))| (j, node)).collect()
 }
 
 #[cfg(test)]

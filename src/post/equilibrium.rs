@@ -234,15 +234,9 @@ fn interface_wrench(
     } else {
         return None;
     };
-    let mut w = vec![0.0; it.pairs.len()];
-    for e in &it.elements {
-        let [j, k] = e.pairs;
-        let l = (it.pairs[k].x[0] - it.pairs[j].x[0]).hypot(it.pairs[k].x[1] - it.pairs[j].x[1]);
-        w[j] += 0.5 * l;
-        w[k] += 0.5 * l;
-    }
+    let w = it.weights();
     let mut total = Wrench::default();
-    for ((p, res), wj) in it.pairs.iter().zip(&r.pairs).zip(&w) {
+    for (j, ((p, res), wj)) in it.pairs.iter().zip(&r.pairs).zip(&w).enumerate() {
         let [mut ts, mut tn] = res.traction;
         if reactions {
             // A component held on this side is in the node's reaction.
@@ -265,10 +259,16 @@ fn interface_wrench(
             sign * wj * (ts * p.tangent[0] + tn * p.normal[0]),
             sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
         ];
+        // Where the sides were meshed on their own, B takes the force where its partners are.
+        let x = if sign < 0.0 && it.independent() {
+            it.b_point(body, j)
+        } else {
+            p.x
+        };
         total.add(Wrench {
             fx: f[0],
             fy: f[1],
-            m: cross([p.x[0] - c[0], p.x[1] - c[1]], f),
+            m: cross([x[0] - c[0], x[1] - c[1]], f),
         });
     }
     Some(total)

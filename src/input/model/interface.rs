@@ -11,8 +11,9 @@ use crate::input::scene::{InterfaceSpec, Scene};
 use super::body::constrained_directions;
 use super::{
     dot, first_time, fmt_point, norm, pair_values, sub, unit, Body, DofClass, Interface,
-    InterfaceElement, Pair, Part, Role,
+    InterfaceElement, Pair, Part, Role, SideNode,
 };
+use crate::input::pairing::{mortar_rows, Reach, SegmentGrid, Side};
 
 #[allow(clippy::too_many_arguments)]
 pub(super) fn build_interface(
@@ -24,6 +25,7 @@ pub(super) fn build_interface(
     curve_bodies: &BTreeMap<i32, Vec<usize>>,
     scene: &Scene,
     mfile: &Path,
+    search: Option<f64>,
 ) -> Result<Interface> {
     let sfile = scene.path.as_path();
     let name = spec.name.as_str();
@@ -43,7 +45,9 @@ pub(super) fn build_interface(
         elems_b: on_interface(b),
         mfile,
     };
-    let (a_to_b, by_position) = sides.match_nodes(mesh)?;
+    // Where a node of A has no node of B at its place, the sides were meshed on their own:
+    // rows over B's segments (`independent_sides`).
+    let (a_to_b, by_position, matching) = sides.match_nodes();
     let (order, s_of) = sides.curve_order(a_to_b.len())?;
     let pair_of: HashMap<usize, usize> = order.iter().enumerate().map(|(j, &n)| (n, j)).collect();
 
@@ -57,9 +61,21 @@ pub(super) fn build_interface(
             normals[j][1] += el.normal[1];
         }
     }
+    let normals: Vec<[f64; 2]> = normals.into_iter().map(unit).collect();
+    let rows = if matching {
+        None
+    } else {
+        Some(independent_sides(
+            name,
+            (a, &sides.elems_a, &order, &normals),
+            (b, &sides.elems_b),
+            sides.reach(search),
+            mfile,
+        )?)
+    };
     let mut pairs = Vec::with_capacity(order.len());
     for (j, &na) in order.iter().enumerate() {
-        let normal = unit(normals[j]);
+        let normal = normals[j];
         let x = a.nodes[na];
         let (gap, cohesion, friction) = pair_values(spec, x, t0).map_err(|m| {
             Error::input(
@@ -67,7 +83,7 @@ pub(super) fn build_interface(
                 format!("{m} (node {})", mesh.node_tags[a.mesh_nodes[na]]),
             )
         })?;
-        pairs.push(Pair {
+        let mut pair = Pair {
             node_a: na,
             node_b: a_to_b[&na],
             x,
@@ -77,10 +93,44 @@ pub(super) fn build_interface(
             gap,
             cohesion,
             friction,
-        });
+            partners: Vec::new(),
+            segment: None,
+            gap_geometry: 0.0,
+            weight: 0.0,
+        };
+        if let Some((rows, _)) = &rows {
+            let row = &rows[j];
+            pair.node_b = row.main;
+            pair.partners = row.partners.clone();
+            pair.segment = row.segment;
+            pair.gap_geometry = row.gap;
+            pair.weight = row.weight;
+            pair.gap = super::with_geometry(spec, row.gap, gap);
+        }
+        pairs.push(pair);
     }
 
-    let elements = sides.elements(&a_to_b, &pair_of)?;
+    let (elements, b_nodes) = match rows {
+        // Sides meshed on their own: A's elements, each with the element of B facing its
+        // start.
+        Some((rows, b_side)) => (
+            sides
+                .elems_a
+                .iter()
+                .map(|&e| {
+                    let [s, t] = a.elements[e].nodes;
+                    let first = pair_of[&s];
+                    InterfaceElement {
+                        elem_a: e,
+                        elem_b: rows[first].segment.unwrap_or(sides.elems_b[0]),
+                        pairs: [first, pair_of[&t]],
+                    }
+                })
+                .collect(),
+            b_side,
+        ),
+        None => (sides.elements(&a_to_b, &pair_of)?, Vec::new()),
+    };
     let length = sides.elems_a.iter().map(|&e| a.elements[e].length).sum();
     Ok(Interface {
         spec: spec.clone(),
@@ -91,6 +141,7 @@ pub(super) fn build_interface(
         elements,
         length,
         matched_by_position: by_position,
+        b_nodes,
     })
 }
 
@@ -159,9 +210,10 @@ struct Sides<'a> {
 
 impl Sides<'_> {
     /// Matches B's interface nodes to A's: same mesh node, else same position. Returns A's
-    /// node → B's node, and whether any pair was matched by position.
-    fn match_nodes(&self, mesh: &Mesh) -> Result<(BTreeMap<usize, usize>, bool)> {
-        let (name, a, b, mfile) = (self.name, self.a, self.b, self.mfile);
+    /// node → B's node (`usize::MAX` where none), whether any pair was matched by position,
+    /// and whether every node found its partner (else the sides were meshed on their own).
+    fn match_nodes(&self) -> (BTreeMap<usize, usize>, bool, bool) {
+        let (a, b) = (self.a, self.b);
         let (elems_a, elems_b) = (&self.elems_a, &self.elems_b);
         let mut b_by_mesh: HashMap<usize, usize> = HashMap::new();
         for &e in elems_b {
@@ -178,57 +230,51 @@ impl Sides<'_> {
         let b_nodes: Vec<usize> = b_by_mesh.values().copied().collect();
         let mut a_to_b: BTreeMap<usize, usize> = BTreeMap::new();
         let mut by_position = false;
+        let mut matching = true;
         for &e in elems_a {
             for n in a.elements[e].nodes {
                 if a_to_b.contains_key(&n) {
                     continue;
                 }
                 let partner = match b_by_mesh.get(&a.mesh_nodes[n]) {
-                    Some(&m) => m,
+                    Some(&m) => Some(m),
                     None => {
                         by_position = true;
                         let x = a.nodes[n];
-                        match b_nodes
+                        b_nodes
                             .iter()
                             .copied()
                             .find(|&m| norm(sub(b.nodes[m], x)) <= tol)
-                        {
-                            Some(m) => m,
-                            None => {
-                                return Err(Error::input(
-                                    mfile,
-                                    format!(
-                                        "interface \"{name}\": node {} {} of body \"{}\" has no \
-                                         matching node on body \"{}\": the two sides must be \
-                                         meshed with the same nodes; use one curve shared by \
-                                         both surfaces (or the same Transfinite count on both)",
-                                        mesh.node_tags[a.mesh_nodes[n]],
-                                        fmt_point(x),
-                                        a.name,
-                                        b.name
-                                    ),
-                                ))
-                            }
-                        }
                     }
                 };
-                a_to_b.insert(n, partner);
+                matching &= partner.is_some();
+                a_to_b.insert(n, partner.unwrap_or(usize::MAX));
             }
         }
         if a_to_b.len() != b_nodes.len() {
-            return Err(Error::input(
-                mfile,
-                format!(
-                    "interface \"{name}\": body \"{}\" has {} interface nodes but body \"{}\" has \
-                     {}: mesh the joint as one curve shared by both surfaces",
-                    a.name,
-                    a_to_b.len(),
-                    b.name,
-                    b_nodes.len()
-                ),
-            ));
+            matching = false;
         }
-        Ok((a_to_b, by_position))
+        (a_to_b, by_position && matching, matching)
+    }
+
+    /// How far B may lie from A: `search` for a found interface; for a declared one any gap,
+    /// and an interference up to the size of the elements.
+    fn reach(&self, search: Option<f64>) -> Reach {
+        match search {
+            Some(d) => Reach {
+                ahead: d,
+                behind: d,
+            },
+            None => Reach {
+                ahead: f64::INFINITY,
+                behind: self
+                    .elems_a
+                    .iter()
+                    .map(|&e| self.a.elements[e].length)
+                    .chain(self.elems_b.iter().map(|&e| self.b.elements[e].length))
+                    .fold(0.0, f64::max),
+            },
+        }
     }
 
     /// Orders A's interface nodes along the curve direction as drawn (mesh order), with
@@ -344,6 +390,131 @@ impl Sides<'_> {
     }
 }
 
+/// The row of one pair of an interface whose sides were meshed on their own.
+struct IndependentRow {
+    partners: Vec<(usize, f64)>,
+    /// B's node with the largest coefficient (the nearest interface node of B where none).
+    main: usize,
+    segment: Option<usize>,
+    gap: f64,
+    weight: f64,
+}
+
+/// The rows of A's interface nodes (in pair order) over B's interface elements, and B's
+/// interface nodes with their frames (docs/formulation.md §5.6). Refused when nothing of B
+/// faces A within `reach`.
+fn independent_sides(
+    name: &str,
+    (a, elems_a, order, normals): (&Body, &[usize], &[usize], &[[f64; 2]]),
+    (b, elems_b): (&Body, &[usize]),
+    reach: Reach,
+    mfile: &Path,
+) -> Result<(Vec<IndependentRow>, Vec<SideNode>)> {
+    let seg = |body: &Body, list: &[usize]| -> Vec<[usize; 2]> {
+        list.iter().map(|&e| body.elements[e].nodes).collect()
+    };
+    let (seg_a, seg_b) = (seg(a, elems_a), seg(b, elems_b));
+    let mut node_normal = vec![[0.0; 2]; a.nodes.len()];
+    for (j, &n) in order.iter().enumerate() {
+        node_normal[n] = normals[j];
+    }
+    let lines: Vec<([f64; 2], [f64; 2])> = seg_b
+        .iter()
+        .map(|&[p, q]| (b.nodes[p], b.nodes[q]))
+        .collect();
+    let mean =
+        lines.iter().map(|(p, q)| norm(sub(*q, *p))).sum::<f64>() / lines.len().max(1) as f64;
+    let grid = SegmentGrid::new(&lines, mean);
+    let far = if reach.ahead.is_finite() {
+        reach.ahead.max(reach.behind)
+    } else {
+        f64::INFINITY
+    };
+    let cands = |p: [f64; 2], q: [f64; 2]| -> Vec<usize> {
+        if far.is_finite() {
+            grid.near(p, q, far)
+        } else {
+            (0..seg_b.len()).collect()
+        }
+    };
+    let found = mortar_rows(
+        &Side {
+            x: &a.nodes,
+            segments: &seg_a,
+        },
+        &node_normal,
+        &Side {
+            x: &b.nodes,
+            segments: &seg_b,
+        },
+        reach,
+        &cands,
+    );
+    if found.is_empty() {
+        return Err(Error::input(
+            mfile,
+            format!(
+                "interface \"{name}\": no part of body \"{}\" faces body \"{}\" along the \
+                 interface (the curves of its two sides must face each other, outward normals \
+                 opposed within 60°); check the curves the interface holds",
+                b.name, a.name
+            ),
+        ));
+    }
+    // B's interface nodes, in node order, with the frame opposite to B's averaged normal.
+    let mut b_normal: BTreeMap<usize, [f64; 2]> = BTreeMap::new();
+    for &e in elems_b {
+        let el = &b.elements[e];
+        for n in el.nodes {
+            let v = b_normal.entry(n).or_insert([0.0; 2]);
+            v[0] -= el.normal[0];
+            v[1] -= el.normal[1];
+        }
+    }
+    let b_side: Vec<SideNode> = b_normal
+        .iter()
+        .map(|(&node, &v)| {
+            let normal = unit(v);
+            SideNode {
+                node,
+                normal,
+                tangent: [-normal[1], normal[0]],
+            }
+        })
+        .collect();
+    let rows = order
+        .iter()
+        .map(|&n| match found.get(&n) {
+            Some(r) => IndependentRow {
+                main: r
+                    .coefs
+                    .iter()
+                    .max_by(|x, y| x.1.total_cmp(&y.1))
+                    .map_or(b_side[0].node, |c| c.0),
+                partners: r.coefs.clone(),
+                segment: Some(elems_b[r.segment]),
+                gap: r.gap,
+                weight: r.weight,
+            },
+            None => IndependentRow {
+                main: b_side
+                    .iter()
+                    .map(|p| p.node)
+                    .min_by(|&x, &y| {
+                        norm(sub(b.nodes[x], a.nodes[n]))
+                            .total_cmp(&norm(sub(b.nodes[y], a.nodes[n])))
+                    })
+                    .unwrap_or(0),
+                partners: Vec::new(),
+                segment: None,
+                gap: 0.0,
+                weight: 0.0,
+            },
+        })
+        .collect();
+    Ok((rows, b_side))
+}
+
 /// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when
 /// the curve joins several pairs of bodies: `joints[brick_1|brick_2]`.
 pub(super) fn split_name(group: &str, a: &str, b: &str) -> String {
@@ -401,25 +572,36 @@ pub(super) fn pairs_of_bodies(
 /// pair must contain the prescribed direction. Turns larger than 30° are left to the
 /// assembly, which reports an oblique condition.
 pub(super) fn align_pair_frames(bodies: &[Body], interfaces: &mut [Interface]) {
-    let limit = 30f64.to_radians().cos();
     for it in interfaces.iter_mut() {
         let a = &bodies[it.body_a];
         for p in it.pairs.iter_mut() {
-            let d = a.dofs[p.node_a];
-            let one_known = d.class[1] == DofClass::Known && d.class[0] != DofClass::Known;
-            if !one_known {
-                continue;
-            }
-            let k = d.frame[1];
-            let (cn, ct) = (dot(k, p.normal), dot(k, p.tangent));
-            if cn.abs() >= ct.abs() && cn.abs() >= limit {
-                p.normal = [k[0] * cn.signum(), k[1] * cn.signum()];
-                p.tangent = [-p.normal[1], p.normal[0]];
-            } else if ct.abs() > cn.abs() && ct.abs() >= limit {
-                p.tangent = [k[0] * ct.signum(), k[1] * ct.signum()];
-                p.normal = [p.tangent[1], -p.tangent[0]];
-            }
+            align(a, p.node_a, &mut p.normal, &mut p.tangent);
         }
+        // B's own nodes where the sides were meshed on their own.
+        let b = &bodies[it.body_b];
+        for p in it.b_nodes.iter_mut() {
+            align(b, p.node, &mut p.normal, &mut p.tangent);
+        }
+    }
+}
+
+/// Turns the frame (normal, tangent) of node n of a body onto its one prescribed direction
+/// (see [`align_pair_frames`]).
+fn align(body: &Body, n: usize, normal: &mut [f64; 2], tangent: &mut [f64; 2]) {
+    let limit = 30f64.to_radians().cos();
+    let d = body.dofs[n];
+    let one_known = d.class[1] == DofClass::Known && d.class[0] != DofClass::Known;
+    if !one_known {
+        return;
+    }
+    let k = d.frame[1];
+    let (cn, ct) = (dot(k, *normal), dot(k, *tangent));
+    if cn.abs() >= ct.abs() && cn.abs() >= limit {
+        *normal = [k[0] * cn.signum(), k[1] * cn.signum()];
+        *tangent = [-normal[1], normal[0]];
+    } else if ct.abs() > cn.abs() && ct.abs() >= limit {
+        *tangent = [k[0] * ct.signum(), k[1] * ct.signum()];
+        *normal = [tangent[1], -tangent[0]];
     }
 }
 
@@ -453,7 +635,8 @@ pub(super) fn check_one_sided(
         names.dedup();
         names
     };
-    for it in interfaces {
+    // Sides meshed on their own: the rows leave out what is held (docs/formulation.md §5.6).
+    for it in interfaces.iter().filter(|it| !it.independent()) {
         let (a, b) = (&bodies[it.body_a], &bodies[it.body_b]);
         for p in &it.pairs {
             for (e, what) in [(p.normal, "normal"), (p.tangent, "tangential")] {

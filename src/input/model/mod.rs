@@ -41,6 +41,7 @@ use crate::input::tables::{self, Resolved};
 
 mod body;
 mod checks;
+mod detect;
 mod interface;
 mod overlap;
 
@@ -197,12 +198,35 @@ pub struct Pair {
     pub cohesion: f64,
     /// Coulomb coefficient μ ≥ 0 (`tangential = "friction"`; 0 otherwise).
     pub friction: f64,
+    /// Where the two sides were meshed on their own (docs/formulation.md §5.6): B's nodes and
+    /// the coefficients of the pair's rows, `u^B = Σ c_k u^B_k` (they sum to one). Empty for
+    /// a node pair (B's node is `node_b`) and for a node of A that faces nothing of B (no
+    /// rows: reported open).
+    pub partners: Vec<(usize, f64)>,
+    /// Sides meshed on their own: B's element facing the node (body-local index).
+    pub segment: Option<usize>,
+    /// Sides meshed on their own: the normal gap measured from the geometry, which `gap`
+    /// includes on unilateral interfaces (0 for node pairs).
+    pub gap_geometry: f64,
+    /// Sides meshed on their own: the tributary length of the rows, ∫ψ_j ds over the part of
+    /// the node's elements that faces B (node pairs: see [`Interface::weights`]).
+    pub weight: f64,
+}
+
+/// A node of body B on an interface whose sides were meshed on their own, with the frame of
+/// its interface unknowns: `normal` is the opposite of B's outward normal (A's direction).
+#[derive(Debug, Clone, Copy)]
+pub struct SideNode {
+    pub node: usize,
+    pub normal: [f64; 2],
+    pub tangent: [f64; 2],
 }
 
 /// An interface element: the same segment seen from both bodies.
 #[derive(Debug, Clone, Copy)]
 pub struct InterfaceElement {
-    /// Element index in body A and in body B.
+    /// Element index in body A and in body B (sides meshed on their own: B's element facing
+    /// the start of A's).
     pub elem_a: usize,
     pub elem_b: usize,
     /// Pair indices at A's start and end nodes.
@@ -226,6 +250,72 @@ pub struct Interface {
     pub length: f64,
     /// True when the two sides were separate coincident curves matched by position.
     pub matched_by_position: bool,
+    /// B's interface nodes where the two sides were meshed on their own (their nodes do not
+    /// pair up): the pairs are then A's nodes, whose rows reach B's nodes through
+    /// [`Pair::partners`]. Empty for node pairs.
+    pub b_nodes: Vec<SideNode>,
+}
+
+impl Interface {
+    /// True when the two sides were meshed on their own (rows over B's segments).
+    pub fn independent(&self) -> bool {
+        !self.b_nodes.is_empty()
+    }
+
+    /// The number of interface points of side A (`side_a`) or B: the index range of the
+    /// `pair` of that body's interface unknowns.
+    pub fn point_count(&self, side_a: bool) -> usize {
+        if side_a || !self.independent() {
+            self.pairs.len()
+        } else {
+            self.b_nodes.len()
+        }
+    }
+
+    /// Interface point j of side A (`side_a`) or B: its body-local node and the frame
+    /// `[tangent, normal]` of its unknowns.
+    pub fn point(&self, side_a: bool, j: usize) -> (usize, [[f64; 2]; 2]) {
+        if !side_a && self.independent() {
+            let p = &self.b_nodes[j];
+            return (p.node, [p.tangent, p.normal]);
+        }
+        let p = &self.pairs[j];
+        (
+            if side_a { p.node_a } else { p.node_b },
+            [p.tangent, p.normal],
+        )
+    }
+
+    /// The tributary length of each pair: half of each adjacent element of A (node pairs),
+    /// or the part of that which faces B (sides meshed on their own).
+    pub fn weights(&self) -> Vec<f64> {
+        if self.independent() {
+            return self.pairs.iter().map(|p| p.weight).collect();
+        }
+        let mut w = vec![0.0; self.pairs.len()];
+        for e in &self.elements {
+            let (a, b) = (self.pairs[e.pairs[0]].x, self.pairs[e.pairs[1]].x);
+            let l = (b[0] - a[0]).hypot(b[1] - a[1]);
+            w[e.pairs[0]] += 0.5 * l;
+            w[e.pairs[1]] += 0.5 * l;
+        }
+        w
+    }
+
+    /// Where B meets the rows of pair j: B's node (node pairs) or the point `Σ c_k x_k` of
+    /// B's partners (sides meshed on their own; A's node where it has none).
+    pub fn b_point(&self, b: &Body, j: usize) -> [f64; 2] {
+        let p = &self.pairs[j];
+        if !self.independent() {
+            return b.nodes[p.node_b];
+        }
+        if p.partners.is_empty() {
+            return p.x;
+        }
+        p.partners.iter().fold([0.0, 0.0], |acc, &(k, c)| {
+            [acc[0] + c * b.nodes[k][0], acc[1] + c * b.nodes[k][1]]
+        })
+    }
 }
 
 /// Element size figures for `sgbem check`.
@@ -278,9 +368,10 @@ impl Model {
     pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {
         let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
         for it in &self.interfaces {
-            for p in &it.pairs {
-                *count.entry((it.body_a, p.node_a)).or_default() += 1;
-                *count.entry((it.body_b, p.node_b)).or_default() += 1;
+            for (side_a, body) in [(true, it.body_a), (false, it.body_b)] {
+                for j in 0..it.point_count(side_a) {
+                    *count.entry((body, it.point(side_a, j).0)).or_default() += 1;
+                }
             }
         }
         // Group the junction nodes by position (the nodes of all bodies there coincide).
@@ -332,13 +423,24 @@ impl Model {
             for p in &mut it.pairs {
                 let (gap, cohesion, friction) =
                     pair_values(&it.spec, p.x, t).map_err(|msg| Error::input(&scene.path, msg))?;
-                p.gap = gap;
+                p.gap = with_geometry(&it.spec, p.gap_geometry, gap);
                 p.cohesion = cohesion;
                 p.friction = friction;
             }
         }
         check_values(&m.bodies, &m.parts, &scene.path, t)?;
         Ok(m)
+    }
+}
+
+/// The gap of a pair: the scene's `gap`, plus the gap measured from the geometry on a
+/// unilateral interface whose sides were meshed on their own (a bonded one joins the sides
+/// as drawn).
+fn with_geometry(spec: &InterfaceSpec, geometry: f64, gap: f64) -> f64 {
+    if geometry == 0.0 || spec.model != crate::input::scene::InterfaceModel::Unilateral {
+        gap
+    } else {
+        geometry + gap
     }
 }
 
@@ -439,6 +541,9 @@ const OPEN_LOOP_HINT: &str = "gmsh drops the elements of curves that are in no P
 once any physical group exists: add every boundary curve to a named Physical Curve \
 (e.g. Physical Curve(\"free\") = {...};) and mesh again";
 
+/// The `group` of the interfaces found by `[contact]`.
+pub const FOUND_GROUP: &str = "[contact]";
+
 /// What each physical curve of the mesh is, after reading the scene.
 enum CurveUse {
     Boundary(usize),
@@ -470,7 +575,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     let curve_role = curve_roles(scene, &groups, &body_curves, &curve_bodies, &found)?;
     let CurveUses {
         mut parts,
-        interfaces: interfaces_found,
+        interfaces: mut interfaces_found,
         unused: unused_curves,
         ..
     } = found;
@@ -503,11 +608,25 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             .collect();
         bodies.push(body);
     }
+    // Interfaces found from the drawing ([contact]) follow the declared ones.
+    let declared = interfaces_found.len();
+    if let Some(cs) = &scene.contact {
+        for f in detect::find_contacts(scene, cs, &bodies, &parts, sfile)? {
+            let k = interfaces_found.len();
+            let curves = f.assign(k, &mut bodies);
+            resolved.push(Resolved {
+                table: "[defaults.interface]".into(),
+                group: f.spec.name.clone(),
+            });
+            interfaces_found.push((f.spec, FOUND_GROUP.to_string(), curves));
+        }
+    }
     part_statistics(&bodies, &mut parts);
 
     // --- Interfaces ---------------------------------------------------------------------------
     let mut interfaces = Vec::new();
     for (k, (spec, group, curves)) in interfaces_found.iter().enumerate() {
+        let search = scene.contact.as_ref().filter(|_| k >= declared);
         interfaces.push(build_interface(
             k,
             (spec, group),
@@ -517,10 +636,12 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             &curve_bodies,
             scene,
             mfile,
+            search.map(|c| c.search),
         )?);
     }
 
-    check_overlaps(&bodies, mfile, scale)?;
+    check_overlaps(&bodies, &interfaces[..declared], mfile, scale)?;
+    detect::check_found_gaps(&bodies, &interfaces[declared..], mfile, scale)?;
     mark_traction_breaks(&mut bodies);
     for body in bodies.iter_mut() {
         body.dofs = node_dofs(body, &parts);
@@ -764,6 +885,63 @@ struct CurveUses {
     unused: Vec<String>,
 }
 
+/// Checks that every `[interface]` names a Physical Curve, or with `between = [A, B]` two
+/// of them (and is not one itself); adds the `between` interfaces to `found` (their curves:
+/// those of A and B) and returns each side's group name → its interface.
+fn between_interfaces<'s>(
+    scene: &'s Scene,
+    groups: &Groups,
+    found: &mut Vec<(InterfaceSpec, String, BTreeSet<i32>)>,
+) -> Result<HashMap<&'s str, usize>> {
+    let (mesh, mfile, sfile) = (groups.mesh, groups.mfile, groups.sfile);
+    let mut between_of = HashMap::new();
+    for i in &scene.interfaces {
+        let Some(sides) = &i.between else {
+            if groups.tag(1, &i.name).is_none() {
+                return Err(groups.wrong_kind("interface", &i.name, 1));
+            }
+            continue;
+        };
+        if groups.tag(1, &i.name).is_some() {
+            return Err(Error::input(
+                sfile,
+                format!(
+                    "[interface.{0}] gives `between`, but {1} also has a Physical Curve named \
+                     \"{0}\": an interface is a Physical Curve or the two curves of `between`; \
+                     rename one",
+                    i.name,
+                    mfile.display()
+                ),
+            ));
+        }
+        let mut curves = BTreeSet::new();
+        for g in sides {
+            let tag = groups.tag(1, g).ok_or_else(|| {
+                Error::input(
+                    sfile,
+                    format!(
+                        "`interface.{}.between` names \"{g}\", but {} has no Physical Curve \
+                         named so{}; its Physical Curves are: {}",
+                        i.name,
+                        mfile.display(),
+                        did_you_mean(g, groups.named(1).into_iter()),
+                        list_or_none(&groups.named(1))
+                    ),
+                )
+            })?;
+            curves.extend(
+                mesh.curves
+                    .values()
+                    .filter(|c| c.physical_tags.contains(&tag))
+                    .map(|c| c.tag),
+            );
+            between_of.insert(g.as_str(), found.len());
+        }
+        found.push((i.clone(), i.name.clone(), curves));
+    }
+    Ok(between_of)
+}
+
 /// What each physical curve is: a boundary part (listed, or traction-free), an interface, or
 /// one interface per pair of bodies it joins. A curve shared by two bodies must be an
 /// interface of the scene.
@@ -778,13 +956,9 @@ fn classify_curves(
             return Err(groups.wrong_kind("boundary", &b.name, 1));
         }
     }
-    for i in &scene.interfaces {
-        if groups.tag(1, &i.name).is_none() {
-            return Err(groups.wrong_kind("interface", &i.name, 1));
-        }
-    }
     let mut parts: Vec<Part> = Vec::new();
     let mut interfaces_found: Vec<(InterfaceSpec, String, BTreeSet<i32>)> = Vec::new();
+    let between_of = between_interfaces(scene, groups, &mut interfaces_found)?;
     let mut uses: HashMap<i32, CurveUse> = HashMap::new();
     let mut unused_curves = Vec::new();
     for p in mesh.physical_names.iter().filter(|p| p.dim == 1) {
@@ -800,8 +974,12 @@ fn classify_curves(
             .flatten()
             .copied()
             .collect();
+        let between = between_of.get(p.name.as_str()).copied();
         if on_bodies.is_empty() {
-            if scene.boundary(&p.name).is_some() || scene.interface(&p.name).is_some() {
+            if scene.boundary(&p.name).is_some()
+                || scene.interface(&p.name).is_some()
+                || between.is_some()
+            {
                 return Err(Error::input(
                     sfile,
                     format!(
@@ -813,6 +991,10 @@ fn classify_curves(
                 ));
             }
             unused_curves.push(p.name.clone());
+            continue;
+        }
+        if let Some(k) = between {
+            uses.insert(p.tag, CurveUse::Interface(k));
             continue;
         }
         let shared: Vec<i32> = curves

@@ -6,14 +6,33 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-use super::{cross, fmt_point, norm, sub, Body};
+use super::{cross, fmt_num, fmt_point, norm, sub, Body, Interface, Role};
+use crate::input::pairing::segment_distance;
 
 /// Elements of different bodies (or non-neighbouring elements of one body) must not cross,
-/// and no body may lie inside another.
-pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Result<()> {
+/// and no body may lie inside another. The two sides of a declared interface whose sides
+/// were meshed on their own may cross (an interference fit, drawn).
+pub(super) fn check_overlaps(
+    bodies: &[Body],
+    declared: &[Interface],
+    mfile: &Path,
+    scale: f64,
+) -> Result<()> {
     let segs = segments(bodies);
     let grid = segment_grid(&segs, scale);
-    if let Some((i, j)) = first_crossing(&segs, &grid) {
+    let interference = |s: &Seg, t: &Seg| -> bool {
+        let (rs, rt) = (
+            bodies[s.body].elements[s.elem].role,
+            bodies[t.body].elements[t.elem].role,
+        );
+        match (rs, rt) {
+            (Role::Interface(k), Role::Interface(l)) => {
+                k == l && s.body != t.body && declared.get(k).is_some_and(|i| i.independent())
+            }
+            _ => false,
+        }
+    };
+    if let Some((i, j)) = first_crossing(&segs, &grid, &interference) {
         {
             let (s, t) = (&segs[i], &segs[j]);
             {
@@ -22,7 +41,12 @@ pub(super) fn check_overlaps(bodies: &[Body], mfile: &Path, scale: f64) -> Resul
                 let what = if s.body == t.body {
                     format!("the boundary of body \"{}\" crosses itself", b1.name)
                 } else {
-                    format!("bodies \"{}\" and \"{}\" overlap", b1.name, b2.name)
+                    format!(
+                        "bodies \"{}\" and \"{}\" overlap by {}",
+                        b1.name,
+                        b2.name,
+                        fmt_num(overlap_depth(b1, b2).max(overlap_depth(b2, b1)))
+                    )
                 };
                 return Err(Error::input(
                     mfile,
@@ -130,8 +154,13 @@ fn segment_grid(segs: &[Seg], scale: f64) -> HashMap<(i64, i64), Vec<usize>> {
     grid
 }
 
-/// The first pair of crossing segments in sweep order that share no mesh node, if any.
-fn first_crossing(segs: &[Seg], grid: &HashMap<(i64, i64), Vec<usize>>) -> Option<(usize, usize)> {
+/// The first pair of crossing segments in sweep order that share no mesh node, if any, but
+/// those `allowed` to cross.
+fn first_crossing(
+    segs: &[Seg],
+    grid: &HashMap<(i64, i64), Vec<usize>>,
+    allowed: &dyn Fn(&Seg, &Seg) -> bool,
+) -> Option<(usize, usize)> {
     let mut first: Option<(usize, usize)> = None;
     for members in grid.values() {
         for (k, &i) in members.iter().enumerate() {
@@ -144,13 +173,28 @@ fn first_crossing(segs: &[Seg], grid: &HashMap<(i64, i64), Vec<usize>>) -> Optio
                 if [t.ma, t.mb].contains(&s.ma) || [t.ma, t.mb].contains(&s.mb) {
                     continue;
                 }
-                if segments_cross(s.a, s.b, t.a, t.b) {
+                if segments_cross(s.a, s.b, t.a, t.b) && !allowed(s, t) {
                     first = Some((i, j));
                 }
             }
         }
     }
     first
+}
+
+/// How deep the boundary nodes of body `a` lie inside body `b`: the largest distance from
+/// such a node to b's boundary (0 when none lies inside).
+pub(super) fn overlap_depth(a: &Body, b: &Body) -> f64 {
+    a.nodes
+        .iter()
+        .filter(|&&x| b.winding_number(x) != 0)
+        .map(|&x| {
+            b.elements
+                .iter()
+                .map(|e| segment_distance(x, x, b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
+                .fold(f64::INFINITY, f64::min)
+        })
+        .fold(0.0, f64::max)
 }
 
 /// A body entirely inside another: probe a point just inside each body.

@@ -30,7 +30,10 @@ use raw::{
 };
 use set::apply_set;
 pub(crate) use set::shown_set;
-use spec::{body_spec, boundary_spec, interface_spec, mesh_spec, output_spec, solve_spec};
+use spec::{
+    body_spec, boundary_spec, contact_spec, interface_spec, mesh_spec, no_between, output_spec,
+    solve_spec,
+};
 
 /// Plane strain or plane stress (docs/scene.md §2, `plane`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -184,6 +187,18 @@ pub struct InterfaceSpec {
     pub tangential: Tangential,
     /// Coulomb coefficient μ ≥ 0 (with `tangential = "friction"`; 0 otherwise).
     pub friction: Scalar,
+    /// `between = [A, B]`: the interface joins Physical Curve A (on one body) and Physical
+    /// Curve B (on another) instead of being a Physical Curve of its own.
+    pub between: Option<[String; 2]>,
+}
+
+/// `[contact]`: interfaces found from the drawing (docs/scene.md).
+#[derive(Debug, Clone)]
+pub struct ContactSpec {
+    /// The bodies (a glob over their names) whose boundaries may touch one another.
+    pub bodies: crate::input::tables::Glob,
+    /// The largest gap (length units) at which facing boundaries pair up.
+    pub search: f64,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -333,6 +348,8 @@ pub struct Scene {
     pub bodies: Vec<BodySpec>,
     pub boundaries: Vec<BoundarySpec>,
     pub interfaces: Vec<InterfaceSpec>,
+    /// `[contact]`: find interfaces between the bodies' boundaries from the drawing.
+    pub contact: Option<ContactSpec>,
     /// Glob tables and `[defaults]`, resolved against the mesh by `model`.
     pub tables: Tables,
     pub solve: SolveSpec,
@@ -562,6 +579,12 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         }
     }
 
+    check_between(&interfaces, &boundaries, path)?;
+    let contact = match doc.get("contact") {
+        Some(v) => Some(contact_spec(typed(v, "contact", path)?, path)?),
+        None => None,
+    };
+
     let raw_solve: RawSolve = match doc.get("solve") {
         Some(v) => typed(v, "solve", path)?,
         None => RawSolve::default(),
@@ -587,10 +610,45 @@ fn validate(doc: &toml::Table, text: &str, path: &Path) -> Result<Scene> {
         bodies,
         boundaries,
         interfaces,
+        contact,
         tables,
         solve,
         output,
     })
+}
+
+/// The two Physical Curves of a `between` are neither boundaries nor interfaces of their own.
+fn check_between(
+    interfaces: &[InterfaceSpec],
+    boundaries: &[BoundarySpec],
+    path: &Path,
+) -> Result<()> {
+    for i in interfaces {
+        for g in i.between.iter().flatten() {
+            if boundaries.iter().any(|b| &b.name == g) {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "`interface.{}.between` names \"{g}\", which has a [boundary.{g}] \
+                         table: a Physical Curve is a boundary or a side of an interface; \
+                         remove one",
+                        i.name
+                    ),
+                ));
+            }
+            if let Some(o) = interfaces.iter().find(|o| o.name == *g) {
+                return Err(Error::input(
+                    path,
+                    format!(
+                        "`interface.{}.between` names \"{g}\", which is [interface.{}] \
+                         itself: a Physical Curve is a side of one interface only",
+                        i.name, o.name
+                    ),
+                ));
+            }
+        }
+    }
+    Ok(())
 }
 
 /// `plane`: "strain" or "stress", required.
@@ -667,6 +725,7 @@ fn interface_tables(
         if Glob::is_pattern(name) {
             let key = pattern_key("interface", name, path)?;
             let raw: RawInterface = typed(v, &key, path)?;
+            no_between(&raw, &key, path)?;
             tables.interfaces.push(Pattern {
                 glob: Glob::new(name),
                 spec: interface_spec(name, raw, &key, path)?,
@@ -687,6 +746,7 @@ fn interface_tables(
     }
     if let Some(v) = defaults_table(doc, "interface", path)? {
         let raw: RawInterface = typed(v, "defaults.interface", path)?;
+        no_between(&raw, "defaults.interface", path)?;
         tables.default_interface = Some(interface_spec("", raw, "defaults.interface", path)?);
     }
     Ok(interfaces)

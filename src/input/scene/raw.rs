@@ -49,6 +49,14 @@ pub(super) struct RawInterface {
     pub(super) gap: Option<RawScalar>,
     pub(super) tangential: Option<String>,
     pub(super) friction: Option<RawScalar>,
+    pub(super) between: Option<Vec<String>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct RawContact {
+    pub(super) bodies: Option<String>,
+    pub(super) search: f64,
 }
 
 #[derive(Deserialize, Default)]
@@ -99,7 +107,7 @@ pub(super) struct RawUnits {
     pub(super) force: Option<String>,
 }
 
-const TOP_KEYS: [&str; 11] = [
+const TOP_KEYS: [&str; 12] = [
     "title",
     "mesh",
     "plane",
@@ -109,20 +117,23 @@ const TOP_KEYS: [&str; 11] = [
     "boundary",
     "interface",
     "defaults",
+    "contact",
     "solve",
     "output",
 ];
+const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
 const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
 const UNITS_KEYS: [&str; 2] = ["length", "force"];
 const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
 const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
-const INTERFACE_KEYS: [&str; 6] = [
+const INTERFACE_KEYS: [&str; 7] = [
     "model",
     "initial",
     "cohesion",
     "gap",
     "tangential",
     "friction",
+    "between",
 ];
 const SOLVE_KEYS: [&str; 7] = [
     "method",
@@ -196,6 +207,9 @@ pub(super) fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {
     }
     if let Some(toml::Value::Table(t)) = doc.get("solve") {
         table_keys(t, "solve", &SOLVE_KEYS)?;
+    }
+    if let Some(toml::Value::Table(t)) = doc.get("contact") {
+        table_keys(t, "contact", &CONTACT_KEYS)?;
     }
     if let Some(toml::Value::Table(t)) = doc.get("output") {
         table_keys(t, "output", &OUTPUT_KEYS)?;

@@ -7,12 +7,13 @@ use crate::error::{Error, Result};
 use crate::input::expr::Scalar;
 
 use super::raw::{
-    choice_error, scalar, typed, RawBody, RawBoundary, RawInterface, RawOutput, RawSolve,
+    choice_error, scalar, typed, RawBody, RawBoundary, RawContact, RawInterface, RawOutput,
+    RawSolve,
 };
 use super::{
-    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, Frame, History, InitialState,
-    InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane, Quadrature, SectionSpec, SolveSpec,
-    Tangential, YOUNG_RANGE,
+    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame, History,
+    InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane, Quadrature,
+    SectionSpec, SolveSpec, Tangential, YOUNG_RANGE,
 };
 
 /// A body table (exact, glob or default) validated: `key` names it in messages.
@@ -304,6 +305,18 @@ pub(super) fn interface_spec(
              set initial = \"closed\" or remove `cohesion`"
         )));
     }
+    let between = match raw.between {
+        None => None,
+        Some(v) => match v.as_slice() {
+            [a, b] if a != b && !a.is_empty() && !b.is_empty() => Some([a.clone(), b.clone()]),
+            _ => {
+                return Err(err(format!(
+                    "`{key}.between` = {v:?} must name two different Physical Curves, one on \
+                     each body: between = [\"A_FACE\", \"B_FACE\"]"
+                )))
+            }
+        },
+    };
     Ok(InterfaceSpec {
         name: name.to_string(),
         model,
@@ -312,6 +325,47 @@ pub(super) fn interface_spec(
         gap,
         tangential,
         friction,
+        between,
+    })
+}
+
+/// `between` names two Physical Curves of one interface: not in a glob or default table.
+pub(super) fn no_between(raw: &RawInterface, key: &str, path: &Path) -> Result<()> {
+    if raw.between.is_some() {
+        return Err(Error::input(
+            path,
+            format!(
+                "`{key}.between` names the two Physical Curves of one interface: give it in a \
+                 named [interface.NAME] table, not in a pattern or default table"
+            ),
+        ));
+    }
+    Ok(())
+}
+
+/// `[contact]`: `search` a positive length, `bodies` a glob (all by default).
+pub(super) fn contact_spec(raw: RawContact, path: &Path) -> Result<ContactSpec> {
+    if !(raw.search.is_finite() && raw.search > 0.0) {
+        return Err(Error::input(
+            path,
+            format!(
+                "`contact.search` = {} must be a positive length: the largest gap at which \
+                 facing boundaries pair up (e.g. search = 1e-3)",
+                raw.search
+            ),
+        ));
+    }
+    let bodies = raw.bodies.unwrap_or_else(|| "*".to_string());
+    if bodies.is_empty() {
+        return Err(Error::input(
+            path,
+            "`contact.bodies` is empty: give the bodies whose boundaries may touch, as a \
+             glob over their names (\"*\" for all, \"brick_*\")",
+        ));
+    }
+    Ok(ContactSpec {
+        bodies: crate::input::tables::Glob::new(&bodies),
+        search: raw.search,
     })
 }
 

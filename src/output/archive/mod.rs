@@ -19,7 +19,10 @@
 //!                        and the attribute n_x
 //! /interfaces/<name>/    attributes name, index, body_a, body_b (names and *_index), model,
 //!                        initial, tangential, length; node_a, node_b, x, normal, tangent
-//!                        (p×2), s, gap, cohesion (p), elements (e×2 pair indices)
+//!                        (p×2), s, gap, cohesion (p), elements (e×2 pair indices); where
+//!                        the sides were meshed on their own, pairing/{offset (p+1), node,
+//!                        coef (the pairs' rows over B's nodes), weight, gap_geometry,
+//!                        segment (p), b_nodes}
 //! /contact/operators/    one dataset per interface operator of the final status
 //! /history/              load_step, load_factor, iteration, solver (R),
 //!                        detached_length (R×interfaces);

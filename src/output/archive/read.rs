@@ -7,7 +7,7 @@ use hdf5_metno as h5;
 use crate::input::scene::{Plane, Units};
 use crate::output::record::{
     Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, IterateRecord, MeshRecord,
-    RunRecord,
+    PairingRecord, RunRecord,
 };
 use crate::solution::{BodyField, History, HistoryRow, InterfaceResult, PairResult, PairStatus};
 
@@ -323,7 +323,8 @@ fn read_body(g: &Group) -> R<BodyRecord> {
 
 fn read_interface(g: &Group) -> R<InterfaceRecord> {
     let node_a = get_idx(g, "node_a", None)?;
-    let np = Some(node_a.len());
+    let n_pairs = node_a.len();
+    let np = Some(n_pairs);
     Ok(InterfaceRecord {
         name: attr_str(g, "name")?,
         body_a: attr_usize(g, "body_a_index")?,
@@ -340,6 +341,22 @@ fn read_interface(g: &Group) -> R<InterfaceRecord> {
         gap: get_f64(g, "gap", np)?,
         cohesion: get_f64(g, "cohesion", np)?,
         elements: get_idx_n::<2>(g, "elements")?,
+        pairing: if g.link_exists("pairing") {
+            let pg = ctx(g.group("pairing"), || "group pairing".into())?;
+            let offset = get_idx(&pg, "offset", np.map(|n| n + 1))?;
+            let node = get_idx(&pg, "node", None)?;
+            Some(PairingRecord {
+                coef: get_f64(&pg, "coef", Some(node.len()))?,
+                weight: get_f64(&pg, "weight", np)?,
+                gap_geometry: get_f64(&pg, "gap_geometry", np)?,
+                segment: get_opt_idx(&pg, "segment", n_pairs)?,
+                b_nodes: get_idx(&pg, "b_nodes", None)?,
+                offset,
+                node,
+            })
+        } else {
+            None
+        },
     })
 }
 

@@ -9,7 +9,7 @@ use ndarray::{ArrayViewD, IxDyn};
 use crate::input::scene::Units;
 use crate::output::record::{
     plane_name, Array, BodyOperators, BodyRecord, InterfaceRecord, IterateRecord, MeshRecord,
-    RunRecord, FORMAT_VERSION,
+    PairingRecord, RunRecord, FORMAT_VERSION,
 };
 use crate::solution::{History, HistoryRow, PairResult, PairStatus};
 
@@ -627,6 +627,63 @@ fn write_interface(g: &Group, index: usize, it: &InterfaceRecord, rec: &RunRecor
         "elements",
         &it.elements,
         "interface elements as (start pair, end pair) along body A",
+    )?;
+    match &it.pairing {
+        Some(pr) => write_pairing(&group(g, "pairing")?, pr, u),
+        None => Ok(()),
+    }
+}
+
+/// `/interfaces/<name>/pairing/`: the rows of an interface whose sides were meshed on their
+/// own (docs/formulation.md §5.6).
+fn write_pairing(g: &Group, pr: &PairingRecord, u: &U) -> R<()> {
+    put_idx(
+        g,
+        "offset",
+        &pr.offset,
+        "where each pair's partners start in node and coef (pairs + 1)",
+    )?;
+    put_idx(
+        g,
+        "node",
+        &pr.node,
+        "partner nodes of the pairs' rows in body B (body-local)",
+    )?;
+    put_f64(
+        g,
+        "coef",
+        &[pr.coef.len()],
+        &pr.coef,
+        "coefficients of the partners: u_B = sum coef u_B[node] (they sum to one per pair)",
+        "1",
+    )?;
+    put_f64(
+        g,
+        "weight",
+        &[pr.weight.len()],
+        &pr.weight,
+        "tributary length of each pair's rows (the part of body A facing body B)",
+        u.len(),
+    )?;
+    put_f64(
+        g,
+        "gap_geometry",
+        &[pr.gap_geometry.len()],
+        &pr.gap_geometry,
+        "normal gap of each pair measured from the geometry",
+        u.len(),
+    )?;
+    put_opt_idx(
+        g,
+        "segment",
+        &pr.segment,
+        "element of body B facing each pair (body-local; -1: none)",
+    )?;
+    put_idx(
+        g,
+        "b_nodes",
+        &pr.b_nodes,
+        "interface nodes of body B (body-local)",
     )
 }
 

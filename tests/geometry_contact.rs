@@ -1,0 +1,462 @@
+//! Contact from the geometry: interfaces whose two sides were drawn and meshed on their own
+//! (docs/formulation.md §5.6), end to end through `sgbem run`.
+//!
+//! * The patch test of Code_Aster's SSNP170 set-up (`geo/patch_nonmatching.geo`): two
+//!   stacked blocks, 10 elements under the interface and 7 above, and 13 / 5. On rollers
+//!   with the top pushed down, the exact state is a uniform oedometric compression; with
+//!   free sides and a pressure on the top, a uniform compression whose lateral displacement
+//!   is linear along the interface (a tied tangential row must reproduce it). The interface
+//!   pressure must be exact to 1e-8 and the tangential traction zero.
+//! * Hertz line contact from the drawing (`geo/hertz_drawn.geo`): a half cylinder drawn
+//!   0.01 above a flat block, meshed on its own, with no gap in the scene: the gap on the
+//!   axis as drawn, the half-width within one element and the peak pressure within 1 % of
+//!   Johnson's, for the load of the run.
+//!
+//! Run with `cargo test --release --test geometry_contact -- --nocapture` to see the numbers.
+
+mod support;
+
+use std::collections::HashMap;
+use std::path::Path;
+
+/// One row of `interfaces/<name>.csv`, by column name.
+struct Row(HashMap<String, String>);
+
+impl Row {
+    fn num(&self, key: &str) -> f64 {
+        self.0[key]
+            .parse()
+            .unwrap_or_else(|_| panic!("column {key}: not a number: {}", self.0[key]))
+    }
+    fn closed(&self) -> bool {
+        self.0["status"] == "closed"
+    }
+}
+
+fn read_rows(path: &Path) -> Vec<Row> {
+    let text = std::fs::read_to_string(path)
+        .unwrap_or_else(|e| panic!("cannot read {}: {e}", path.display()));
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap_or("")
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .filter(|l| !l.trim().is_empty())
+        .map(|l| {
+            Row(header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect())
+        })
+        .collect()
+}
+
+/// Runs a scene written into `dir`; returns the rows of interface `iface` and the summary.
+fn run(dir: &Path, scene: &str, iface: &str) -> (Vec<Row>, serde_json::Value) {
+    let s = support::write(dir, "scene.toml", scene);
+    let out = dir.join("out");
+    let (code, _, err) = support::sgbem(&[
+        "run",
+        s.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "sgbem run failed: {err}");
+    let summary: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    (
+        read_rows(&out.join("interfaces").join(format!("{iface}.csv"))),
+        summary,
+    )
+}
+
+fn geo(name: &str) -> String {
+    support::root()
+        .join("geo")
+        .join(format!("{name}.geo"))
+        .to_string_lossy()
+        .into_owned()
+}
+
+/// The largest deviation of the normal traction from the pressure −p, and the largest
+/// tangential traction.
+fn deviations(rows: &[Row], p: f64) -> (f64, f64) {
+    rows.iter().fold((0.0f64, 0.0f64), |(d, t), r| {
+        (
+            d.max((r.num("normal_traction") + p).abs()),
+            t.max(r.num("tangential_traction").abs()),
+        )
+    })
+}
+
+/// The SSNP170-like blocks with `n_lower` / `n_upper` elements across the interface.
+fn patch_scene(n_lower: usize, n_upper: usize, rest: &str) -> String {
+    format!(
+        "title = \"patch test, independent meshes\"\nplane = \"strain\"\n\
+         [mesh]\nfile = \"{}\"\nn_lower = {n_lower}\nn_upper = {n_upper}\n{rest}",
+        geo("patch_nonmatching")
+    )
+}
+
+/// Rollers on every side, the base held, the top pushed down by 0.01: every pair of the
+/// open, stick interface closes with the oedometric pressure p = d / (H/M_upper + H/M_lower).
+#[test]
+fn patch_test_on_rollers_gives_the_exact_pressure() {
+    let m = |e: f64, nu: f64| e * (1.0 - nu) / ((1.0 + nu) * (1.0 - 2.0 * nu));
+    let p = 0.01 / (1.0 / m(1000.0, 0.3) + 1.0 / m(3000.0, 0.2));
+    for (n_lower, n_upper) in [(10, 7), (13, 5)] {
+        let dir = support::tmpdir("patch_rollers");
+        let rest = "[body.upper]\nyoung = 1000.0\npoisson = 0.3\n\
+                    [body.lower]\nyoung = 3000.0\npoisson = 0.2\n\
+                    [boundary.top]\nuy = -0.01\ntx = 0.0\n\
+                    [boundary.base]\nuy = 0.0\ntx = 0.0\n\
+                    [boundary.left]\nux = 0.0\nty = 0.0\n\
+                    [boundary.right]\nux = 0.0\nty = 0.0\n\
+                    [interface.contact]\nmodel = \"unilateral\"\ninitial = \"open\"\n\
+                    tangential = \"stick\"\n[solve]\ntolerance = 1e-10\n";
+        let (rows, summary) = run(&dir, &patch_scene(n_lower, n_upper, rest), "contact");
+        assert_eq!(summary["status"], "converged");
+        // The rows are the upper block's nodes (the first body).
+        assert_eq!(rows.len(), n_upper + 1);
+        let (dev, tt) = deviations(&rows, p);
+        println!(
+            "patch {n_lower}/{n_upper} on rollers: p = {p:.12}, largest deviation {dev:.2e}, \
+             largest tangential traction {tt:.2e}"
+        );
+        assert!(rows.iter().all(Row::closed));
+        assert!(dev <= 1e-8 * p, "pressure off by {dev:e} (p = {p})");
+        assert!(tt <= 1e-8 * p, "tangential traction {tt:e}");
+        let resultant = summary["interfaces"]["contact"]["normal_resultant"]
+            .as_f64()
+            .unwrap();
+        assert!(
+            (resultant + 2.0 * p).abs() <= 1e-8 * p,
+            "resultant {resultant}"
+        );
+    }
+}
+
+/// Free right sides, the left ones on rollers, a pressure q on the top, one material: a
+/// uniform compression σ_yy = −q whose lateral displacement grows linearly along the
+/// interface. Bonded, and unilateral with stick (the tangential rows tie it), the pressure
+/// is q at every pair and the tangential traction zero.
+#[test]
+fn patch_test_with_free_sides_reproduces_a_linear_field() {
+    let q = 2.5;
+    for (n_lower, n_upper) in [(10, 7), (13, 5)] {
+        for joint in [
+            "model = \"bonded\"",
+            "model = \"unilateral\"\ninitial = \"closed\"\ntangential = \"stick\"",
+        ] {
+            let dir = support::tmpdir("patch_free");
+            let rest = format!(
+                "[body.upper]\nyoung = 1000.0\npoisson = 0.3\n\
+                 [body.lower]\nyoung = 1000.0\npoisson = 0.3\n\
+                 [boundary.top]\nty = -{q}\ntx = 0.0\n\
+                 [boundary.base]\nuy = 0.0\ntx = 0.0\n\
+                 [boundary.left]\nux = 0.0\nty = 0.0\n\
+                 [interface.contact]\n{joint}\n"
+            );
+            let (rows, _) = run(&dir, &patch_scene(n_lower, n_upper, &rest), "contact");
+            let (dev, tt) = deviations(&rows, q);
+            println!(
+                "patch {n_lower}/{n_upper}, free sides, {}: largest deviation {dev:.2e}, \
+                 largest tangential traction {tt:.2e}",
+                joint.lines().next().unwrap_or("")
+            );
+            assert!(rows.iter().all(Row::closed));
+            assert!(dev <= 1e-8 * q, "pressure off by {dev:e} (q = {q})");
+            assert!(tt <= 1e-8 * q, "tangential traction {tt:e}");
+        }
+    }
+}
+
+/// A half cylinder of radius 100 (a quarter disc in the half model) drawn 0.01 above a flat
+/// block, each meshed on its own (0.08 on the arc, 0.1 on the flat near the contact); the
+/// diametral plane pushed down by 0.2. The gap comes from the drawing alone.
+#[test]
+fn hertz_with_the_gap_from_the_drawing() {
+    let dir = support::tmpdir("hertz_drawn");
+    let (e1, n1, e2, n2, radius) = (1000.0, 0.3, 2000.0, 0.25, 100.0);
+    let scene = format!(
+        "title = \"Hertz from the drawing\"\nplane = \"strain\"\n\
+         [mesh]\nfile = \"{}\"\nh_fine = 0.1\n\
+         [body.cylinder]\nyoung = {e1}\npoisson = {n1}\n\
+         [body.flat]\nyoung = {e2}\npoisson = {n2}\n\
+         [boundary.top]\nuy = -0.2\ntx = 0.0\n\
+         [boundary.base]\nuy = 0.0\ntx = 0.0\n\
+         [boundary.symmetry]\nun = 0.0\ntt = 0.0\n\
+         [interface.contact]\nmodel = \"unilateral\"\ninitial = \"open\"\n\
+         tangential = \"slide\"\n\
+         [solve]\ntolerance = 1e-10\n[output]\nvtk = false\n",
+        geo("hertz_drawn")
+    );
+    let (mut rows, summary) = run(&dir, &scene, "contact");
+    assert_eq!(summary["status"], "converged");
+    rows.sort_by(|a, b| a.num("s").total_cmp(&b.num("s")));
+    // The rows are the cylinder's nodes; on the axis the gap is the drawn 0.01 (the arc's
+    // chords lie within 1e-5 of the circle there).
+    let axis = &rows[0];
+    assert!(axis.num("x").abs() < 1e-12);
+    assert!(
+        (axis.num("gap") - 0.01).abs() < 1e-6,
+        "gap on the axis {}",
+        axis.num("gap")
+    );
+    // Johnson (1985) for the load of the run (full model: twice the half's).
+    let e_star = 1.0 / ((1.0f64 - n1 * n1) / e1 + (1.0 - n2 * n2) / e2);
+    let p = -2.0
+        * summary["interfaces"]["contact"]["normal_resultant"]
+            .as_f64()
+            .unwrap();
+    let pi = std::f64::consts::PI;
+    let b = (4.0 * p * radius / (pi * e_star)).sqrt();
+    let p0 = 2.0 * p / (pi * b);
+    let last_closed = rows
+        .iter()
+        .filter(|r| r.closed())
+        .map(|r| r.num("x"))
+        .fold(f64::NEG_INFINITY, f64::max);
+    let first_open = rows
+        .iter()
+        .filter(|r| !r.closed())
+        .map(|r| r.num("x"))
+        .fold(f64::INFINITY, f64::min);
+    let peak = -rows
+        .iter()
+        .map(|r| r.num("normal_traction"))
+        .fold(f64::INFINITY, f64::min);
+    let element = first_open - last_closed;
+    println!(
+        "hertz from the drawing: P = {p:.5}: b Johnson {b:.4}, last closed pair {last_closed:.4}, \
+         first open {first_open:.4}; p0 Johnson {p0:.4}, peak {peak:.4} ({:+.3} %)",
+        100.0 * (peak / p0 - 1.0)
+    );
+    assert!(
+        last_closed < first_open,
+        "the closed pairs are not one zone"
+    );
+    assert!(
+        element < 0.1,
+        "elements of the arc near the contact: {element}"
+    );
+    assert!(
+        last_closed <= b && b <= first_open,
+        "half-width: Johnson b = {b} not between the last closed pair {last_closed} and the \
+         first open one {first_open}"
+    );
+    assert!(
+        (peak / p0 - 1.0).abs() <= 0.01,
+        "peak pressure {peak} vs Johnson p0 = {p0}"
+    );
+    let tangential = rows
+        .iter()
+        .map(|r| r.num("tangential_traction").abs())
+        .fold(0.0, f64::max);
+    assert_eq!(tangential, 0.0, "frictionless: tangential traction");
+}
+
+/// `geo/stacked_blocks.geo` with `nb` blocks and `[contact]`, the other keys in `rest`.
+fn stack_scene(nb: usize, mesh_extra: &str, rest: &str) -> String {
+    format!(
+        "title = \"stacked blocks found by [contact]\"\nplane = \"strain\"\n\
+         [mesh]\nfile = \"{}\"\nnb = {nb}\n{mesh_extra}\n\
+         [defaults.body]\nyoung = 1000.0\npoisson = 0.2\nbody_force = [0.0, -2.0]\n\
+         [boundary.base]\nux = 0.0\nuy = 0.0\n{rest}",
+        geo("stacked_blocks")
+    )
+}
+
+/// Five blocks drawn and meshed on their own (no joint with matching nodes, every other
+/// block shifted by a quarter of its width) under self-weight γ = 2: `[contact]` finds the
+/// four joints, and each carries the weight of the blocks above it, γ w h (5 − i), to 1e-8
+/// with no tangential resultant.
+#[test]
+fn contact_finds_the_joints_of_separately_drawn_blocks() {
+    let dir = support::tmpdir("stack_found");
+    let nb = 5;
+    let rest = "[contact]\nsearch = 1e-6\n\
+                [defaults.interface]\nmodel = \"unilateral\"\ntangential = \"friction\"\n\
+                friction = 0.6\n[output]\nvtk = false\n";
+    let scene = stack_scene(nb, "", rest);
+    let s = support::write(&dir, "check.toml", &scene);
+    let (code, text, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    for i in 1..nb {
+        let name = format!("contact[block_{}|block_{i}]", i - 1);
+        assert!(text.contains(&name), "check does not list {name}: {text}");
+    }
+    assert!(text.contains("found by [contact]"), "{text}");
+    let (_, summary) = run(&dir, &scene, "contact[block_0|block_1]");
+    assert_eq!(summary["status"], "converged");
+    let found = summary["interfaces"].as_object().unwrap();
+    assert_eq!(found.len(), nb - 1, "{found:?}");
+    for i in 1..nb {
+        let f = &summary["interfaces"][format!("contact[block_{}|block_{i}]", i - 1)];
+        let weight = 2.0 * 1.0 * 0.5 * (nb - i) as f64;
+        let n = f["normal_resultant"].as_f64().unwrap();
+        let t = f["tangential_resultant"].as_f64().unwrap();
+        println!(
+            "joint {i}: normal resultant {n:.12} (weight above {weight}), relative error \
+             {:.1e}; tangential {t:.1e}; open pairs {} of {}",
+            (n + weight).abs() / weight,
+            f["open_pairs"],
+            f["pairs"]
+        );
+        assert!(
+            (n + weight).abs() <= 1e-8 * weight,
+            "joint {i}: {n} vs {weight}"
+        );
+        assert!(t.abs() <= 1e-8 * weight, "joint {i}: tangential {t}");
+    }
+}
+
+/// A declared interface between the same boundaries wins over `[contact]`; a scene whose
+/// bodies overlap is refused naming both bodies and the depth; `[contact]` needs
+/// `[defaults.interface]`.
+#[test]
+fn contact_declared_interfaces_win_and_overlaps_are_refused() {
+    let dir = support::tmpdir("stack_rules");
+    let iface = "[defaults.interface]\nmodel = \"unilateral\"\n";
+    // Two blocks; the Physical Curve "faces" declared as the interface.
+    let scene = stack_scene(
+        2,
+        "",
+        &format!("[contact]\nsearch = 1e-6\n{iface}[interface.faces]\nmodel = \"bonded\"\n"),
+    );
+    let s = support::write(&dir, "declared.toml", &scene);
+    let (code, text, err) = support::sgbem(&["check", s.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let names: Vec<&str> = v["interfaces"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|i| i["name"].as_str().unwrap())
+        .collect();
+    assert_eq!(names, ["faces"]);
+
+    // Block 1 drawn 0.01 into block 0.
+    let scene = stack_scene(
+        2,
+        "sink = 0.01",
+        &format!("[contact]\nsearch = 1e-3\n{iface}"),
+    );
+    let s = support::write(&dir, "overlap.toml", &scene);
+    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("\"block_0\"")
+            && err.contains("\"block_1\"")
+            && err.contains("overlap by 0.01"),
+        "{err}"
+    );
+
+    // No [defaults.interface].
+    let scene = stack_scene(2, "", "[contact]\nsearch = 1e-6\n");
+    let s = support::write(&dir, "nodefault.toml", &scene);
+    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("[defaults.interface]"), "{err}");
+}
+
+/// `between = [A, B]`: the interface over two Physical Curves, one on each block; the same
+/// exact pressure as the curve that holds both. Its mistakes are input errors.
+#[test]
+fn between_names_the_two_sides_of_an_interface() {
+    let dir = support::tmpdir("between");
+    let q = 2.5;
+    let rest = |joint: &str| {
+        format!(
+            "[body.upper]\nyoung = 1000.0\npoisson = 0.3\n\
+             [body.lower]\nyoung = 1000.0\npoisson = 0.3\n\
+             [boundary.top]\nty = -{q}\n[boundary.base]\nuy = 0.0\n[boundary.left]\nux = 0.0\n\
+             [interface.joint]\n{joint}\n"
+        )
+    };
+    let good = rest("model = \"bonded\"\nbetween = [\"upper_bottom\", \"lower_top\"]");
+    let (rows, _) = run(&dir, &patch_scene(10, 7, &good), "joint");
+    let (dev, tt) = deviations(&rows, q);
+    assert!(dev <= 1e-8 * q && tt <= 1e-8 * q, "{dev:e} {tt:e}");
+    // The CSV says which body each row is at and the element of the other that it faces.
+    for r in &rows {
+        assert_eq!(r.0["side"], "upper");
+        let tag: usize = r.0["segment"].parse().expect("a gmsh element tag");
+        assert!(tag > 0);
+    }
+    // The archive keeps the pairing: per pair its row over the lower block's nodes, whose
+    // coefficients sum to one and reproduce the pair's position; the weights add up to the
+    // interface's length.
+    let rec = sgbem::output::archive::read_archive(&dir.join("out").join("archive.h5")).unwrap();
+    let it = &rec.interfaces[0];
+    let pr = it.pairing.as_ref().expect("the archive keeps the pairing");
+    assert_eq!(pr.offset.len(), 8 + 1);
+    let lower = &rec.bodies[it.body_b].nodes;
+    for j in 0..8 {
+        let (lo, hi) = (pr.offset[j], pr.offset[j + 1]);
+        let sum: f64 = pr.coef[lo..hi].iter().sum();
+        let x: f64 = (lo..hi).map(|m| pr.coef[m] * lower[pr.node[m]][0]).sum();
+        assert!(
+            (sum - 1.0).abs() < 1e-14 && (x - it.x[j][0]).abs() < 1e-12,
+            "pair {j}"
+        );
+    }
+    assert!((pr.weight.iter().sum::<f64>() - 2.0).abs() < 1e-12);
+    assert_eq!(pr.b_nodes.len(), 11);
+    for (joint, culprit) in [
+        (
+            "model = \"bonded\"\nbetween = [\"upper_bottom\", \"nope\"]",
+            "no Physical Curve named so",
+        ),
+        (
+            "model = \"bonded\"\nbetween = [\"upper_bottom\"]",
+            "must name two different Physical Curves",
+        ),
+    ] {
+        let s = support::write(&dir, "bad.toml", &patch_scene(10, 7, &rest(joint)));
+        let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+        assert_eq!(code, 2, "{err}");
+        assert!(
+            err.contains("interface.joint.between") && err.contains(culprit),
+            "{err}"
+        );
+    }
+}
+
+/// The shipped stone wall (`pipelines/stone_wall.toml` on `geo/stone_wall.geo`, written by
+/// `pipelines/stones.py`): `[contact]` finds every joint that the generator counted, and
+/// every stone is in one.
+#[test]
+fn stone_wall_joints_are_all_found() {
+    let geo_text = std::fs::read_to_string(geo("stone_wall")).unwrap();
+    let joints: usize = geo_text
+        .lines()
+        .find_map(|l| l.strip_prefix("// Joints: "))
+        .and_then(|l| l.split_whitespace().next())
+        .and_then(|n| n.parse().ok())
+        .expect("the generator's joint count in the .geo header");
+    let scene = support::root().join("pipelines/stone_wall.toml");
+    let (code, out, err) = support::sgbem(&["check", scene.to_str().unwrap(), "--json"]);
+    assert_eq!(code, 0, "{err}");
+    let v: serde_json::Value = serde_json::from_str(&out).unwrap();
+    let bodies = v["bodies"].as_array().unwrap().len();
+    let found = v["interfaces"].as_array().unwrap();
+    println!(
+        "stone wall: {bodies} bodies, {} interfaces found, {joints} joints drawn",
+        found.len()
+    );
+    assert!(bodies > 200);
+    assert_eq!(found.len(), joints);
+    let mut in_joint = std::collections::BTreeSet::new();
+    for i in found {
+        assert!(i["name"].as_str().unwrap().starts_with("contact["));
+        in_joint.insert(i["body_a"].as_str().unwrap().to_string());
+        in_joint.insert(i["body_b"].as_str().unwrap().to_string());
+    }
+    assert_eq!(in_joint.len(), bodies);
+}
