@@ -183,6 +183,110 @@ fn union_length(mut iv: Vec<(f64, f64)>) -> f64 {
     total
 }
 
+/// One element of side A with the pieces of B that face it.
+struct Elem {
+    ends: [usize; 2],
+    length: f64,
+    /// True when B covers the element whole.
+    full: bool,
+    pieces: Vec<Piece>,
+}
+
+/// What one node of A gathers: `M_jk` by B node, the covered integral of its hat, and the
+/// segment of B facing it (the nearest piece that holds the node's parameter, else the one
+/// with the largest share).
+struct Acc {
+    m: BTreeMap<usize, f64>,
+    weight: f64,
+    at_node: Option<(f64, usize)>,
+    largest: (f64, usize),
+}
+
+impl Default for Acc {
+    fn default() -> Acc {
+        Acc {
+            m: BTreeMap::new(),
+            weight: 0.0,
+            at_node: None,
+            largest: (0.0, usize::MAX),
+        }
+    }
+}
+
+impl Acc {
+    /// Adds the integrals of piece `c` of B over element `e` of A for the node at `end` of
+    /// e, with the dual basis or the hat (`dual`).
+    fn add(&mut self, e: &Elem, end: usize, dual: bool, c: &Piece, b: &Side) {
+        // Gauss–Legendre, 2 points on [0, 1]: exact for the quadratic products of two hats.
+        const G: [(f64, f64); 2] = [
+            (0.211_324_865_405_187_1, 0.5),
+            (0.788_675_134_594_812_9, 0.5),
+        ];
+        let [r, s] = b.segments[c.f];
+        let span = (c.hi - c.lo) * e.length;
+        let mut share = 0.0;
+        for (g, wg) in G {
+            let xi = c.lo + g * (c.hi - c.lo);
+            let hat = if end == 0 { 1.0 - xi } else { xi };
+            let basis = match (dual, end) {
+                (false, _) => hat,
+                (true, 0) => 2.0 - 3.0 * xi,
+                (true, _) => 3.0 * xi - 1.0,
+            };
+            let eta = (xi - c.xr) / (c.xs - c.xr);
+            let w = wg * span;
+            *self.m.entry(r).or_default() += w * basis * (1.0 - eta);
+            *self.m.entry(s).or_default() += w * basis * eta;
+            self.weight += w * hat;
+            share += w * hat;
+        }
+        if share > self.largest.0 {
+            self.largest = (share, c.f);
+        }
+        let xi_node = end as f64;
+        let holds = c.lo <= xi_node + 1e-9 && c.hi >= xi_node - 1e-9;
+        if holds && self.at_node.is_none_or(|(d, _)| c.dist.abs() < d) {
+            self.at_node = Some((c.dist.abs(), c.f));
+        }
+    }
+
+    /// The row of node n (None where B faces too little of its hat, `full_hat` long).
+    fn row(
+        self,
+        n: usize,
+        full_hat: f64,
+        a: &Side,
+        normal: [f64; 2],
+        b: &Side,
+    ) -> Option<MortarRow> {
+        // Shares at rounding level (a segment of B that meets A's hat at one end only) are
+        // left out.
+        let total: f64 = self.m.values().sum();
+        let kept: Vec<(usize, f64)> = self
+            .m
+            .iter()
+            .filter(|(_, &v)| v.abs() > 1e-12 * total.abs())
+            .map(|(&k, &v)| (k, v))
+            .collect();
+        let d: f64 = kept.iter().map(|c| c.1).sum();
+        if self.weight <= 1e-9 * full_hat || d <= 1e-9 * full_hat {
+            return None;
+        }
+        let coefs: Vec<(usize, f64)> = kept.into_iter().map(|(k, v)| (k, v / d)).collect();
+        let xj = a.x[n];
+        let gap = coefs
+            .iter()
+            .map(|&(k, c)| c * dot(sub(b.x[k], xj), normal))
+            .sum();
+        Some(MortarRow {
+            coefs,
+            weight: self.weight,
+            gap,
+            segment: self.at_node.map_or(self.largest.1, |(_, f)| f),
+        })
+    }
+}
+
 /// The rows of A's interface nodes over B (see the module documentation). `normals[n]` is
 /// A's unit normal at node n (only A's interface nodes are read); `cands(p, q)` lists the
 /// segments of B that may face A's segment `[p, q]` (all of them, or those a
@@ -194,17 +298,6 @@ pub fn mortar_rows(
     reach: Reach,
     cands: &dyn Fn([f64; 2], [f64; 2]) -> Vec<usize>,
 ) -> BTreeMap<usize, MortarRow> {
-    // Gauss–Legendre, 2 points on [0, 1]: exact for the quadratic products of two hats.
-    const G: [(f64, f64); 2] = [
-        (0.211_324_865_405_187_1, 0.5),
-        (0.788_675_134_594_812_9, 0.5),
-    ];
-    struct Elem {
-        ends: [usize; 2],
-        length: f64,
-        full: bool,
-        pieces: Vec<Piece>,
-    }
     let elems: Vec<Elem> = a
         .segments
         .iter()
@@ -223,98 +316,26 @@ pub fn mortar_rows(
     // A node is "whole" when every element of A at it is covered whole; an element uses the
     // dual basis when both its ends are whole.
     let mut whole: HashMap<usize, bool> = HashMap::new();
+    let mut full_hat: HashMap<usize, f64> = HashMap::new();
     for e in &elems {
         for n in e.ends {
-            let w = whole.entry(n).or_insert(true);
-            *w &= e.full;
+            *whole.entry(n).or_insert(true) &= e.full;
+            *full_hat.entry(n).or_default() += 0.5 * e.length;
         }
-    }
-    // Per A node: M_jk (by B node), the covered integral of its hat, and the segment of B
-    // facing it (nearest piece that holds the node's parameter, else the largest share).
-    struct Acc {
-        m: BTreeMap<usize, f64>,
-        weight: f64,
-        at_node: Option<(f64, usize)>,
-        largest: (f64, usize),
     }
     let mut acc: BTreeMap<usize, Acc> = BTreeMap::new();
     for e in &elems {
         let dual = e.ends.iter().all(|n| whole[n]);
         for (end, &n) in e.ends.iter().enumerate() {
-            let at = acc.entry(n).or_insert(Acc {
-                m: BTreeMap::new(),
-                weight: 0.0,
-                at_node: None,
-                largest: (0.0, usize::MAX),
-            });
-            let xi_node = end as f64;
+            let at = acc.entry(n).or_default();
             for c in &e.pieces {
-                let [r, s] = b.segments[c.f];
-                let span = (c.hi - c.lo) * e.length;
-                let mut share = 0.0;
-                for (g, wg) in G {
-                    let xi = c.lo + g * (c.hi - c.lo);
-                    let hat = if end == 0 { 1.0 - xi } else { xi };
-                    let basis = match (dual, end) {
-                        (false, _) => hat,
-                        (true, 0) => 2.0 - 3.0 * xi,
-                        (true, _) => 3.0 * xi - 1.0,
-                    };
-                    let eta = (xi - c.xr) / (c.xs - c.xr);
-                    let w = wg * span;
-                    *at.m.entry(r).or_default() += w * basis * (1.0 - eta);
-                    *at.m.entry(s).or_default() += w * basis * eta;
-                    at.weight += w * hat;
-                    share += w * hat;
-                }
-                if share > at.largest.0 {
-                    at.largest = (share, c.f);
-                }
-                let holds = c.lo <= xi_node + 1e-9 && c.hi >= xi_node - 1e-9;
-                if holds && at.at_node.is_none_or(|(d, _)| c.dist.abs() < d) {
-                    at.at_node = Some((c.dist.abs(), c.f));
-                }
+                at.add(e, end, dual, c, b);
             }
         }
     }
-    let mut out = BTreeMap::new();
-    for (n, at) in acc {
-        let full_hat: f64 = elems
-            .iter()
-            .filter(|e| e.ends.contains(&n))
-            .map(|e| 0.5 * e.length)
-            .sum();
-        // Shares at rounding level (a segment of B that meets A's hat at one end only)
-        // are left out.
-        let total: f64 = at.m.values().sum();
-        let kept: Vec<(usize, f64)> =
-            at.m.iter()
-                .filter(|(_, &v)| v.abs() > 1e-12 * total.abs())
-                .map(|(&k, &v)| (k, v))
-                .collect();
-        let d: f64 = kept.iter().map(|c| c.1).sum();
-        if at.weight <= 1e-9 * full_hat || d <= 1e-9 * full_hat {
-            continue;
-        }
-        let coefs: Vec<(usize, f64)> = kept.into_iter().map(|(k, v)| (k, v / d)).collect();
-        let xj = a.x[n];
-        let nj = normals[n];
-        let gap = coefs
-            .iter()
-            .map(|&(k, c)| c * dot(sub(b.x[k], xj), nj))
-            .sum();
-        let segment = at.at_node.map_or(at.largest.1, |(_, f)| f);
-        out.insert(
-            n,
-            MortarRow {
-                coefs,
-                weight: at.weight,
-                gap,
-                segment,
-            },
-        );
-    }
-    out
+    acc.into_iter()
+        .filter_map(|(n, at)| Some((n, at.row(n, full_hat[&n], a, normals[n], b)?)))
+        .collect()
 }
 
 /// A uniform grid over segments: each cell lists the segments that pass through it.

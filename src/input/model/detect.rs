@@ -14,7 +14,8 @@ use crate::input::pairing::{facing_pairs, BodySegment};
 use crate::input::scene::{Condition, ContactSpec, InterfaceSpec, Scene};
 
 use super::overlap::overlap_depth;
-use super::{fmt_num, fmt_point, split_name, Body, Interface, Part, Role};
+use super::{fmt_num, fmt_point, split_name, Body, Interface, Part, Role, FOUND_GROUP};
+use crate::input::tables::Resolved;
 
 /// One interface found: its table and the elements of each body (A first).
 pub(super) struct Found {
@@ -23,6 +24,28 @@ pub(super) struct Found {
     pub body_b: usize,
     pub elems_a: Vec<usize>,
     pub elems_b: Vec<usize>,
+}
+
+/// With `[contact]`: finds the interfaces, gives their elements the role of their interface
+/// and appends them to `found` (table, group [`FOUND_GROUP`], curves) and to `resolved`.
+pub(super) fn add_found(
+    scene: &Scene,
+    (bodies, parts): (&mut [Body], &[Part]),
+    found: &mut Vec<(InterfaceSpec, String, BTreeSet<i32>)>,
+    resolved: &mut Vec<Resolved>,
+) -> Result<()> {
+    let Some(cs) = &scene.contact else {
+        return Ok(());
+    };
+    for f in find_contacts(scene, cs, bodies, parts, &scene.path)? {
+        let curves = f.assign(found.len(), bodies);
+        resolved.push(Resolved {
+            table: "[defaults.interface]".into(),
+            group: f.spec.name.clone(),
+        });
+        found.push((f.spec, FOUND_GROUP.to_string(), curves));
+    }
+    Ok(())
 }
 
 impl Found {

@@ -99,36 +99,13 @@ pub(super) fn build_interface(
             weight: 0.0,
         };
         if let Some((rows, _)) = &rows {
-            let row = &rows[j];
-            pair.node_b = row.main;
-            pair.partners = row.partners.clone();
-            pair.segment = row.segment;
-            pair.gap_geometry = row.gap;
-            pair.weight = row.weight;
-            pair.gap = super::with_geometry(spec, row.gap, gap);
+            rows[j].apply(&mut pair, spec);
         }
         pairs.push(pair);
     }
 
     let (elements, b_nodes) = match rows {
-        // Sides meshed on their own: A's elements, each with the element of B facing its
-        // start.
-        Some((rows, b_side)) => (
-            sides
-                .elems_a
-                .iter()
-                .map(|&e| {
-                    let [s, t] = a.elements[e].nodes;
-                    let first = pair_of[&s];
-                    InterfaceElement {
-                        elem_a: e,
-                        elem_b: rows[first].segment.unwrap_or(sides.elems_b[0]),
-                        pairs: [first, pair_of[&t]],
-                    }
-                })
-                .collect(),
-            b_side,
-        ),
+        Some((rows, b_side)) => (sides.facing_elements(&rows, &pair_of), b_side),
         None => (sides.elements(&a_to_b, &pair_of)?, Vec::new()),
     };
     let length = sides.elems_a.iter().map(|&e| a.elements[e].length).sum();
@@ -338,6 +315,27 @@ impl Sides<'_> {
         Ok((order, s_of))
     }
 
+    /// Interface elements where the sides were meshed on their own: A's elements, each with
+    /// the element of B facing its start.
+    fn facing_elements(
+        &self,
+        rows: &[IndependentRow],
+        pair_of: &HashMap<usize, usize>,
+    ) -> Vec<InterfaceElement> {
+        self.elems_a
+            .iter()
+            .map(|&e| {
+                let [s, t] = self.a.elements[e].nodes;
+                let first = pair_of[&s];
+                InterfaceElement {
+                    elem_a: e,
+                    elem_b: rows[first].segment.unwrap_or(self.elems_b[0]),
+                    pairs: [first, pair_of[&t]],
+                }
+            })
+            .collect()
+    }
+
     /// Interface elements: A's element and B's element on the same node pair, which must
     /// lie on opposite sides.
     fn elements(
@@ -398,6 +396,18 @@ struct IndependentRow {
     segment: Option<usize>,
     gap: f64,
     weight: f64,
+}
+
+impl IndependentRow {
+    /// Gives `pair` this row over B's nodes; its gap takes the one measured from the geometry.
+    fn apply(&self, pair: &mut Pair, spec: &InterfaceSpec) {
+        pair.node_b = self.main;
+        pair.partners = self.partners.clone();
+        pair.segment = self.segment;
+        pair.gap_geometry = self.gap;
+        pair.weight = self.weight;
+        pair.gap = super::with_geometry(spec, self.gap, pair.gap);
+    }
 }
 
 /// The rows of A's interface nodes (in pair order) over B's interface elements, and B's
@@ -461,27 +471,7 @@ fn independent_sides(
             ),
         ));
     }
-    // B's interface nodes, in node order, with the frame opposite to B's averaged normal.
-    let mut b_normal: BTreeMap<usize, [f64; 2]> = BTreeMap::new();
-    for &e in elems_b {
-        let el = &b.elements[e];
-        for n in el.nodes {
-            let v = b_normal.entry(n).or_insert([0.0; 2]);
-            v[0] -= el.normal[0];
-            v[1] -= el.normal[1];
-        }
-    }
-    let b_side: Vec<SideNode> = b_normal
-        .iter()
-        .map(|(&node, &v)| {
-            let normal = unit(v);
-            SideNode {
-                node,
-                normal,
-                tangent: [-normal[1], normal[0]],
-            }
-        })
-        .collect();
+    let b_side = side_nodes(b, elems_b);
     let rows = order
         .iter()
         .map(|&n| match found.get(&n) {
@@ -513,6 +503,31 @@ fn independent_sides(
         })
         .collect();
     Ok((rows, b_side))
+}
+
+/// B's interface nodes, in node order, with the frame of their unknowns: the normal opposite
+/// to B's averaged outward normal (A's direction).
+fn side_nodes(b: &Body, elems_b: &[usize]) -> Vec<SideNode> {
+    let mut b_normal: BTreeMap<usize, [f64; 2]> = BTreeMap::new();
+    for &e in elems_b {
+        let el = &b.elements[e];
+        for n in el.nodes {
+            let v = b_normal.entry(n).or_insert([0.0; 2]);
+            v[0] -= el.normal[0];
+            v[1] -= el.normal[1];
+        }
+    }
+    b_normal
+        .iter()
+        .map(|(&node, &v)| {
+            let normal = unit(v);
+            SideNode {
+                node,
+                normal,
+                tangent: [-normal[1], normal[0]],
+            }
+        })
+        .collect()
 }
 
 /// The name of the part of Physical Curve `group` between bodies `a` and `b` (a first), when

@@ -612,17 +612,12 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
     }
     // Interfaces found from the drawing ([contact]) follow the declared ones.
     let declared = interfaces_found.len();
-    if let Some(cs) = &scene.contact {
-        for f in detect::find_contacts(scene, cs, &bodies, &parts, sfile)? {
-            let k = interfaces_found.len();
-            let curves = f.assign(k, &mut bodies);
-            resolved.push(Resolved {
-                table: "[defaults.interface]".into(),
-                group: f.spec.name.clone(),
-            });
-            interfaces_found.push((f.spec, FOUND_GROUP.to_string(), curves));
-        }
-    }
+    detect::add_found(
+        scene,
+        (&mut bodies, &parts),
+        &mut interfaces_found,
+        &mut resolved,
+    )?;
     part_statistics(&bodies, &mut parts);
 
     // --- Interfaces ---------------------------------------------------------------------------

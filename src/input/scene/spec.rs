@@ -305,18 +305,7 @@ pub(super) fn interface_spec(
              set initial = \"closed\" or remove `cohesion`"
         )));
     }
-    let between = match raw.between {
-        None => None,
-        Some(v) => match v.as_slice() {
-            [a, b] if a != b && !a.is_empty() && !b.is_empty() => Some([a.clone(), b.clone()]),
-            _ => {
-                return Err(err(format!(
-                    "`{key}.between` = {v:?} must name two different Physical Curves, one on \
-                     each body: between = [\"A_FACE\", \"B_FACE\"]"
-                )))
-            }
-        },
-    };
+    let between = between(raw.between, key, path)?;
     Ok(InterfaceSpec {
         name: name.to_string(),
         model,
@@ -327,6 +316,21 @@ pub(super) fn interface_spec(
         friction,
         between,
     })
+}
+
+/// `between`: two different, non-empty Physical Curve names.
+fn between(v: Option<Vec<String>>, key: &str, path: &Path) -> Result<Option<[String; 2]>> {
+    let Some(v) = v else { return Ok(None) };
+    match v.as_slice() {
+        [a, b] if a != b && !a.is_empty() && !b.is_empty() => Ok(Some([a.clone(), b.clone()])),
+        _ => Err(Error::input(
+            path,
+            format!(
+                "`{key}.between` = {v:?} must name two different Physical Curves, one on each \
+                 body: between = [\"A_FACE\", \"B_FACE\"]"
+            ),
+        )),
+    }
 }
 
 /// `between` names two Physical Curves of one interface: not in a glob or default table.
