@@ -1,6 +1,6 @@
 """`sgbem.open`: a run folder or its `archive.h5` as Python objects (h5py, pandas, pyvista).
 
-The archive layout is documented in `src/output/archive.rs`. What this module relies on:
+The archive layout is documented in `src/output/archive/mod.rs`. What this module relies on:
 `/bodies`, `/interfaces` and `/history/interfaces` carry an `order` attribute with their
 children's group names in run order, each child a `name` attribute with its real name;
 `/states/NNNN` hold every archived state with the bodies' nodes and elements and the
