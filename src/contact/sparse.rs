@@ -95,10 +95,9 @@ impl SparseSystem {
         trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
             .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
+        let (cp, ri) = (h.symbolic().col_ptr(), h.symbolic().row_idx());
         let diag = (0..size)
             .map(|k| {
-                let sym = h.symbolic();
-                let (cp, ri) = (sym.col_ptr(), sym.row_idx());
                 (cp[k]..cp[k + 1])
                     .find(|&p| ri[p] == k)
                     .map_or(0.0, |p| h.val()[p])
