@@ -14,7 +14,7 @@ SGBEM   := target/release/sgbem
 MESH_OPTS ?=
 SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
-PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest
+PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest jsonschema
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
@@ -47,7 +47,7 @@ setup:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
 	fi
 	@test -x $(PY) || python3 -m venv $(VENV)
-	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest" 2>/dev/null || \
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest, jsonschema" 2>/dev/null || \
 	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
 	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
 	@# The Python package sgbem (python/), editable: the venv follows the working tree.

@@ -122,6 +122,10 @@ enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
+    /// Print the JSON Schema of a scene file, for editors that check TOML against one, e.g.
+    /// `sgbem schema > sgbem-scene.schema.json` and `#:schema ./sgbem-scene.schema.json` as
+    /// the scene's first line (Taplo, Even Better TOML).
+    Schema,
 }
 
 /// Environment variable that marks the child process reading an archive.
@@ -330,6 +334,10 @@ fn main() -> ExitCode {
             let mut script = Vec::new();
             clap_complete::generate(shell, &mut Cli::command(), "sgbem", &mut script);
             out(&String::from_utf8_lossy(&script))
+        }
+        Command::Schema => {
+            let schema = sgbem::input::scene::schema::schema();
+            out(&format!("{:#}\n", schema))
         }
         Command::Check {
             scene,

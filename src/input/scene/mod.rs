@@ -21,6 +21,7 @@ use crate::input::expr::Scalar;
 use crate::input::tables::{Glob, Pattern, Tables};
 
 mod raw;
+pub mod schema;
 mod set;
 mod spec;
 

@@ -107,7 +107,7 @@ pub(super) struct RawUnits {
     pub(super) force: Option<String>,
 }
 
-const TOP_KEYS: [&str; 12] = [
+pub(super) const TOP_KEYS: [&str; 12] = [
     "title",
     "mesh",
     "plane",
@@ -121,12 +121,12 @@ const TOP_KEYS: [&str; 12] = [
     "solve",
     "output",
 ];
-const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
-const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
-const UNITS_KEYS: [&str; 2] = ["length", "force"];
-const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
-const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
-const INTERFACE_KEYS: [&str; 7] = [
+pub(super) const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
+pub(super) const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
+pub(super) const UNITS_KEYS: [&str; 2] = ["length", "force"];
+pub(super) const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
+pub(super) const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
+pub(super) const INTERFACE_KEYS: [&str; 7] = [
     "model",
     "initial",
     "cohesion",
@@ -135,7 +135,7 @@ const INTERFACE_KEYS: [&str; 7] = [
     "friction",
     "between",
 ];
-const SOLVE_KEYS: [&str; 7] = [
+pub(super) const SOLVE_KEYS: [&str; 7] = [
     "method",
     "tolerance",
     "max_iterations",
@@ -144,7 +144,7 @@ const SOLVE_KEYS: [&str; 7] = [
     "collapse",
     "quadrature",
 ];
-const OUTPUT_KEYS: [&str; 7] = [
+pub(super) const OUTPUT_KEYS: [&str; 7] = [
     "directory",
     "history",
     "operators",
@@ -153,7 +153,7 @@ const OUTPUT_KEYS: [&str; 7] = [
     "field",
     "section",
 ];
-const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
+pub(super) const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
 
 /// Rejects unknown keys anywhere in the document, suggesting the nearest valid one.
 pub(super) fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {
