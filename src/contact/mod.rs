@@ -48,7 +48,7 @@ use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
 use inner::*;
-use lcp::{Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
+use lcp::{status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
 pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
 
@@ -612,7 +612,7 @@ impl<'a> Session<'a> {
             let settled = !friction || change <= 1e-10;
             bound_changes.extend(friction.then_some(change));
             relax.update(outer, change);
-            bound = relax.apply(&bound, new_bound);
+            bound = relax.next(outer, status_key(&state), &bound, new_bound);
             if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
                 // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
                 // LCP through Lemke) and restart the fixed point from its bounds.
