@@ -498,9 +498,18 @@ fn write_stage(scene: &Scene, model: &Model) -> String {
         "archive.h5".into()
     });
     if scene.output.vtk {
-        write.push(match scene.output.history {
-            History::Full => "vtk (every iteration)".into(),
-            History::Final => "vtk (final state)".into(),
+        let compressed = if scene.output.vtk_style.compressed {
+            ", compressed"
+        } else {
+            ""
+        };
+        write.push(match (scene.output.history, scene.output.every) {
+            (History::Full, 1) => format!("vtk (every iteration{compressed})"),
+            (History::Full, n) => {
+                format!("vtk (every {n}-th iteration and the last of each load step{compressed})")
+            }
+            (History::Steps, _) => format!("vtk (the end of each load step{compressed})"),
+            (History::Final, _) => format!("vtk (final state{compressed})"),
         });
     }
     if !model.interfaces.is_empty() {

@@ -51,6 +51,28 @@ use crate::error::{Error, Result};
 use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
 use crate::solution::PairStatus;
 
+/// The names of the point arrays that the boundary and field files can hold, the choices of
+/// `output.vtk_fields` in alphabetical order (a name both files use selects it in both).
+pub const POINT_ARRAYS: [&str; 17] = [
+    "body",
+    "contact_status",
+    "displacement",
+    "normal",
+    "normal_opening",
+    "normal_traction",
+    "principal_direction",
+    "principal_stress",
+    "slip",
+    "stress",
+    "sxx",
+    "sxy",
+    "syy",
+    "szz",
+    "tangential_status",
+    "traction",
+    "von_mises",
+];
+
 /// File name of the boundary file of state `k`.
 pub(crate) fn boundary_name(k: usize) -> String {
     format!("boundary_{k:04}.vtu")
