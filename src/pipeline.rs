@@ -97,7 +97,9 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let model = model::build(&scene, &mesh, &mesh_path)?;
     let mut scene = scene;
     scene.solve.choose_method(model.unilateral_pair_count());
-    let plan = plan::plan(&scene, &model)?;
+    let scaled = crate::estimate::scale_history(&mut scene, &model);
+    let mut plan = plan::plan(&scene, &model)?;
+    plan.advice.extend(scaled);
     Ok(Loaded {
         scene,
         mesh,

@@ -471,16 +471,7 @@ impl Solve<'_> {
 fn postprocess_stage(scene: &Scene, model: &Model) -> String {
     let mut post = vec!["boundary stresses and interface tractions".to_string()];
     if scene.output.field {
-        let nodes: usize = model
-            .bodies
-            .iter()
-            .map(|b| {
-                let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
-                v.sort_unstable();
-                v.dedup();
-                v.len()
-            })
-            .sum();
+        let nodes: usize = model.bodies.iter().map(|b| b.triangle_node_count()).sum();
         post.push(format!("interior field at {nodes} triangle nodes"));
     }
     for s in &scene.output.sections {
