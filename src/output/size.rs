@@ -30,7 +30,7 @@
 //! pair once per load step; measured: 91 states where it says 106 on the clamped beam, 240
 //! for 1926 on the 105-brick wall, but 297 for 181 with the friction of the collapsing
 //! wall): the estimate of a full history is as rough as that count. With "steps" or "final"
-//! the number of states is exact, and the estimate within 20 % on the shipped scenes.
+//! the number of states is exact, and the estimate within 30 % on the shipped scenes.
 
 use crate::estimate::{fmt_bytes, BodySize, ContactEstimate};
 use crate::input::model::Model;
