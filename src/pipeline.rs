@@ -523,8 +523,8 @@ fn postprocess(
         factor,
     );
     // Each section's points are located, planned and integrated once (post::PointSampler),
-    // then evaluated for the final state and, with history = "full", for every recorded
-    // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
+    // then evaluated for the final state and, but with history = "final", for every kept
+    // state (the path, for plots like the paper's Fig. 6), the states in parallel.
     let full_path = scene.output.history != HistoryLevel::Final && !loads.is_empty();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
