@@ -357,15 +357,18 @@ fn main() -> ExitCode {
                     mesh_dir: Some(tmp.path().to_path_buf()),
                 },
             );
-            drop(tmp);
-            loaded.and_then(|l| {
+            // The report reads the mesh file's size (the outputs' estimate): the folder goes
+            // after it.
+            let printed = loaded.and_then(|l| {
                 out(&if json {
                     let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
                     format!("{v:#}\n")
                 } else {
                     report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
                 })
-            })
+            });
+            drop(tmp);
+            printed
         }
         Command::Run {
             scene,

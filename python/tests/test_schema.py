@@ -35,6 +35,9 @@ def test_shipped_scenes_are_valid(schema, path):
 def test_mistakes_are_marked(schema):
     good = tomllib.loads((ROOT / "pipelines/wall_collapse.toml").read_text())
     jsonschema.validate(good, schema)
+    ok = copy.deepcopy(good)
+    ok["output"].update(history="full", every=3, vtk="compressed", vtk_fields=["displacement"])
+    jsonschema.validate(ok, schema)
     bad = []
     for change in (
         lambda s: s["defaults"]["interface"].update(frition=0.8),   # unknown key
@@ -44,6 +47,9 @@ def test_mistakes_are_marked(schema):
         lambda s: s["output"].update(vtk="yes"),
         lambda s: s.update(plane="3d"),
         lambda s: s.update(sovle={}),
+        lambda s: s["output"].update(history="steps", every=0),
+        lambda s: s["output"].update(vtk="zip"),
+        lambda s: s["output"].update(vtk_fields=["displacment"]),
     ):
         s = copy.deepcopy(good)
         change(s)

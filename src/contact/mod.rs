@@ -117,6 +117,9 @@ pub struct RecordedState {
     /// Body force of each body at this step (before the load factor).
     pub body_force: Vec<Option<[f64; 2]>>,
     pub iteration: usize,
+    /// The state's number in the run's full history (every iteration of every load step,
+    /// counted from 0): the iteration that the archive and the VTK files give it.
+    pub index: usize,
     pub fields: Vec<BodyField>,
     pub interfaces: Vec<InterfaceResult>,
 }
@@ -763,6 +766,7 @@ impl<'a> Session<'a> {
                     time: self.model.time,
                     body_force: self.body_forces(),
                     iteration: iterations,
+                    index: 0,
                     fields: fields.clone(),
                     interfaces: interfaces.clone(),
                 });
@@ -833,6 +837,7 @@ impl<'a> Session<'a> {
                 time: self.model.time,
                 body_force: self.body_forces(),
                 iteration: it,
+                index: 0,
                 fields: f,
                 interfaces: i,
             });

@@ -92,12 +92,22 @@ pub(super) struct RawSection {
 pub(super) struct RawOutput {
     pub(super) directory: Option<String>,
     pub(super) history: Option<String>,
+    pub(super) every: Option<i64>,
     pub(super) operators: Option<bool>,
     pub(super) compress: Option<bool>,
-    pub(super) vtk: Option<bool>,
+    pub(super) vtk: Option<RawVtk>,
+    pub(super) vtk_fields: Option<Vec<String>>,
     pub(super) field: Option<bool>,
     #[serde(default)]
     pub(super) section: Vec<RawSection>,
+}
+
+/// `output.vtk`: `true`, `false` or `"compressed"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum RawVtk {
+    Flag(bool),
+    Mode(String),
 }
 
 #[derive(Deserialize, Default)]
@@ -144,12 +154,14 @@ pub(super) const SOLVE_KEYS: [&str; 7] = [
     "collapse",
     "quadrature",
 ];
-pub(super) const OUTPUT_KEYS: [&str; 7] = [
+pub(super) const OUTPUT_KEYS: [&str; 9] = [
     "directory",
     "history",
+    "every",
     "operators",
     "compress",
     "vtk",
+    "vtk_fields",
     "field",
     "section",
 ];

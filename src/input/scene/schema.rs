@@ -187,7 +187,17 @@ fn output() -> Value {
             ("directory", typed("string", "the run folder")),
             (
                 "history",
-                choice(&["full", "final"], "which contact iterations are kept"),
+                choice(
+                    &["full", "steps", "final"],
+                    "which contact iterations are kept: all, the end of each load step, the last",
+                ),
+            ),
+            (
+                "every",
+                json!({
+                    "type": "integer", "minimum": 1,
+                    "description": "with history = \"full\": keep every n-th iteration and the last",
+                }),
             ),
             (
                 "operators",
@@ -197,7 +207,21 @@ fn output() -> Value {
                 "compress",
                 typed("boolean", "deflate the archive's large datasets"),
             ),
-            ("vtk", typed("boolean", "write the VTK files")),
+            (
+                "vtk",
+                json!({
+                    "oneOf": [{ "type": "boolean" }, { "enum": ["compressed"] }],
+                    "description": "write the VTK files (\"compressed\": zlib-compressed arrays)",
+                }),
+            ),
+            (
+                "vtk_fields",
+                json!({
+                    "type": "array", "minItems": 1, "uniqueItems": true,
+                    "items": { "enum": crate::output::vtk::POINT_ARRAYS },
+                    "description": "the VTK point arrays to write (default: all)",
+                }),
+            ),
             (
                 "field",
                 typed(
