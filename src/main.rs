@@ -101,6 +101,18 @@ enum Command {
         /// for a .geo you have read and trust.
         #[arg(long)]
         allow_geo_shell: bool,
+        /// Print the points (number from 1, run folder, `--set` arguments; tab separated)
+        /// and run nothing.
+        #[arg(long, conflicts_with_all = ["point", "table"])]
+        list: bool,
+        /// Run point K (from 1) alone, e.g. `--point $SLURM_ARRAY_TASK_ID` in a job array;
+        /// no table (see `--table`).
+        #[arg(long, value_name = "K", conflicts_with = "table")]
+        point: Option<usize>,
+        /// Tabulate the point folders already written (after a job array) into sweep.csv and
+        /// sweep.md, running nothing; exit_code is 0 for a converged run, 3 otherwise.
+        #[arg(long)]
+        table: bool,
     },
     /// Print what an archive holds.
     Inspect {
@@ -409,28 +421,18 @@ fn main() -> ExitCode {
             jobs,
             out,
             allow_geo_shell,
-        } => sgbem::sweep::sweep(&scene, &set, jobs, &out, allow_geo_shell).and_then(|w| {
-            println!("sweep table in {}", w.table.display());
-            if w.interrupted {
-                err_line(&format!(
-                    "sgbem: interrupted: the sweep ended its runs; {} lists the points that \
-                     finished",
-                    w.table.display()
-                ));
-                interrupted = true;
-                return Ok(());
-            }
-            if w.failed > 0 {
-                Err(sgbem::error::Error::numerical(format!(
-                    "{} point(s) of the sweep failed: see the exit_code and status \
-                     columns of {}",
-                    w.failed,
-                    w.table.display()
-                )))
-            } else {
-                Ok(())
-            }
-        }),
+            list,
+            point,
+            table,
+        } => {
+            let mode = match (list, point, table) {
+                (true, _, _) => sgbem::sweep::Mode::List,
+                (_, Some(k), _) => sgbem::sweep::Mode::Point(k),
+                (_, _, true) => sgbem::sweep::Mode::Table,
+                _ => sgbem::sweep::Mode::All,
+            };
+            sweep_command(&scene, &set, jobs, &out, allow_geo_shell, mode, &mut interrupted)
+        }
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
         }
@@ -455,4 +457,51 @@ fn main() -> ExitCode {
 fn fail(e: &Error) -> ExitCode {
     err_line(&format!("sgbem: {e}"));
     ExitCode::from(e.exit_code() as u8)
+}
+
+/// `sgbem sweep` in `mode`: the runs, the table, and the exit status of the sweep (130 when
+/// a signal ended it, through `interrupted`).
+#[allow(clippy::too_many_arguments)]
+fn sweep_command(
+    scene: &std::path::Path,
+    set: &[String],
+    jobs: usize,
+    out: &std::path::Path,
+    allow_geo_shell: bool,
+    mode: sgbem::sweep::Mode,
+    interrupted: &mut bool,
+) -> sgbem::error::Result<()> {
+    let w = sgbem::sweep::sweep(scene, set, jobs, out, allow_geo_shell, mode)?;
+    match mode {
+        sgbem::sweep::Mode::List => return Ok(()),
+        sgbem::sweep::Mode::Point(k) => {
+            println!("results in {}", w.table.display());
+            if w.failed > 0 {
+                return Err(sgbem::error::Error::numerical(format!(
+                    "point {k} of the sweep did not converge or failed: see {}",
+                    w.table.display()
+                )));
+            }
+            return Ok(());
+        }
+        _ => {}
+    }
+    println!("sweep table in {}", w.table.display());
+    if w.interrupted {
+        err_line(&format!(
+            "sgbem: interrupted: the sweep ended its runs; {} lists the points that finished",
+            w.table.display()
+        ));
+        *interrupted = true;
+        return Ok(());
+    }
+    if w.failed > 0 {
+        Err(sgbem::error::Error::numerical(format!(
+            "{} point(s) of the sweep failed: see the exit_code and status columns of {}",
+            w.failed,
+            w.table.display()
+        )))
+    } else {
+        Ok(())
+    }
 }

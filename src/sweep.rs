@@ -156,14 +156,29 @@ unsafe extern "C" {
 const SIGTERM: i32 = 15;
 const PR_SET_PDEATHSIG: i32 = 1;
 
+/// What `sgbem sweep` does with its points.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Mode {
+    /// Run every point `jobs` at a time and tabulate them.
+    All,
+    /// Print the points (number, folder, `--set` arguments) and run nothing.
+    List,
+    /// Run point K (from 1) alone, e.g. one task of a SLURM job array; no table.
+    Point(usize),
+    /// Tabulate the point folders already written (after a job array), run nothing.
+    Table,
+}
+
 /// Runs the sweep: validates every point's scene first (exit 2 before any run), then runs
-/// the points `jobs` at a time and writes `out/sweep.csv` and `out/sweep.md`.
+/// the points `jobs` at a time and writes `out/sweep.csv` and `out/sweep.md` (`Mode::All`),
+/// or one point, the list or the table alone (`mode`).
 pub fn sweep(
     scene_path: &Path,
     sets: &[String],
     jobs: usize,
     out: &Path,
     allow_geo_shell: bool,
+    mode: Mode,
 ) -> Result<Swept> {
     if !scene_path.is_file() {
         return Err(Error::input(
@@ -188,6 +203,29 @@ pub fn sweep(
         if let Some(mesh) = sc.mesh.as_deref().filter(|m| crate::input::gmsh::is_geo(m)) {
             crate::input::gmsh::check_commands(mesh)?;
         }
+    }
+    match mode {
+        Mode::List => return Ok(list(&pts, out)),
+        Mode::Point(k) => return one_point(scene_path, &pts, k, out, allow_geo_shell),
+        Mode::Table => {
+            if !out.is_dir() {
+                return Err(Error::input(
+                    out,
+                    "no sweep folder here to tabulate: run its points first (--point K)",
+                ));
+            }
+            let codes = finished(&pts, out);
+            let (csv, md, failed) = table(&axes, &pts, &codes, out);
+            super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
+            let path = out.join("sweep.csv");
+            super::output::write_atomic(&path, csv.as_bytes())?;
+            return Ok(Swept {
+                table: path,
+                failed,
+                interrupted: false,
+            });
+        }
+        Mode::All => {}
     }
     std::fs::create_dir_all(out)
         .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
@@ -216,6 +254,88 @@ pub fn sweep(
         failed,
         interrupted: codes.iter().any(Option::is_none),
     })
+}
+
+/// `--list`: one line per point, its number (from 1), folder and `--set` arguments, tab
+/// separated, on stdout.
+fn list(pts: &[Point], out: &Path) -> Swept {
+    for (k, p) in pts.iter().enumerate() {
+        let sets: Vec<String> = p.sets.iter().map(|s| format!("--set '{s}'")).collect();
+        println!("{}\t{}\t{}", k + 1, out.join(&p.name).display(), sets.join(" "));
+    }
+    Swept {
+        table: PathBuf::new(),
+        failed: 0,
+        interrupted: false,
+    }
+}
+
+/// `--point K`: runs point K (from 1) into its folder of the sweep, as `Mode::All` would,
+/// without the sweep's lock or table (each run locks its own folder, so the tasks of a job
+/// array run side by side); its exit code is the result's.
+fn one_point(
+    scene_path: &Path,
+    pts: &[Point],
+    k: usize,
+    out: &Path,
+    allow_geo_shell: bool,
+) -> Result<Swept> {
+    let Some(p) = k.checked_sub(1).and_then(|i| pts.get(i)) else {
+        return Err(Error::input(
+            scene_path,
+            format!(
+                "--point {k}: the sweep has points 1 to {}; `sgbem sweep ... --list` lists them",
+                pts.len()
+            ),
+        ));
+    };
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
+    let exe = std::env::current_exe()
+        .map_err(|e| Error::io(scene_path, format!("cannot find the sgbem program: {e}")))?;
+    let mut cmd = run_command(&exe, scene_path, p, out, allow_geo_shell);
+    eprintln!("sweep: point {k} of {}: {}", pts.len(), p.name);
+    let status = cmd
+        .status()
+        .map_err(|e| Error::io(scene_path, format!("cannot start the run: {e}")))?;
+    let code = status.code().unwrap_or(-1);
+    Ok(Swept {
+        table: out.join(&p.name),
+        failed: usize::from(code != 0),
+        interrupted: false,
+    })
+}
+
+/// The `sgbem run` of point `p` into its folder of the sweep `out`.
+fn run_command(
+    exe: &Path,
+    scene_path: &Path,
+    p: &Point,
+    out: &Path,
+    allow_geo_shell: bool,
+) -> Command {
+    let mut cmd = Command::new(exe);
+    cmd.arg("run").arg(scene_path);
+    for s in &p.sets {
+        cmd.arg("--set").arg(s);
+    }
+    cmd.arg("--out").arg(out.join(&p.name)).arg("--quiet");
+    if allow_geo_shell {
+        cmd.arg("--allow-geo-shell");
+    }
+    cmd
+}
+
+/// `--table`: the exit code of each point from the summary its run left (0 converged, 3
+/// not converged), None where there is none (not run, or refused with exit 2).
+fn finished(pts: &[Point], out: &Path) -> Vec<Option<i32>> {
+    pts.iter()
+        .map(|p| {
+            let text = std::fs::read_to_string(out.join(&p.name).join("summary.json")).ok()?;
+            let v: serde_json::Value = serde_json::from_str(&text).ok()?;
+            Some(if v["status"] == "converged" { 0 } else { 3 })
+        })
+        .collect()
 }
 
 /// The list of the points a sweep wrote, in its folder.
@@ -272,15 +392,7 @@ fn run_points(
     while (next < pts.len() && !STOP.load(Ordering::SeqCst)) || !running.is_empty() {
         while running.len() < jobs && next < pts.len() && !STOP.load(Ordering::SeqCst) {
             let p = &pts[next];
-            let mut cmd = Command::new(exe);
-            cmd.arg("run").arg(scene_path);
-            for s in &p.sets {
-                cmd.arg("--set").arg(s);
-            }
-            cmd.arg("--out").arg(out.join(&p.name)).arg("--quiet");
-            if allow_geo_shell {
-                cmd.arg("--allow-geo-shell");
-            }
+            let mut cmd = run_command(exe, scene_path, p, out, allow_geo_shell);
             if std::env::var_os("RAYON_NUM_THREADS").is_none() {
                 cmd.env("RAYON_NUM_THREADS", &threads);
             }

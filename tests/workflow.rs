@@ -347,6 +347,56 @@ points = 5
     );
 }
 
+/// A sweep as a job array: `--list` numbers the points, `--point K` runs one (as a SLURM
+/// task would, side by side with the others), `--table` tabulates what has run; the table
+/// of all points equals the one of the whole sweep.
+#[test]
+fn sweep_points_run_one_by_one_and_tabulate_as_the_whole_sweep() {
+    let dir = tmpdir("workflow-sweep-points");
+    let scene = geo_scene(&dir, "");
+    let s = scene.to_str().unwrap();
+    let sweep = |out: &Path, extra: &[&str]| {
+        let mut args = vec![
+            "sweep",
+            s,
+            "--set",
+            "boundary.top.ty=-1,-2,-3",
+            "--out",
+            out.to_str().unwrap(),
+        ];
+        args.extend_from_slice(extra);
+        sgbem(&args)
+    };
+    let whole = dir.join("whole");
+    assert_eq!(sweep(&whole, &[]).0, 0);
+    let arr = dir.join("array");
+    let (code, listed, err) = sweep(&arr, &["--list"]);
+    assert_eq!(code, 0, "{err}");
+    let lines: Vec<&str> = listed.lines().collect();
+    assert_eq!(lines.len(), 3, "{listed}");
+    assert!(lines[1].starts_with("2\t") && lines[1].contains("ty=-2"), "{listed}");
+    assert!(lines[1].contains("--set 'boundary.top.ty=-2'"), "{listed}");
+    assert!(!arr.exists(), "--list runs nothing");
+    for bad in ["0", "4"] {
+        let (code, _, err) = sweep(&arr, &["--point", bad]);
+        assert_eq!(code, 2, "{err}");
+        assert!(err.contains("points 1 to 3") && err.contains("--list"), "{err}");
+    }
+    let (code, _, err) = sweep(&arr, &["--point", "2"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(arr.join("ty=-2").join("summary.json").is_file());
+    assert!(!arr.join("ty=-1").exists() && !arr.join("ty=-3").exists());
+    assert_eq!(sweep(&arr, &["--table"]).0, 0);
+    let partial = std::fs::read_to_string(arr.join("sweep.csv")).unwrap();
+    assert!(partial.lines().nth(1).unwrap().contains("not finished"), "{partial}");
+    for k in ["3", "1"] {
+        assert_eq!(sweep(&arr, &["--point", k]).0, 0);
+    }
+    assert_eq!(sweep(&arr, &["--table"]).0, 0);
+    let read = |d: &Path| std::fs::read_to_string(d.join("sweep.csv")).unwrap();
+    assert_eq!(read(&arr), read(&whole));
+}
+
 #[test]
 fn sweep_runs_every_point_and_tabulates() {
     let dir = tmpdir("workflow-sweep");
