@@ -137,12 +137,20 @@ impl InterfaceFigures {
 pub struct CurveFigures {
     pub closed_length: Option<f64>,
     pub detached_length: Option<f64>,
+    /// With friction: the largest accumulated slip of the parts, and the sums of their
+    /// stick and slip lengths (absent without friction).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub max_accumulated_slip: Option<f64>,
     pub max_normal_traction: Option<f64>,
     pub min_normal_traction: Option<f64>,
     pub normal_resultant: Option<f64>,
     pub open_pairs: u64,
     pub pairs: u64,
     pub parts: Vec<String>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub slip_length: Option<f64>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stick_length: Option<f64>,
     pub tangential_resultant: Option<f64>,
 }
 
@@ -321,14 +329,26 @@ pub fn interface_curves(
         let entry = m.entry(it.group.clone()).or_insert_with(|| CurveFigures {
             closed_length: Some(0.0),
             detached_length: Some(0.0),
+            max_accumulated_slip: None,
             max_normal_traction: None,
             min_normal_traction: None,
             normal_resultant: Some(0.0),
             open_pairs: 0,
             pairs: 0,
             parts: Vec::new(),
+            slip_length: None,
+            stick_length: None,
             tangential_resultant: Some(0.0),
         });
+        if let Some(g) = fig {
+            let add = |a: Option<f64>, b: Option<f64>| b.map(|b| a.unwrap_or(0.0) + b).or(a);
+            entry.stick_length = add(entry.stick_length, g.stick_length);
+            entry.slip_length = add(entry.slip_length, g.slip_length);
+            entry.max_accumulated_slip = g
+                .max_accumulated_slip
+                .map(|b| entry.max_accumulated_slip.unwrap_or(0.0).max(b))
+                .or(entry.max_accumulated_slip);
+        }
         entry.parts.push(it.spec.name.clone());
         for (sum, part) in [
             (&mut entry.detached_length, get(|g| g.detached_length)),
@@ -442,12 +462,15 @@ mod tests {
                 CurveFigures {
                     closed_length: Some(1.0),
                     detached_length: None,
+                    max_accumulated_slip: Some(0.5),
                     max_normal_traction: Some(2.0),
                     min_normal_traction: Some(-2.0),
                     normal_resultant: Some(3.0),
                     open_pairs: 1,
                     pairs: 2,
                     parts: vec!["joint[A|B]".into()],
+                    slip_length: Some(0.25),
+                    stick_length: Some(0.75),
                     tangential_resultant: Some(0.0),
                 },
             )])),
