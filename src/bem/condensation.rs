@@ -20,6 +20,7 @@ use faer::Mat;
 use crate::bem::assembly::{BodySystem, Unknown};
 use crate::error::{Error, Result};
 use crate::input::model::Model;
+use crate::linalg::jacobi_scaling;
 use crate::solution::BodyField;
 
 /// A body condensed onto its interface unknowns.
@@ -45,16 +46,7 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
     let nx0 = n - nx;
     let g = &sys.g;
     // Jacobi scaling of A.
-    let s: Vec<f64> = (0..nx)
-        .map(|i| {
-            let d = g[(i, i)].abs();
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let s = jacobi_scaling((0..nx).map(|i| g[(i, i)]));
     let a = Mat::<f64>::from_fn(nx, nx, |i, j| s[i] * g[(i, j)] * s[j]);
     // Right-hand sides [A0 | L̂], scaled by rows.
     let rhs = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| {

@@ -24,6 +24,7 @@ use crate::bem::condensation::Condensed;
 use crate::bem::operators::X0Map;
 use crate::error::{Error, Result};
 use crate::input::model::Model;
+use crate::linalg::jacobi_scaling;
 use crate::solution::PairStatus;
 
 /// Where the unknowns of one pair component sit in Y.
@@ -165,16 +166,7 @@ pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
     if n == 0 {
         return Ok((Vec::new(), 0.0));
     }
-    let s: Vec<f64> = (0..n)
-        .map(|i| {
-            let d = k[(i, i)].abs();
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
+    let s = jacobi_scaling((0..n).map(|i| k[(i, i)]));
     let a = Mat::<f64>::from_fn(n, n, |i, j| s[i] * k[(i, j)] * s[j]);
     let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -s[i] * l[i]);
     let lu = a.partial_piv_lu();
