@@ -121,11 +121,6 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
 }
 
 impl Condensed {
-    /// X = R X0 + r.
-    pub fn recover_x(&self, x0: &[f64]) -> Vec<f64> {
-        self.recover_x_scaled(x0, 1.0)
-    }
-
     /// X = R X0 + factor·r (loads scaled by `factor`).
     pub fn recover_x_scaled(&self, x0: &[f64], factor: f64) -> Vec<f64> {
         if self.recover.nrows() == 0 {

@@ -195,18 +195,6 @@ pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
     Ok(((0..n).map(|i| s[i] * y[(i, 0)]).collect(), residual))
 }
 
-/// X0 of body `b` from Y.
-pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
-    let mut x0 = vec![0.0; n_x0];
-    for &(xi, yi, si) in &layout.select[b] {
-        x0[xi] = si * y[yi];
-    }
-    for &(xi, h) in &layout.offset[b] {
-        x0[xi] += h;
-    }
-    x0
-}
-
 /// The interface system with the shared displacements of the closed pairs eliminated
 /// ([paper eqs. 21–24]): `K00` and `L00` over `t = [open; forces]`, with the Y indices of
 /// both parts.
