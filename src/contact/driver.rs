@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
-use crate::contact::{status_differences, RecordedState, Session, Solver, StepState};
+use crate::contact::{status_differences, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
 use crate::input::scene::{History as HistoryLevel, Method, Scene};
@@ -46,7 +46,7 @@ pub struct ContactRun {
     /// positive): the force the complementarity conditions hold.
     pub nodal_force: Vec<Vec<f64>>,
     pub history: History,
-    pub states: Vec<RecordedState>,
+    pub states: Vec<Iterate>,
     pub contact: serde_json::Value,
     /// The QP's solution at the last load step, where it ran.
     pub qp: Option<QpCheck>,
@@ -629,7 +629,7 @@ pub(super) struct StepAcc {
     qp_block: Option<QpCheck>,
     notes: Vec<String>,
     history: History,
-    states: Vec<RecordedState>,
+    states: Vec<Iterate>,
     pub(super) failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium): no substeps help.
     pub(super) mechanism: bool,

@@ -416,7 +416,7 @@ impl InteriorRecord {
     }
 }
 
-/// One solved state, the record of an iterate (`contact::RecordedState`): the boundary
+/// One solved state, the record of an iterate (`contact::Iterate`): the boundary
 /// solution of every body and the interface results after one contact iteration (or the
 /// final state).
 #[derive(Debug, Clone, Default)]
