@@ -155,7 +155,7 @@ const SPARSE_PAIRS_PER_ITERATION: f64 = 400.0;
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a
 /// unilateral interface.
 pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<ContactEstimate> {
-    use crate::input::scene::{History, InterfaceModel, Method, Tangential};
+    use crate::input::scene::{HistoryLevel, InterfaceModel, Method, Tangential};
     let (mut pairs, mut rows) = (0usize, 0usize);
     for it in &model.interfaces {
         if it.spec.model == InterfaceModel::Unilateral {
@@ -198,7 +198,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     // between the VTK writer and the archive's thread.
     per_state =
         1.15 * (per_state + 8.0 * (6.0 + 4.25) * model.pair_count() as f64 + 9.0 * rows as f64);
-    let recorded = if scene.output.history == History::Full {
+    let recorded = if scene.output.history == HistoryLevel::Full {
         switches as f64 + 1.0
     } else {
         k

@@ -16,7 +16,7 @@ use crate::contact::interface;
 use crate::error::{Error, Result};
 use crate::input::mesh::{self, Mesh};
 use crate::input::model::{self, Model};
-use crate::input::scene::History as HistoryLevel;
+use crate::input::scene::HistoryLevel;
 use crate::input::scene::{self, Scene};
 use crate::output::archive::{ArchivePart, ArchiveWriter};
 use crate::output::folder::RunFolder;

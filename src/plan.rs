@@ -10,7 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::input::model::Model;
-use crate::input::scene::{History, InitialState, InterfaceModel, Method, Scene};
+use crate::input::scene::{HistoryLevel, InitialState, InterfaceModel, Method, Scene};
 
 /// Which unilateral problem the contact solver faces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -499,8 +499,8 @@ fn write_stage(scene: &Scene, model: &Model) -> String {
     });
     if scene.output.vtk {
         write.push(match scene.output.history {
-            History::Full => "vtk (every iteration)".into(),
-            History::Final => "vtk (final state)".into(),
+            HistoryLevel::Full => "vtk (every iteration)".into(),
+            HistoryLevel::Final => "vtk (final state)".into(),
         });
     }
     if !model.interfaces.is_empty() {

@@ -17,7 +17,7 @@ use crate::bem::{prepare, Operators};
 use crate::contact::{status_differences, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
-use crate::input::scene::{History as HistoryLevel, Method, Scene};
+use crate::input::scene::{HistoryLevel, Method, Scene};
 use crate::output::progress::{ContactTick, Progress, Stage};
 use crate::plan::{ContactProblem, Plan};
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus, RunStatus};

@@ -291,8 +291,10 @@ impl SolveSpec {
     }
 }
 
+/// How much of the iteration history a run keeps (`[output] history`); not to be confused
+/// with `solution::History`, the history itself.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum History {
+pub enum HistoryLevel {
     Full,
     Final,
 }
@@ -309,7 +311,7 @@ pub struct SectionSpec {
 #[derive(Debug, Clone)]
 pub struct OutputSpec {
     pub directory: PathBuf,
-    pub history: History,
+    pub history: HistoryLevel,
     pub operators: bool,
     /// Deflate the archive's large datasets (shuffle + deflate): about a third smaller, for
     /// about 0.2 s of CPU per 10 MB of operators; off by default.

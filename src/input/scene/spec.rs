@@ -11,9 +11,9 @@ use super::raw::{
     RawSolve,
 };
 use super::{
-    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame, History,
-    InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane, Quadrature,
-    SectionSpec, SolveSpec, Tangential, YOUNG_RANGE,
+    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame,
+    HistoryLevel, InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane,
+    Quadrature, SectionSpec, SolveSpec, Tangential, YOUNG_RANGE,
 };
 
 /// A body table (exact, glob or default) validated: `key` names it in messages.
@@ -515,8 +515,8 @@ pub(super) fn output_spec(
 ) -> Result<OutputSpec> {
     let err = |msg: String| Error::input(path, msg);
     let history = match raw.history.as_deref() {
-        None | Some("full") => History::Full,
-        Some("final") => History::Final,
+        None | Some("full") => HistoryLevel::Full,
+        Some("final") => HistoryLevel::Final,
         Some(other) => {
             return Err(err(choice_error(
                 "output.history",
