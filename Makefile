@@ -14,7 +14,7 @@ SGBEM   := target/release/sgbem
 MESH_OPTS ?=
 SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
-PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest
+PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest jsonschema
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
@@ -47,7 +47,7 @@ setup:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
 	fi
 	@test -x $(PY) || python3 -m venv $(VENV)
-	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest" 2>/dev/null || \
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest, jsonschema" 2>/dev/null || \
 	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
 	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
 	@# The Python package sgbem (python/), editable: the venv follows the working tree.
@@ -107,12 +107,18 @@ test: setup mesh lint
 	@# A running-bond wall: 22 bodies, T-junctions, friction, compact archived states.
 	$(SGBEM) run pipelines/wall_running_bond.toml --set mesh.courses=4 --set mesh.bricks=5 --out out/test/wall_running_bond --quiet
 	$(PY) pipelines/check_outputs.py out/test/wall_running_bond
+	@# Output requests: the state at the end of each load step, compressed VTK; every 5th
+	@# iteration with a selection of the VTK arrays.
+	$(SGBEM) run pipelines/wall_running_bond.toml --set mesh.courses=4 --set mesh.bricks=5 --set 'output.history="steps"' --set 'output.vtk="compressed"' --out out/test/wall_steps --quiet
+	$(PY) pipelines/check_outputs.py out/test/wall_steps
+	$(SGBEM) run pipelines/clamped_beam_joint.toml --set output.every=5 --set 'output.vtk_fields=["displacement","contact_status","stress","sxx","syy","szz","sxy"]' --out out/test/beam_every --quiet
+	$(PY) pipelines/check_outputs.py out/test/beam_every
 	@# Contact from the drawing: 220 stones drawn each on its own, joints found by [contact].
 	$(SGBEM) run pipelines/stone_wall.toml --out out/test/stone_wall --quiet
 	$(PY) pipelines/check_outputs.py out/test/stone_wall
 	@# ParaView itself (opportunistic: not installed by `make setup`, it adds minutes).
 	@if command -v pvpython >/dev/null && command -v xvfb-run >/dev/null; then \
-	  for run in clamped_beam_joint wall_running_bond; do \
+	  for run in clamped_beam_joint wall_running_bond wall_steps beam_every; do \
 	    echo "xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run"; \
 	    xvfb-run -a pvpython pipelines/check_pvd_paraview.py out/test/$$run || exit 1; \
 	  done; \

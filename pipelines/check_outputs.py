@@ -18,6 +18,7 @@ import csv
 import json
 import pathlib
 import sys
+import tomllib
 import xml.etree.ElementTree as ET
 
 import h5py
@@ -299,8 +300,23 @@ def check_csv(c, run, h5, ifaces):
             c.ok(head == "x,y,ux,uy,sxx,syy,sxy", f"{path}: header {head!r}")
 
 
-def read_vtu(c, path, expect_names):
+def selected_arrays(h5):
+    """`output.vtk_fields` of the run's scene with its `--set` overrides: the point arrays the
+    VTK files hold (None: every one)."""
+    fields = tomllib.loads(text(h5.attrs["scene"])).get("output", {}).get("vtk_fields")
+    for o in json.loads(text(h5.attrs.get("overrides", "[]"))):
+        key, _, value = o.partition("=")
+        if key.strip() == "output.vtk_fields":
+            fields = tomllib.loads(f"v = {value}")["v"]
+    return fields
+
+
+def read_vtu(c, path, expect_names, selected=None):
     m = meshio.read(path)
+    if selected is not None:
+        expect_names = {k: n for k, n in expect_names.items() if k in selected}
+        c.ok(set(m.point_data) <= set(selected),
+             f"{path}: point data {sorted(m.point_data)}, output.vtk_fields selects {sorted(selected)}")
     p = pyvista.read(path)
     c.ok(p.n_points == len(m.points), f"{path}: pyvista reads {p.n_points} points, meshio {len(m.points)}")
     for key, ncomp in expect_names.items():
@@ -316,6 +332,7 @@ def read_vtu(c, path, expect_names):
 def check_vtk(c, run, h5, bodies, count):
     vtk = run / "vtk"
     pvd = vtk / "history.pvd"
+    selected = selected_arrays(h5)
     if not pvd.exists():
         print(f"check_outputs: {vtk} has no history.pvd (output.vtk = false?): VTK checks skipped")
         return
@@ -339,7 +356,7 @@ def check_vtk(c, run, h5, bodies, count):
     if ft:
         # ParaView reads a part only when it is listed at every time.
         c.ok(ft == bt, f"{pvd}: the field part is not listed at every time")
-        check_pvd_pyvista(c, pvd, bt)
+        check_pvd_pyvista(c, pvd, bt, selected)
     states = h5["states"]
     for k in range(count):
         st = states[f"{k:04d}"]
@@ -348,13 +365,13 @@ def check_vtk(c, run, h5, bodies, count):
         path = vtk / f"boundary_{k:04d}.vtu"
         if not c.ok(path.exists(), f"{path} is missing"):
             continue
-        m = read_vtu(c, path, BOUNDARY_DATA)
+        m = read_vtu(c, path, BOUNDARY_DATA, selected)
         n = sum(b["nodes"].shape[0] for b in bodies)
         ne = sum(b["elements"].shape[0] for b in bodies)
         c.ok(len(m.points) == n, f"{path}: {len(m.points)} points for {n} body nodes")
         lines = sum(len(cb.data) for cb in m.cells if cb.type == "line")
         c.ok(lines == ne, f"{path}: {lines} lines for {ne} boundary elements")
-        if len(m.points) == n and "displacement" in m.point_data:
+        if len(m.points) == n and {"displacement", "contact_status"} <= set(m.point_data):
             u = st["u"][()]
             xy = np.vstack([b["nodes"][()] for b in bodies])
             c.close(m.points[:, :2], xy, f"{path}: points vs the archive's body nodes")
@@ -372,20 +389,22 @@ def check_vtk(c, run, h5, bodies, count):
         if interior is not None:
             if not c.ok(fpath.exists(), f"{fpath} is missing though state {k} has interior values"):
                 continue
-            m = read_vtu(c, fpath, FIELD_DATA)
+            m = read_vtu(c, fpath, FIELD_DATA, selected)
             tri = sum(len(cb.data) for cb in m.cells if cb.type == "triangle")
             nt = sum(b["triangles"].shape[0] for b in bodies)
             c.ok(tri == nt, f"{fpath}: {tri} triangles for {nt} body triangles")
             u = np.vstack([g["u"][()] for g in (interior[b.name.split("/")[-1]] for b in bodies)])
-            if c.ok(len(m.points) == len(u), f"{fpath}: {len(m.points)} points for {len(u)} interior values"):
+            if (c.ok(len(m.points) == len(u), f"{fpath}: {len(m.points)} points for {len(u)} interior values")
+                    and "displacement" in m.point_data):
                 c.close(m.point_data["displacement"][:, :2], u, f"{fpath}: displacement vs the archive's")
         else:
             c.ok(not fpath.exists(), f"{fpath} exists though state {k} has no interior values")
 
 
-def check_pvd_pyvista(c, pvd, times):
+def check_pvd_pyvista(c, pvd, times, selected=None):
     """The series as pyvista reads it: at every time a boundary and a field block, the field
-    with the 6-component stress tensor, the scalars sxx, syy, sxy and the title as field data."""
+    with the 6-component stress tensor, the scalars sxx, syy, sxy and the title as field data
+    (the stress where `output.vtk_fields` selects it)."""
     reader = pyvista.get_reader(str(pvd))
     c.close(reader.time_values, times, f"{pvd}: pyvista's times")
     for t in reader.time_values:
@@ -393,12 +412,15 @@ def check_pvd_pyvista(c, pvd, times):
         data = reader.read()
         blocks = [b for b in data if b is not None]
         fields = [b for b in blocks if "stress" in b.point_data]
-        if not c.ok(len(blocks) == 2 and len(fields) == 1, f"{pvd} at time {t}: pyvista reads "
+        if selected is not None and not {"stress", "sxx", "syy", "szz", "sxy"} <= set(selected):
+            c.ok(len(blocks) == 2, f"{pvd} at time {t}: pyvista reads {len(blocks)} blocks")
+            fields = []
+        elif not c.ok(len(blocks) == 2 and len(fields) == 1, f"{pvd} at time {t}: pyvista reads "
                     f"{len(blocks)} blocks, {len(fields)} with stress; want a boundary and a field"):
             continue
-        f = fields[0]
-        s = f.point_data["stress"]
-        if c.ok(s.shape == (f.n_points, 6), f"{pvd} at time {t}: stress shape {s.shape}"):
+        s = fields[0].point_data["stress"] if fields else None
+        f = fields[0] if fields else None
+        if s is not None and c.ok(s.shape == (f.n_points, 6), f"{pvd} at time {t}: stress shape {s.shape}"):
             for col, name in [(0, "sxx"), (1, "syy"), (2, "szz"), (3, "sxy")]:
                 c.ok(name in f.point_data and np.array_equal(f.point_data[name], s[:, col]),
                      f"{pvd} at time {t}: {name} differs from stress column {col}")

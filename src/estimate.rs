@@ -91,6 +91,8 @@ pub struct Estimate {
     pub post_seconds: f64,
     /// The contact stage, with a unilateral interface.
     pub contact: Option<ContactEstimate>,
+    /// The size of the files the run writes.
+    pub outputs: crate::output::size::OutputSize,
 }
 
 /// The estimated cost of the contact stage (see the module doc).
@@ -198,10 +200,11 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     // between the VTK writer and the archive's thread.
     per_state =
         1.15 * (per_state + 8.0 * (6.0 + 4.25) * model.pair_count() as f64 + 9.0 * rows as f64);
-    let recorded = if scene.output.history == HistoryLevel::Full {
-        switches as f64 + 1.0
-    } else {
-        k
+    let recorded = match scene.output.history {
+        HistoryLevel::Full => ((switches as f64 + 1.0) / scene.output.every as f64)
+            .ceil()
+            .max(k),
+        HistoryLevel::Steps | HistoryLevel::Final => k,
     };
     // A collapse search solves one step per trial before the run itself: the two bounds and
     // the bisection down to the tolerance.
@@ -270,6 +273,46 @@ fn k_steps(scene: &Scene) -> f64 {
     scene.solve.steps().len() as f64
 }
 
+/// Above this many recorded unknowns (the boundary unknowns, as `sgbem check` counts them,
+/// times the states of a full history, as [`contact`] counts them) a scene that does not
+/// set `output.history` keeps the end of each load step ("steps"): the 105-brick wall
+/// (15 555 unknowns, up to 1926 states: 3.0e7; 288 MB written with every iteration) does,
+/// the other shipped scene without `history`, wall_collapse (2.8e5), does not.
+pub const FULL_HISTORY_LIMIT: f64 = 1e7;
+
+/// The default of `output.history` scaled to the scene: "steps" when neither
+/// `output.history` nor `output.every` is set and a full history would record more than
+/// [`FULL_HISTORY_LIMIT`] unknowns. Returns the run note that says so.
+pub fn scale_history(scene: &mut Scene, model: &Model) -> Option<String> {
+    use crate::input::scene::HistoryLevel;
+    if scene.output.history_given || scene.output.every != 1 {
+        return None;
+    }
+    let bodies = body_sizes(model);
+    let unknowns: usize = bodies.iter().map(|b| b.n_x + b.n_x0).sum();
+    let states = contact(model, scene, &bodies)?.states;
+    let recorded = unknowns as f64 * states as f64;
+    if recorded <= FULL_HISTORY_LIMIT {
+        return None;
+    }
+    scene.output.history = HistoryLevel::Steps;
+    Some(format!(
+        "output.history = \"steps\" (the state at the end of each load step) was chosen for \
+         this scene: a full history would record about {recorded:.1e} unknowns ({unknowns} \
+         boundary unknowns × up to {states} states), more than {FULL_HISTORY_LIMIT:.0e}; set \
+         [output] history = \"full\" (with every = N to keep every N-th iteration) to keep \
+         the iterations"
+    ))
+}
+
+/// The unknowns n_i of the paper's mixed interface operators of the final status where they
+/// are archived: `operators = true`, up to 3000 (4 per pair) and no junctions.
+pub(crate) fn mixed_unknowns(model: &Model, scene: &Scene) -> Option<f64> {
+    let ni = 4.0 * model.pair_count() as f64;
+    (scene.output.operators && ni > 0.0 && ni <= 3000.0 && model.junctions().is_empty())
+        .then_some(ni)
+}
+
 /// Bytes the program needs besides the dense operators.
 const BASE_BYTES: f64 = 64.0 * 1024.0 * 1024.0;
 
@@ -334,12 +377,7 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
     }
     // The paper's mixed interface operators of the final status, archived (dense, several
     // copies) only for scenes of up to 3000 interface unknowns and no junctions.
-    let ni = 4.0 * model.pair_count() as f64;
-    let mixed = if scene.output.operators && ni <= 3000.0 && model.junctions().is_empty() {
-        8.0 * 4.0 * ni * ni
-    } else {
-        0.0
-    };
+    let mixed = mixed_unknowns(model, scene).map_or(0.0, |ni| 8.0 * 4.0 * ni * ni);
     let per_pair = match quadrature {
         Quadrature::Fast => 4e-6,
         Quadrature::Standard => 10e-6,
@@ -356,10 +394,7 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
         .sum();
     if scene.output.field {
         for (b, size) in model.bodies.iter().zip(&bodies) {
-            let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
-            v.sort_unstable();
-            v.dedup();
-            evaluations += v.len() as f64 * size.elements as f64;
+            evaluations += b.triangle_node_count() as f64 * size.elements as f64;
         }
     }
     let contact = contact(model, scene, &bodies);
@@ -368,7 +403,9 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
     let history_floor = contact.as_ref().map_or(0.0, |c| {
         c.history_bytes / c.states.max(1) as f64 * k_steps(scene)
     });
+    let outputs = crate::output::size::output_size(scene, model, &bodies, contact.as_ref());
     Estimate {
+        outputs,
         bodies,
         peak_bytes: kept + work + mixed + contact_bytes + history_floor + BASE_BYTES,
         seconds: pairs * per_pair + flops / 1e9,

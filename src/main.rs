@@ -122,6 +122,10 @@ enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
+    /// Print the JSON Schema of a scene file, for editors that check TOML against one, e.g.
+    /// `sgbem schema > sgbem-scene.schema.json` and `#:schema ./sgbem-scene.schema.json` as
+    /// the scene's first line (Taplo, Even Better TOML).
+    Schema,
 }
 
 /// Environment variable that marks the child process reading an archive.
@@ -331,6 +335,10 @@ fn main() -> ExitCode {
             clap_complete::generate(shell, &mut Cli::command(), "sgbem", &mut script);
             out(&String::from_utf8_lossy(&script))
         }
+        Command::Schema => {
+            let schema = sgbem::input::scene::schema::schema();
+            out(&format!("{:#}\n", schema))
+        }
         Command::Check {
             scene,
             mesh,
@@ -349,15 +357,18 @@ fn main() -> ExitCode {
                     mesh_dir: Some(tmp.path().to_path_buf()),
                 },
             );
-            drop(tmp);
-            loaded.and_then(|l| {
+            // The report reads the mesh file's size (the outputs' estimate): the folder goes
+            // after it.
+            let printed = loaded.and_then(|l| {
                 out(&if json {
                     let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
                     format!("{v:#}\n")
                 } else {
                     report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
                 })
-            })
+            });
+            drop(tmp);
+            printed
         }
         Command::Run {
             scene,

@@ -97,7 +97,9 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     let model = model::build(&scene, &mesh, &mesh_path)?;
     let mut scene = scene;
     scene.solve.choose_method(model.unilateral_pair_count());
-    let plan = plan::plan(&scene, &model)?;
+    let scaled = crate::estimate::scale_history(&mut scene, &model);
+    let mut plan = plan::plan(&scene, &model)?;
+    plan.advice.extend(scaled);
     Ok(Loaded {
         scene,
         mesh,
@@ -393,14 +395,18 @@ fn record_solution(
         })
         .collect();
     let mut states: Vec<IterateRecord> = Vec::new();
-    if scene.output.history == HistoryLevel::Full {
+    // The last recorded state is the final one: it is replaced by the run's final state
+    // (the step that failed, after a failure), under the same number.
+    let mut final_index = 0;
+    if scene.output.history != HistoryLevel::Final {
         let recorded = solved.states.len().saturating_sub(1);
+        final_index = solved.states.last().map_or(0, |s| s.index);
         for st in std::mem::take(&mut solved.states)
             .into_iter()
             .take(recorded)
         {
             states.push(IterateRecord::new(
-                states.len(),
+                st.index,
                 st.load_step,
                 st.load_factor,
                 st.fields,
@@ -409,7 +415,7 @@ fn record_solution(
         }
     }
     states.push(IterateRecord::new(
-        states.len(),
+        final_index,
         final_step,
         solved.load_factor,
         solved.fields.clone(),
@@ -520,9 +526,9 @@ fn postprocess(
         factor,
     );
     // Each section's points are located, planned and integrated once (post::PointSampler),
-    // then evaluated for the final state and, with history = "full", for every recorded
-    // iteration (the path, for plots like the paper's Fig. 6), the iterations in parallel.
-    let full_path = scene.output.history == HistoryLevel::Full && !loads.is_empty();
+    // then evaluated for the final state and, but with history = "final", for every kept
+    // state (the path, for plots like the paper's Fig. 6), the states in parallel.
+    let full_path = scene.output.history != HistoryLevel::Final && !loads.is_empty();
     for s in &scene.output.sections {
         let pts = section_points(s.from, s.to, s.points);
         let sampler = PointSampler::new(&inputs, settings, &pts);

@@ -471,16 +471,7 @@ impl Solve<'_> {
 fn postprocess_stage(scene: &Scene, model: &Model) -> String {
     let mut post = vec!["boundary stresses and interface tractions".to_string()];
     if scene.output.field {
-        let nodes: usize = model
-            .bodies
-            .iter()
-            .map(|b| {
-                let mut v: Vec<usize> = b.triangles.iter().flatten().copied().collect();
-                v.sort_unstable();
-                v.dedup();
-                v.len()
-            })
-            .sum();
+        let nodes: usize = model.bodies.iter().map(|b| b.triangle_node_count()).sum();
         post.push(format!("interior field at {nodes} triangle nodes"));
     }
     for s in &scene.output.sections {
@@ -498,9 +489,18 @@ fn write_stage(scene: &Scene, model: &Model) -> String {
         "archive.h5".into()
     });
     if scene.output.vtk {
-        write.push(match scene.output.history {
-            HistoryLevel::Full => "vtk (every iteration)".into(),
-            HistoryLevel::Final => "vtk (final state)".into(),
+        let compressed = if scene.output.vtk_style.compressed {
+            ", compressed"
+        } else {
+            ""
+        };
+        write.push(match (scene.output.history, scene.output.every) {
+            (HistoryLevel::Full, 1) => format!("vtk (every iteration{compressed})"),
+            (HistoryLevel::Full, n) => {
+                format!("vtk (every {n}-th iteration and the last of each load step{compressed})")
+            }
+            (HistoryLevel::Steps, _) => format!("vtk (the end of each load step{compressed})"),
+            (HistoryLevel::Final, _) => format!("vtk (final state{compressed})"),
         });
     }
     if !model.interfaces.is_empty() {

@@ -278,6 +278,7 @@ fn write_plan(o: &mut String, scene: &Scene, model: &Model, plan: &Plan) {
     if let Some(line) = cost.contact_line() {
         let _ = writeln!(o, "  cost:    {line}");
     }
+    let _ = writeln!(o, "  outputs: {}", cost.outputs.line(scene));
     if let Some((avail, source)) = crate::estimate::available_memory() {
         if cost.peak_bytes > avail {
             let _ = writeln!(
@@ -389,6 +390,13 @@ pub fn check_json(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool) 
                 "states": c.states,
             })),
             "text": cost.line(),
+        },
+        "outputs": {
+            "history": scene.output.history.name(),
+            "every": scene.output.every,
+            "vtk_compressed": scene.output.vtk_style.compressed,
+            "estimate": cost.outputs.json(),
+            "text": cost.outputs.line(scene),
         },
     })
 }

@@ -731,3 +731,151 @@ fn a_pier_of_blocks_past_overturning_ends_with_the_tipping_mechanism() {
         }
     }
 }
+
+// ------------------------------------------------------------------------------------------
+// Large friction tends to stick
+
+/// A running-bond wall of 4 courses of 5 bricks (geo/wall.geo, 0.4 × 0.2 m, E = 5 MPa) on a
+/// clamped base under its weight and a lateral body force of 0.625 of it, with Coulomb
+/// friction μ on every joint, against the same wall with stick joints (the limit μ → ∞).
+fn large_friction_scene(tangential: &str) -> String {
+    format!(
+        r#"title = "4 x 5 wall under a lateral load"
+plane = "strain"
+[mesh]
+file = "{}"
+courses = 4
+bricks = 5
+[defaults.body]
+young = 5.0e6
+poisson = 0.2
+body_force = [12.5, -20.0]
+[defaults.interface]
+model = "unilateral"
+{tangential}
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[output]
+history = "final"
+vtk = false
+operators = false
+"#,
+        geo("wall").display()
+    )
+}
+
+/// The summary of the run `name` of `large_friction_converges_and_tends_to_stick`.
+fn r_summary(dir: &Path, name: &str) -> Value {
+    let text = std::fs::read_to_string(dir.join(format!("out_{name}")).join("summary.json"));
+    serde_json::from_str(&text.expect("summary.json")).expect("JSON")
+}
+
+/// Every interface table of a run, in file order.
+fn all_rows(out: &Path) -> Vec<InterfaceRow> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("interfaces"))
+        .expect("interfaces/")
+        .map(|e| e.unwrap().path())
+        .collect();
+    files.sort();
+    files.iter().flat_map(|f| read_interface_csv(f)).collect()
+}
+
+/// The 4 × 5 wall at 0.625 of its weight sideways (its collapse multiplier is 0.636 for
+/// μ = 3) with μ = 3, 10, 100 and 1000: each converges (μ = 1000 did not settle in 300
+/// outer iterations before Anderson's acceleration of the Tresca fixed point), obeys
+/// Coulomb's law on every row with a friction law (|t_t| ≤ μ|t_n|, equal where the row
+/// slips), and its tractions approach those of stick joints as μ grows.
+#[test]
+fn large_friction_converges_and_tends_to_stick() {
+    let dir = support::tmpdir("large_friction");
+    let solve = |name: &str, tangential: &str| -> Vec<InterfaceRow> {
+        // All interfaces are read below (`run` reads one).
+        let r = run(&dir, name, &large_friction_scene(tangential), "");
+        assert_eq!(r.code, 0, "{name}: {}", r.stderr);
+        assert_eq!(r.summary["contact"]["converged"], true, "{name}");
+        all_rows(&dir.join(format!("out_{name}")))
+    };
+    let stick = solve("stick", "tangential = \"stick\"");
+    let st = stick.iter().fold(0.0f64, |a, r| a.max(r.tt.abs()));
+    let mut last = (f64::INFINITY, f64::INFINITY);
+    for mu in [3.0, 10.0, 100.0, 1000.0] {
+        let rows = solve(
+            &format!("mu{mu}"),
+            &format!("tangential = \"friction\"\nfriction = {mu}"),
+        );
+        assert_eq!(rows.len(), stick.len());
+        let mut slipping = 0;
+        // Tangential components implied at a junction carry no friction law of their own
+        // (issue: junctions exact); they are listed in the summary and left out here.
+        let implied: Vec<(f64, f64)> = r_summary(&dir, &format!("mu{mu}"))["contact"]["junctions"]
+            ["implied"]
+            .as_object()
+            .map(|m| {
+                m.values()
+                    .flat_map(|v| v.as_array().cloned().unwrap_or_default())
+                    .filter(|c| c["component"] == "tangential")
+                    .map(|c| (c["x"][0].as_f64().unwrap(), c["x"][1].as_f64().unwrap()))
+                    .collect()
+            })
+            .unwrap_or_default();
+        let at_junction = |r: &InterfaceRow| {
+            implied
+                .iter()
+                .any(|p| (p.0 - r.x).abs() + (p.1 - r.y).abs() < 1e-9)
+        };
+        eprintln!("μ = {mu}: {} implied tangential components", implied.len());
+        // Rows with a friction law: not the ends of joints on the clamped base, whose
+        // displacements are held (tangential status "none").
+        let law =
+            |r: &InterfaceRow| matches!(r.tangential_status.as_deref(), Some("stick" | "slip"));
+        for r in rows
+            .iter()
+            .filter(|r| r.closed && law(r) && !at_junction(r))
+        {
+            let excess = r.tt.abs() - mu * r.tn.abs();
+            assert!(
+                excess <= 1e-8 * st,
+                "μ {mu} at {:?}: |t_t| {} > μ|t_n|",
+                (r.x, r.y),
+                r.tt
+            );
+            if r.tangential_status.as_deref() == Some("slip") {
+                slipping += 1;
+                assert!(
+                    excess.abs() <= 1e-6 * st,
+                    "μ {mu} slips below μ|t_n| at {:?}",
+                    (r.x, r.y)
+                );
+            }
+        }
+        // Σ|t(μ) − t(stick)| / Σ|t(stick)| over every row.
+        let dist = |f: fn(&InterfaceRow) -> f64| {
+            let d: f64 = rows
+                .iter()
+                .zip(&stick)
+                .map(|(r, s)| (f(r) - f(s)).abs())
+                .sum();
+            d / stick.iter().map(|s| f(s).abs()).sum::<f64>()
+        };
+        let d = (dist(|r| r.tn), dist(|r| r.tt));
+        eprintln!(
+            "μ = {mu}: {slipping} slipping rows; difference to stick (L1, relative): normal \
+             {:.4}, tangential {:.4}",
+            d.0, d.1
+        );
+        if mu <= 100.0 {
+            assert!(d.0 < last.0 && d.1 < last.1, "μ {mu}: {d:?} after {last:?}");
+        }
+        if mu >= 100.0 {
+            // Measured 0.0054 / 0.016 (μ = 100) and 0.0063 / 0.019 (μ = 1000): from μ = 100
+            // on the states differ from stick by the one edge row that slips, which stick
+            // keeps closed and tangentially free.
+            assert!(
+                d.0 < 0.01 && d.1 < 0.03,
+                "μ = {mu} is far from stick: {d:?}"
+            );
+        }
+        last = d;
+    }
+}

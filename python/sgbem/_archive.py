@@ -134,7 +134,8 @@ class Run:
     @property
     def states(self):
         """One row per archived state (the rows of `pairs(..., state=k)` and
-        `to_pyvista(k)`): iteration, load_step, load_factor."""
+        `to_pyvista(k)`): iteration (the state's number in the run's full history, also with
+        history = "steps" or every = n, which keep some of them), load_step, load_factor."""
         rows = []
         with self._file() as f:
             g = f["states"]
@@ -151,7 +152,9 @@ class Run:
     def history(self):
         """One row per recorded contact state (`/history`: with history = "full" per load
         step its initial status, every contact iteration and the state once the outer
-        iterations settle, the rows of `states`; none without a unilateral interface):
+        iterations settle, the rows of `states`; with every = n every n-th of them and the
+        last of each step; with "steps" and "final" the last of each load step; none without
+        a unilateral interface):
         load_step, iteration, load_factor, solver, and per interface NAME the columns
         `detached_length/NAME`, `open_pairs/NAME`, `closed_pairs/NAME`."""
         with self._file() as f:

@@ -178,3 +178,27 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
     failed = sgbem.open(e.value.out)
     assert failed.status == "not converged" == failed.summary["status"]
     assert len(failed.pairs("joint")) == failed.summary["interfaces"]["joint"]["pairs"]
+
+
+def test_steps_history_and_compressed_vtk(tmp_path):
+    """history = "steps" keeps the last state of each load step of the full run (the
+    incline block: 5 steps), its history one row per step; the compressed VTK files read in
+    pyvista to the full run's numbers."""
+    pyvista = pytest.importorskip("pyvista")
+    m = mesh("geo/two_blocks.geo", tmp_path)
+    scene = ROOT / "pipelines/incline_block.toml"
+    full = sgbem.run(scene, out=tmp_path / "full", mesh=m)
+    steps = sgbem.run(scene, out=tmp_path / "steps", mesh=m,
+                      set={"output.history": "steps", "output.vtk": "compressed"})
+    last = full.states.groupby("load_step")["iteration"].max()
+    assert list(steps.states["load_step"]) == [0, 1, 2, 3, 4]
+    assert list(steps.states["iteration"]) == list(last) == [0, 1, 2, 10, 13]
+    assert list(steps.history["load_step"]) == [0, 1, 2, 3, 4]
+    for k, it in enumerate(last):
+        a = pyvista.read(full.folder / f"vtk/boundary_{it:04d}.vtu")
+        b = pyvista.read(steps.folder / f"vtk/boundary_{k:04d}.vtu")
+        assert "compressor" in (steps.folder / f"vtk/boundary_{k:04d}.vtu").read_text()[:400]
+        for name in a.point_data:
+            assert np.array_equal(a.point_data[name], b.point_data[name]), (k, name)
+    f, s = full.pairs("joint", state=-1), steps.pairs("joint", state=-1)
+    pd.testing.assert_frame_equal(f, s)

@@ -14,7 +14,7 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
-use crate::contact::{status_differences, Iterate, Session, Solver, StepState};
+use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
 use crate::input::scene::{HistoryLevel, Method, Scene};
@@ -588,6 +588,7 @@ struct AccMark {
     notes: usize,
     rows: usize,
     states: usize,
+    recorded: usize,
 }
 
 impl StepAcc {
@@ -601,6 +602,7 @@ impl StepAcc {
             notes: self.notes.len(),
             rows: self.history.rows.len(),
             states: self.states.len(),
+            recorded: self.recorded,
         }
     }
 
@@ -614,6 +616,7 @@ impl StepAcc {
         self.notes.truncate(m.notes);
         self.history.rows.truncate(m.rows);
         self.states.truncate(m.states);
+        self.recorded = m.recorded;
         self.failure = None;
         self.mechanism = false;
     }
@@ -630,6 +633,9 @@ pub(super) struct StepAcc {
     notes: Vec<String>,
     history: History,
     states: Vec<Iterate>,
+    /// The states of a full history so far (those kept and those `output.every` or
+    /// "steps" left out): the number of the next one.
+    recorded: usize,
     pub(super) failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium): no substeps help.
     pub(super) mechanism: bool,
@@ -649,7 +655,9 @@ fn contact_step(
 ) {
     let (scene, main) = (ctx.scene, ctx.main);
     let t = Instant::now();
-    let full = scene.output.history == HistoryLevel::Full;
+    // "steps" records the iterations too (a status and an opening per row each), and keeps
+    // the last of the step.
+    let full = scene.output.history != HistoryLevel::Final;
     let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
     timings.add(main.timing_key(), t.elapsed().as_secs_f64());
     if r.mechanism && main == Solver::Evolutive {
@@ -671,7 +679,7 @@ fn contact_step(
         }
     }
     let t = Instant::now();
-    session.expand(&mut r);
+    keep_recorded(session, &mut r, scene, &mut acc.recorded);
     timings.add("contact_record", t.elapsed().as_secs_f64());
     for &c in ctx.checks {
         cross_check(session, ctx, c, step, f, state, &r.interfaces, acc, timings);
@@ -715,6 +723,32 @@ fn contact_step(
         acc.failure = Some(e);
         acc.mechanism = r.mechanism;
     }
+}
+
+/// Expands the recorded iterations of a load step that the history keeps: with "full" every
+/// `output.every`-th (from the first) and the last, with "steps" the last; numbers the
+/// states kept by their place in the full history, from `*recorded` on (which it advances).
+fn keep_recorded(session: &Session, r: &mut ContactResult, scene: &Scene, recorded: &mut usize) {
+    let m = r.recorded.len();
+    let keep = |k: usize| match scene.output.history {
+        HistoryLevel::Full => k.is_multiple_of(scene.output.every) || k + 1 == m,
+        _ => k + 1 == m,
+    };
+    let kept: Vec<usize> = (0..m).filter(|&k| keep(k)).collect();
+    let mut k = 0;
+    r.recorded.retain(|_| {
+        k += 1;
+        keep(k - 1)
+    });
+    session.expand(r);
+    for (s, &k) in r
+        .states
+        .iter_mut()
+        .zip(kept.iter().chain(std::iter::repeat(&0)))
+    {
+        s.index = *recorded + k;
+    }
+    *recorded += m.max(r.states.len());
 }
 
 /// One cross-check of a load step: solver `c` from the same state, its statuses compared

@@ -48,7 +48,7 @@ use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
 use inner::*;
-use lcp::{Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
+use lcp::{status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
 pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
 
@@ -117,6 +117,9 @@ pub struct Iterate {
     /// Body force of each body at this step (before the load factor).
     pub body_force: Vec<Option<[f64; 2]>>,
     pub iteration: usize,
+    /// The state's number in the run's full history (every iteration of every load step,
+    /// counted from 0): the iteration that the archive and the VTK files give it.
+    pub index: usize,
     pub fields: Vec<BodyField>,
     pub interfaces: Vec<InterfaceResult>,
 }
@@ -612,7 +615,7 @@ impl<'a> Session<'a> {
             let settled = !friction || change <= 1e-10;
             bound_changes.extend(friction.then_some(change));
             relax.update(outer, change);
-            bound = relax.apply(&bound, new_bound);
+            bound = relax.next(outer, status_key(&state), &bound, new_bound);
             if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
                 // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
                 // LCP through Lemke) and restart the fixed point from its bounds.
@@ -763,6 +766,7 @@ impl<'a> Session<'a> {
                     time: self.model.time,
                     body_force: self.body_forces(),
                     iteration: iterations,
+                    index: 0,
                     fields: fields.clone(),
                     interfaces: interfaces.clone(),
                 });
@@ -833,6 +837,7 @@ impl<'a> Session<'a> {
                 time: self.model.time,
                 body_force: self.body_forces(),
                 iteration: it,
+                index: 0,
                 fields: f,
                 interfaces: i,
             });

@@ -16,6 +16,7 @@ pub mod folder;
 pub mod owned;
 pub mod progress;
 pub mod record;
+pub mod size;
 pub mod summary;
 pub mod vtk;
 

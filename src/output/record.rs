@@ -25,7 +25,7 @@ use crate::bem::condensation::Condensed;
 use crate::error::{Error, Result};
 use crate::input::mesh::Mesh;
 use crate::input::model::{fmt_num, Interface, Model};
-use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Units};
+use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Units, VtkStyle};
 use crate::post::NodeValue;
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus};
 
@@ -488,6 +488,9 @@ pub struct RunRecord {
     pub summary_json: String,
     /// Deflate the archive's large datasets (`output.compress`).
     pub compress: bool,
+    /// How the VTK files are written (`output.vtk`, `output.vtk_fields`); not archived:
+    /// `sgbem export` takes it from the archived scene.
+    pub vtk: VtkStyle,
 }
 
 impl RunRecord {
@@ -513,6 +516,7 @@ impl RunRecord {
             timings: Vec::new(),
             summary_json: String::new(),
             compress: false,
+            vtk: VtkStyle::default(),
         }
     }
 
@@ -524,6 +528,7 @@ impl RunRecord {
         r.scene_text = scene.text.clone();
         r.overrides = scene.overrides.clone();
         r.compress = scene.output.compress;
+        r.vtk = scene.output.vtk_style.clone();
         r.mesh_sha256 = sha256_file(&model.mesh_path)?;
         r.units = scene.units.clone();
         r.thickness = scene.thickness;

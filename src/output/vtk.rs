@@ -48,8 +48,31 @@ use std::path::{Path, PathBuf};
 use super::record::{InterfaceRecord, RunRecord};
 use super::write_files;
 use crate::error::{Error, Result};
+use crate::input::scene::VtkStyle;
 use crate::post::{out_of_plane_stress, principal_stresses, von_mises};
 use crate::solution::PairStatus;
+
+/// The names of the point arrays that the boundary and field files can hold, the choices of
+/// `output.vtk_fields` in alphabetical order (a name both files use selects it in both).
+pub const POINT_ARRAYS: [&str; 17] = [
+    "body",
+    "contact_status",
+    "displacement",
+    "normal",
+    "normal_opening",
+    "normal_traction",
+    "principal_direction",
+    "principal_stress",
+    "slip",
+    "stress",
+    "sxx",
+    "sxy",
+    "syy",
+    "szz",
+    "tangential_status",
+    "traction",
+    "von_mises",
+];
 
 /// File name of the boundary file of state `k`.
 pub(crate) fn boundary_name(k: usize) -> String {
@@ -141,8 +164,12 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
     // The files are made and written in parallel; history.pvd is renamed into place last.
     write_files(&paths, durable, |i| {
         Ok(match files[i] {
-            File::Boundary(k) => grid_xml(boundary_grid(rec, k), &state_meta(rec, k, times[k])),
-            File::Field(k) => grid_xml(field_grid(rec, k), &state_meta(rec, k, times[k])),
+            File::Boundary(k) => grid_xml(
+                boundary_grid(rec, k),
+                &state_meta(rec, k, times[k]),
+                &rec.vtk,
+            ),
+            File::Field(k) => grid_xml(field_grid(rec, k), &state_meta(rec, k, times[k]), &rec.vtk),
             File::State(k, field) => state_vtm(k, field).into_bytes(),
             File::StatesPvd => states_pvd(&times).into_bytes(),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
@@ -219,7 +246,12 @@ fn collection(entries: impl Iterator<Item = (f64, usize, String)>) -> String {
 
 /// `sgbem export`: reads an archive and writes its VTK files into `dir`.
 pub fn export(archive: &Path, dir: &Path) -> Result<Vec<PathBuf>> {
-    let rec = super::archive::read_archive(archive)?;
+    let mut rec = super::archive::read_archive(archive)?;
+    // The VTK files as the run wrote them: `output.vtk` and `output.vtk_fields` of the
+    // archived scene with its overrides (every array, uncompressed, if it no longer reads).
+    rec.vtk = crate::input::scene::parse_scene_with(&rec.scene_text, archive, &rec.overrides)
+        .map(|s| s.output.vtk_style)
+        .unwrap_or_default();
     // The folder is written whole, as a run folder is: no file of a longer earlier export
     // is left, and nothing the tool did not write is replaced (output/folder.rs).
     let folder = super::folder::RunFolder::acquire(dir)?;
@@ -261,22 +293,28 @@ impl Values {
             Values::U8(v) => v.len(),
         }
     }
-    /// The binary payload of the array: its size in bytes (UInt64), then the values,
-    /// little-endian.
-    fn payload(&self) -> Vec<u8> {
-        fn with_header<const K: usize>(n: usize, bytes: impl Iterator<Item = [u8; K]>) -> Vec<u8> {
+    /// The binary payload of the array: with `header`, its size in bytes (UInt64) first;
+    /// then the values, little-endian.
+    fn payload(&self, header: bool) -> Vec<u8> {
+        fn bytes<const K: usize>(
+            n: usize,
+            header: bool,
+            values: impl Iterator<Item = [u8; K]>,
+        ) -> Vec<u8> {
             let mut p = Vec::with_capacity(8 + n * K);
-            p.extend_from_slice(&((n * K) as u64).to_le_bytes());
-            for b in bytes {
+            if header {
+                p.extend_from_slice(&((n * K) as u64).to_le_bytes());
+            }
+            for b in values {
                 p.extend_from_slice(&b);
             }
             p
         }
         match self {
-            Values::F64(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
-            Values::I32(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
-            Values::U64(v) => with_header(v.len(), v.iter().map(|x| x.to_le_bytes())),
-            Values::U8(v) => with_header(v.len(), v.iter().map(|&x| [x])),
+            Values::F64(v) => bytes(v.len(), header, v.iter().map(|x| x.to_le_bytes())),
+            Values::I32(v) => bytes(v.len(), header, v.iter().map(|x| x.to_le_bytes())),
+            Values::U64(v) => bytes(v.len(), header, v.iter().map(|x| x.to_le_bytes())),
+            Values::U8(v) => bytes(v.len(), header, v.iter().map(|&x| [x])),
         }
     }
     fn as_f64(&self) -> Vec<f64> {
@@ -376,7 +414,37 @@ fn base64_into(o: &mut String, bytes: &[u8]) {
     o.push_str(std::str::from_utf8(&out).unwrap_or_default());
 }
 
-fn write_data_array(o: &mut String, a: &DataArray) {
+/// The uncompressed size of a block of compressed data (VTK's default).
+const BLOCK_SIZE: usize = 1 << 15;
+
+/// Appends `bytes` as VTK's zlib-compressed inline binary data: the header (UInt64: the
+/// number of blocks, the block size, the size of the last block if partial (else 0), the
+/// compressed size of each block) in base64, then the blocks, each a zlib stream, in
+/// base64 of their own.
+fn compressed_into(o: &mut String, bytes: &[u8]) {
+    use flate2::{write::ZlibEncoder, Compression};
+    use std::io::Write as _;
+    let blocks: Vec<Vec<u8>> = bytes
+        .chunks(BLOCK_SIZE)
+        .map(|block| {
+            let mut z = ZlibEncoder::new(Vec::new(), Compression::default());
+            // Writing into a Vec cannot fail.
+            let _ = z.write_all(block);
+            z.finish().unwrap_or_default()
+        })
+        .collect();
+    let mut header: Vec<u64> = vec![
+        blocks.len() as u64,
+        BLOCK_SIZE as u64,
+        (bytes.len() % BLOCK_SIZE) as u64,
+    ];
+    header.extend(blocks.iter().map(|b| b.len() as u64));
+    let header: Vec<u8> = header.iter().flat_map(|h| h.to_le_bytes()).collect();
+    base64_into(o, &header);
+    base64_into(o, &blocks.concat());
+}
+
+fn write_data_array(o: &mut String, a: &DataArray, compressed: bool) {
     let _ = write!(
         o,
         "<DataArray type=\"{}\" Name=\"{}\"",
@@ -401,11 +469,23 @@ fn write_data_array(o: &mut String, a: &DataArray) {
         }
     }
     o.push('>');
-    base64_into(o, &a.values.payload());
+    if compressed {
+        compressed_into(o, &a.values.payload(false));
+    } else {
+        base64_into(o, &a.values.payload(true));
+    }
     o.push_str("</DataArray>\n");
 }
 
-fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
+/// An unstructured grid's XML file: the arrays `style` selects, compressed if it says so.
+fn grid_xml(mut g: Grid, meta: &[(&'static str, FieldValue)], style: &VtkStyle) -> Vec<u8> {
+    g.point_data.retain(|a| style.writes(a.name));
+    for name in &mut g.active {
+        if !style.writes(name) {
+            *name = "";
+        }
+    }
+    let z = style.compressed;
     let n_points = g.points.len() / 3;
     let n_cells = g.connectivity.len().checked_div(g.per_cell).unwrap_or(0);
     // The file's size, at most: its base64 payloads and some text (one allocation).
@@ -415,8 +495,12 @@ fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
     let mut o = String::with_capacity(payload / 3 * 4 + 4096);
     o.push_str(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"UnstructuredGrid\" version=\"1.0\" \
-         byte_order=\"LittleEndian\" header_type=\"UInt64\">\n<UnstructuredGrid>\n<FieldData>\n",
+         byte_order=\"LittleEndian\" header_type=\"UInt64\"",
     );
+    if z {
+        o.push_str(" compressor=\"vtkZLibDataCompressor\"");
+    }
+    o.push_str(">\n<UnstructuredGrid>\n<FieldData>\n");
     for (name, v) in meta {
         match v {
             FieldValue::Text(s) => {
@@ -456,10 +540,10 @@ fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
     }
     let _ = writeln!(o, "<PointData{attrs}>");
     for a in &g.point_data {
-        write_data_array(&mut o, a);
+        write_data_array(&mut o, a, z);
     }
     o.push_str("</PointData>\n<Points>\n");
-    write_data_array(&mut o, &array("Points", 3, Values::F64(g.points)));
+    write_data_array(&mut o, &array("Points", 3, Values::F64(g.points)), z);
     o.push_str("</Points>\n<Cells>\n");
     // Point indices as Int32 where they fit (a third of a boundary file's bytes otherwise).
     let last_offset = n_cells * g.per_cell;
@@ -479,11 +563,12 @@ fn grid_xml(g: Grid, meta: &[(&'static str, FieldValue)]) -> Vec<u8> {
             Values::U64((1..=n_cells).map(|i| (i * g.per_cell) as u64).collect()),
         ),
     };
-    write_data_array(&mut o, &array("connectivity", 1, connectivity));
-    write_data_array(&mut o, &array("offsets", 1, offsets));
+    write_data_array(&mut o, &array("connectivity", 1, connectivity), z);
+    write_data_array(&mut o, &array("offsets", 1, offsets), z);
     write_data_array(
         &mut o,
         &array("types", 1, Values::U8(vec![g.cell_type; n_cells])),
+        z,
     );
     o.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     o.into_bytes()

@@ -143,6 +143,14 @@ impl Body {
         self.elements.iter().map(|e| e.length).sum()
     }
 
+    /// The mesh nodes of the body's triangles, each once (the interior field's points).
+    pub fn triangle_node_count(&self) -> usize {
+        let mut v: Vec<usize> = self.triangles.iter().flatten().copied().collect();
+        v.sort_unstable();
+        v.dedup();
+        v.len()
+    }
+
     /// Winding number of the boundary around x: non-zero inside the body (holes cancel).
     pub fn winding_number(&self, x: [f64; 2]) -> i32 {
         winding(

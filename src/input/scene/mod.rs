@@ -21,6 +21,7 @@ use crate::input::expr::Scalar;
 use crate::input::tables::{Glob, Pattern, Tables};
 
 mod raw;
+pub mod schema;
 mod set;
 mod spec;
 
@@ -291,12 +292,44 @@ impl SolveSpec {
     }
 }
 
-/// How much of the iteration history a run keeps (`[output] history`); not to be confused
-/// with `solution::History`, the history itself.
+/// Which solved states a run keeps (`output.history`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum HistoryLevel {
+    /// Every contact iteration (every `output.every`-th, and the last of each load step).
     Full,
+    /// The state at the end of each load step.
+    Steps,
+    /// The final state only.
     Final,
+}
+
+impl HistoryLevel {
+    /// The name written in the scene.
+    pub fn name(self) -> &'static str {
+        match self {
+            HistoryLevel::Full => "full",
+            HistoryLevel::Steps => "steps",
+            HistoryLevel::Final => "final",
+        }
+    }
+}
+
+/// How the VTK files are written (`output.vtk`, `output.vtk_fields`).
+#[derive(Debug, Clone, Default, PartialEq, Eq)]
+pub struct VtkStyle {
+    /// zlib-compressed binary arrays (`vtk = "compressed"`).
+    pub compressed: bool,
+    /// The point arrays written, by name; None: every array.
+    pub fields: Option<Vec<String>>,
+}
+
+impl VtkStyle {
+    /// Whether the point array `name` is written.
+    pub fn writes(&self, name: &str) -> bool {
+        self.fields
+            .as_ref()
+            .is_none_or(|f| f.iter().any(|x| x == name))
+    }
 }
 
 /// A segment along which displacements and stresses are sampled.
@@ -312,11 +345,17 @@ pub struct SectionSpec {
 pub struct OutputSpec {
     pub directory: PathBuf,
     pub history: HistoryLevel,
+    /// Whether `output.history` was given (else the run may choose "steps" for a large
+    /// scene).
+    pub history_given: bool,
+    /// With history "full": keep every n-th iteration of a load step (and always its last).
+    pub every: usize,
     pub operators: bool,
     /// Deflate the archive's large datasets (shuffle + deflate): about a third smaller, for
     /// about 0.2 s of CPU per 10 MB of operators; off by default.
     pub compress: bool,
     pub vtk: bool,
+    pub vtk_style: VtkStyle,
     pub field: bool,
     pub sections: Vec<SectionSpec>,
 }

@@ -92,12 +92,22 @@ pub(super) struct RawSection {
 pub(super) struct RawOutput {
     pub(super) directory: Option<String>,
     pub(super) history: Option<String>,
+    pub(super) every: Option<i64>,
     pub(super) operators: Option<bool>,
     pub(super) compress: Option<bool>,
-    pub(super) vtk: Option<bool>,
+    pub(super) vtk: Option<RawVtk>,
+    pub(super) vtk_fields: Option<Vec<String>>,
     pub(super) field: Option<bool>,
     #[serde(default)]
     pub(super) section: Vec<RawSection>,
+}
+
+/// `output.vtk`: `true`, `false` or `"compressed"`.
+#[derive(Deserialize)]
+#[serde(untagged)]
+pub(super) enum RawVtk {
+    Flag(bool),
+    Mode(String),
 }
 
 #[derive(Deserialize, Default)]
@@ -107,7 +117,7 @@ pub(super) struct RawUnits {
     pub(super) force: Option<String>,
 }
 
-const TOP_KEYS: [&str; 12] = [
+pub(super) const TOP_KEYS: [&str; 12] = [
     "title",
     "mesh",
     "plane",
@@ -121,12 +131,12 @@ const TOP_KEYS: [&str; 12] = [
     "solve",
     "output",
 ];
-const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
-const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
-const UNITS_KEYS: [&str; 2] = ["length", "force"];
-const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
-const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
-const INTERFACE_KEYS: [&str; 7] = [
+pub(super) const CONTACT_KEYS: [&str; 2] = ["bodies", "search"];
+pub(super) const DEFAULTS_KEYS: [&str; 2] = ["body", "interface"];
+pub(super) const UNITS_KEYS: [&str; 2] = ["length", "force"];
+pub(super) const BODY_KEYS: [&str; 3] = ["young", "poisson", "body_force"];
+pub(super) const BOUNDARY_KEYS: [&str; 8] = ["ux", "uy", "un", "ut", "tx", "ty", "tn", "tt"];
+pub(super) const INTERFACE_KEYS: [&str; 7] = [
     "model",
     "initial",
     "cohesion",
@@ -135,7 +145,7 @@ const INTERFACE_KEYS: [&str; 7] = [
     "friction",
     "between",
 ];
-const SOLVE_KEYS: [&str; 7] = [
+pub(super) const SOLVE_KEYS: [&str; 7] = [
     "method",
     "tolerance",
     "max_iterations",
@@ -144,16 +154,18 @@ const SOLVE_KEYS: [&str; 7] = [
     "collapse",
     "quadrature",
 ];
-const OUTPUT_KEYS: [&str; 7] = [
+pub(super) const OUTPUT_KEYS: [&str; 9] = [
     "directory",
     "history",
+    "every",
     "operators",
     "compress",
     "vtk",
+    "vtk_fields",
     "field",
     "section",
 ];
-const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
+pub(super) const SECTION_KEYS: [&str; 4] = ["name", "from", "to", "points"];
 
 /// Rejects unknown keys anywhere in the document, suggesting the nearest valid one.
 pub(super) fn check_keys(doc: &toml::Table, path: &Path) -> Result<()> {

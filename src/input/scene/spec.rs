@@ -3,17 +3,17 @@
 
 use std::path::{Path, PathBuf};
 
-use crate::error::{Error, Result};
+use crate::error::{did_you_mean, Error, Result};
 use crate::input::expr::Scalar;
 
 use super::raw::{
     choice_error, scalar, typed, RawBody, RawBoundary, RawContact, RawInterface, RawOutput,
-    RawSolve,
+    RawSolve, RawVtk,
 };
 use super::{
     file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame,
     HistoryLevel, InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane,
-    Quadrature, SectionSpec, SolveSpec, Tangential, YOUNG_RANGE,
+    Quadrature, SectionSpec, SolveSpec, Tangential, VtkStyle, YOUNG_RANGE,
 };
 
 /// A body table (exact, glob or default) validated: `key` names it in messages.
@@ -516,15 +516,33 @@ pub(super) fn output_spec(
     let err = |msg: String| Error::input(path, msg);
     let history = match raw.history.as_deref() {
         None | Some("full") => HistoryLevel::Full,
+        Some("steps") => HistoryLevel::Steps,
         Some("final") => HistoryLevel::Final,
         Some(other) => {
             return Err(err(choice_error(
                 "output.history",
                 other,
-                &["full", "final"],
+                &["full", "steps", "final"],
             )))
         }
     };
+    let every = match raw.every {
+        None => 1,
+        Some(n) if n < 1 => {
+            return Err(err(format!(
+                "`output.every` = {n} must be an integer of at least 1 (1 keeps every iteration)"
+            )))
+        }
+        Some(n) if history != HistoryLevel::Full => {
+            return Err(err(format!(
+                "`output.every` = {n} thins a full history, but `output.history` is \"{}\": \
+                 set history = \"full\" or remove `every`",
+                history.name()
+            )))
+        }
+        Some(n) => usize::try_from(n).unwrap_or(usize::MAX),
+    };
+    let (vtk, vtk_style) = vtk_choice(raw.vtk, raw.vtk_fields).map_err(err)?;
     let directory = match raw.directory {
         Some(d) if d.trim().is_empty() => {
             return Err(err("`output.directory` is empty".into()));
@@ -577,10 +595,58 @@ pub(super) fn output_spec(
     Ok(OutputSpec {
         directory,
         history,
+        history_given: raw.history.is_some(),
+        every,
         operators: raw.operators.unwrap_or(true),
         compress: raw.compress.unwrap_or(false),
-        vtk: raw.vtk.unwrap_or(true),
+        vtk,
+        vtk_style,
         field: raw.field.unwrap_or(false),
         sections,
     })
+}
+
+/// `output.vtk` (`true`, `false` or `"compressed"`) and `output.vtk_fields` (names of the
+/// VTK point arrays, each known, none twice).
+fn vtk_choice(
+    vtk: Option<RawVtk>,
+    fields: Option<Vec<String>>,
+) -> std::result::Result<(bool, VtkStyle), String> {
+    let (on, compressed) = match vtk {
+        None | Some(RawVtk::Flag(true)) => (true, false),
+        Some(RawVtk::Flag(false)) => (false, false),
+        Some(RawVtk::Mode(m)) if m == "compressed" => (true, true),
+        Some(RawVtk::Mode(m)) => {
+            return Err(format!(
+                "`output.vtk` = \"{m}\" is not a choice: write true, false or \"compressed\" \
+                 (zlib-compressed arrays){}",
+                did_you_mean(&m, ["compressed"].into_iter())
+            ))
+        }
+    };
+    if let Some(names) = &fields {
+        let valid = crate::output::vtk::POINT_ARRAYS;
+        if names.is_empty() {
+            return Err(format!(
+                "`output.vtk_fields` is empty: list the point arrays to write, from {}; \
+                 or remove the key to write every one",
+                valid.join(", ")
+            ));
+        }
+        for (i, n) in names.iter().enumerate() {
+            if !valid.contains(&n.as_str()) {
+                return Err(format!(
+                    "`output.vtk_fields`: \"{n}\" is not a VTK point array{}; valid names: {}",
+                    did_you_mean(n, valid.iter().copied()),
+                    valid.join(", ")
+                ));
+            }
+            if names[..i].contains(n) {
+                return Err(format!(
+                    "`output.vtk_fields` lists \"{n}\" twice: name each array once"
+                ));
+            }
+        }
+    }
+    Ok((on, VtkStyle { compressed, fields }))
 }

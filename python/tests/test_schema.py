@@ -1,0 +1,61 @@
+"""`sgbem schema`: every shipped scene is valid against the JSON Schema it prints, and the
+mistakes an editor should mark are not (an unknown key, a word that is not allowed, a
+missing required key, a wrong type)."""
+
+import copy
+import json
+import os
+import pathlib
+import subprocess
+import tomllib
+
+import jsonschema
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parents[2]
+BIN = os.environ.get("SGBEM", str(ROOT / "target/release/sgbem"))
+
+
+@pytest.fixture(scope="module")
+def schema():
+    out = subprocess.run([BIN, "schema"], check=True, capture_output=True, text=True).stdout
+    s = json.loads(out)
+    jsonschema.Draft7Validator.check_schema(s)
+    return s
+
+
+SCENES = sorted((ROOT / "pipelines").glob("*.toml"))
+
+
+@pytest.mark.parametrize("path", SCENES, ids=[p.stem for p in SCENES])
+def test_shipped_scenes_are_valid(schema, path):
+    jsonschema.validate(tomllib.loads(path.read_text()), schema)
+
+
+def test_mistakes_are_marked(schema):
+    good = tomllib.loads((ROOT / "pipelines/wall_collapse.toml").read_text())
+    jsonschema.validate(good, schema)
+    ok = copy.deepcopy(good)
+    ok["output"].update(history="full", every=3, vtk="compressed", vtk_fields=["displacement"])
+    jsonschema.validate(ok, schema)
+    bad = []
+    for change in (
+        lambda s: s["defaults"]["interface"].update(frition=0.8),   # unknown key
+        lambda s: s["defaults"]["interface"].update(tangential="coulomb"),
+        lambda s: s["defaults"]["body"].pop("young"),
+        lambda s: s["solve"].update(method="fast"),
+        lambda s: s["output"].update(vtk="yes"),
+        lambda s: s.update(plane="3d"),
+        lambda s: s.update(sovle={}),
+        lambda s: s["output"].update(history="steps", every=0),
+        lambda s: s["output"].update(vtk="zip"),
+        lambda s: s["output"].update(vtk_fields=["displacment"]),
+    ):
+        s = copy.deepcopy(good)
+        change(s)
+        try:
+            jsonschema.validate(s, schema)
+        except jsonschema.ValidationError:
+            continue
+        bad.append(s)
+    assert not bad, f"accepted: {bad}"

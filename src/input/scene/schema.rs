@@ -1,0 +1,370 @@
+//! The JSON Schema of a scene file (`sgbem schema`), for editors that check TOML against a
+//! schema (Taplo, Even Better TOML, IntelliJ): key names, types, allowed words and a short
+//! description of every key, from docs/scene.md. It checks the shape only: ranges that depend
+//! on other keys, expressions, names of mesh groups and files are `sgbem check`'s.
+//!
+//! Place in the flow: nothing reads it; the test below keeps its keys those of `raw`.
+
+use serde_json::{json, Map, Value};
+
+use super::raw::BOUNDARY_KEYS;
+
+/// A table with exactly the keys `props` (name, schema), of which `required` must be given.
+fn table(description: &str, props: &[(&str, Value)], required: &[&str]) -> Value {
+    let properties: Map<String, Value> = props
+        .iter()
+        .map(|(k, v)| (k.to_string(), v.clone()))
+        .collect();
+    json!({
+        "type": "object",
+        "description": description,
+        "properties": properties,
+        "required": required,
+        "additionalProperties": false,
+    })
+}
+
+fn typed(ty: &str, description: &str) -> Value {
+    json!({ "type": ty, "description": description })
+}
+
+fn choice(words: &[&str], description: &str) -> Value {
+    json!({ "type": "string", "enum": words, "description": description })
+}
+
+/// A number, or an expression in x, y (and t) as a string.
+fn scalar(description: &str) -> Value {
+    json!({ "type": ["number", "string"], "description": description })
+}
+
+fn point(description: &str) -> Value {
+    json!({
+        "type": "array", "items": { "type": "number" }, "minItems": 2, "maxItems": 2,
+        "description": description,
+    })
+}
+
+fn numbers(description: &str) -> Value {
+    json!({ "type": "array", "items": { "type": "number" }, "description": description })
+}
+
+/// Tables keyed by a group name or pattern, each of the schema `of`.
+fn named(description: &str, of: Value) -> Value {
+    json!({ "type": "object", "description": description, "additionalProperties": of })
+}
+
+fn body() -> Value {
+    table(
+        "an elastic body (a Physical Surface)",
+        &[
+            ("young", typed("number", "Young's modulus E (F/L²), > 0")),
+            (
+                "poisson",
+                typed("number", "Poisson's ratio ν, -1 < ν < 0.5"),
+            ),
+            (
+                "body_force",
+                json!({
+                    "type": "array", "items": { "type": ["number", "string"] },
+                    "minItems": 2, "maxItems": 2,
+                    "description": "body force [bx, by] (F/L³): numbers or expressions in x, y, t",
+                }),
+            ),
+        ],
+        &["young", "poisson"],
+    )
+}
+
+fn boundary() -> Value {
+    let d = |k: &str| match k {
+        "ux" | "uy" => "displacement held (L): number or expression",
+        "un" | "ut" => "normal / tangential displacement held (L): number or expression",
+        "tx" | "ty" => "traction (F/L²): number or expression",
+        _ => "normal / tangential traction (F/L²): number or expression",
+    };
+    let props: Vec<(&str, Value)> = BOUNDARY_KEYS.iter().map(|&k| (k, scalar(d(k)))).collect();
+    table("conditions on a Physical Curve", &props, &[])
+}
+
+fn interface() -> Value {
+    table(
+        "an interface between two bodies",
+        &[
+            (
+                "model",
+                choice(&["bonded", "unilateral"], "bonded, or unilateral contact"),
+            ),
+            (
+                "initial",
+                choice(&["closed", "open"], "the status at the start"),
+            ),
+            (
+                "cohesion",
+                scalar("tensile strength (F/L²), lost where the joint opens"),
+            ),
+            (
+                "gap",
+                scalar("initial normal gap (L), added to the drawn one"),
+            ),
+            (
+                "tangential",
+                choice(
+                    &["stick", "slide", "friction"],
+                    "tangential law of a unilateral interface",
+                ),
+            ),
+            (
+                "friction",
+                scalar("Coulomb coefficient μ, with tangential = \"friction\""),
+            ),
+            (
+                "between",
+                json!({
+                    "type": "array", "items": { "type": "string" }, "minItems": 2, "maxItems": 2,
+                    "description": "the two bodies, where the interface is not a shared curve",
+                }),
+            ),
+        ],
+        &["model"],
+    )
+}
+
+fn solve() -> Value {
+    table(
+        "the contact solver and the load path",
+        &[
+            (
+                "method",
+                choice(&["lcp", "qp", "both", "sparse"], "the contact solver"),
+            ),
+            (
+                "tolerance",
+                typed("number", "relative tolerance of the contact conditions"),
+            ),
+            (
+                "max_iterations",
+                typed("integer", "contact iterations per load step"),
+            ),
+            ("load_factors", numbers("load factors of the steps")),
+            ("time", numbers("pseudo-times t of the steps")),
+            (
+                "collapse",
+                table(
+                    "search the largest multiplier t that stands",
+                    &[
+                        ("max", typed("number", "the largest t tried")),
+                        ("tolerance", typed("number", "bracket width of the answer")),
+                    ],
+                    &["max"],
+                ),
+            ),
+            (
+                "quadrature",
+                choice(&["fast", "standard", "accurate"], "Galerkin quadrature"),
+            ),
+        ],
+        &[],
+    )
+}
+
+fn output() -> Value {
+    let section = table(
+        "a section: displacements and stresses along a segment",
+        &[
+            ("name", typed("string", "file name of the section")),
+            ("from", point("first end [x, y] (L)")),
+            ("to", point("last end [x, y] (L)")),
+            (
+                "points",
+                typed("integer", "equally spaced points, 2 … 1 000 000"),
+            ),
+        ],
+        &["name", "from", "to", "points"],
+    );
+    table(
+        "what the run writes",
+        &[
+            ("directory", typed("string", "the run folder")),
+            (
+                "history",
+                choice(
+                    &["full", "steps", "final"],
+                    "which contact iterations are kept: all, the end of each load step, the last",
+                ),
+            ),
+            (
+                "every",
+                json!({
+                    "type": "integer", "minimum": 1,
+                    "description": "with history = \"full\": keep every n-th iteration and the last",
+                }),
+            ),
+            (
+                "operators",
+                typed("boolean", "archive the bodies' Galerkin blocks"),
+            ),
+            (
+                "compress",
+                typed("boolean", "deflate the archive's large datasets"),
+            ),
+            (
+                "vtk",
+                json!({
+                    "oneOf": [{ "type": "boolean" }, { "enum": ["compressed"] }],
+                    "description": "write the VTK files (\"compressed\": zlib-compressed arrays)",
+                }),
+            ),
+            (
+                "vtk_fields",
+                json!({
+                    "type": "array", "minItems": 1, "uniqueItems": true,
+                    "items": { "enum": crate::output::vtk::POINT_ARRAYS },
+                    "description": "the VTK point arrays to write (default: all)",
+                }),
+            ),
+            (
+                "field",
+                typed(
+                    "boolean",
+                    "interior displacement and stress at the mesh nodes",
+                ),
+            ),
+            (
+                "section",
+                json!({ "type": "array", "items": section, "description": "sections" }),
+            ),
+        ],
+        &[],
+    )
+}
+
+/// The schema of a scene file.
+pub fn schema() -> Value {
+    let mesh = json!({
+        "description": "the .msh or .geo file, or a table with `file` and gmsh -setnumber parameters",
+        "oneOf": [
+            { "type": "string" },
+            {
+                "type": "object",
+                "properties": { "file": { "type": "string" } },
+                "required": ["file"],
+                "additionalProperties": { "type": "number" },
+            },
+        ],
+    });
+    let props = [
+        ("title", typed("string", "the scene's title")),
+        ("mesh", mesh),
+        (
+            "plane",
+            choice(&["strain", "stress"], "plane strain or stress"),
+        ),
+        (
+            "thickness",
+            typed("number", "out-of-plane thickness (L), > 0"),
+        ),
+        (
+            "units",
+            table(
+                "unit names, for labels",
+                &[
+                    ("length", typed("string", "length unit")),
+                    ("force", typed("string", "force unit")),
+                ],
+                &[],
+            ),
+        ),
+        (
+            "body",
+            named("bodies by Physical Surface name or pattern", body()),
+        ),
+        (
+            "boundary",
+            named("conditions by Physical Curve name or pattern", boundary()),
+        ),
+        (
+            "interface",
+            named("interfaces by Physical Curve name", interface()),
+        ),
+        (
+            "defaults",
+            table(
+                "what bodies and interfaces without a table of their own take",
+                &[("body", body()), ("interface", interface())],
+                &[],
+            ),
+        ),
+        (
+            "contact",
+            table(
+                "contact found from the geometry",
+                &[
+                    ("bodies", typed("string", "the bodies searched, a pattern")),
+                    (
+                        "search",
+                        typed("number", "largest distance of facing sides (L)"),
+                    ),
+                ],
+                &["search"],
+            ),
+        ),
+        ("solve", solve()),
+        ("output", output()),
+    ];
+    let mut s = table("an sgbem scene (docs/scene.md)", &props, &["mesh"]);
+    s["$schema"] = json!("http://json-schema.org/draft-07/schema#");
+    s["title"] = json!("sgbem scene");
+    s
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::raw::{
+        BODY_KEYS, CONTACT_KEYS, DEFAULTS_KEYS, INTERFACE_KEYS, OUTPUT_KEYS, SECTION_KEYS,
+        SOLVE_KEYS, TOP_KEYS, UNITS_KEYS,
+    };
+    use super::*;
+
+    fn keys(v: &Value) -> Vec<String> {
+        let mut k: Vec<String> = v["properties"]
+            .as_object()
+            .expect("a table")
+            .keys()
+            .cloned()
+            .collect();
+        k.sort();
+        k
+    }
+
+    fn sorted(k: &[&str]) -> Vec<String> {
+        let mut k: Vec<String> = k.iter().map(|s| s.to_string()).collect();
+        k.sort();
+        k
+    }
+
+    /// Every table of the schema has exactly the keys the reader accepts.
+    #[test]
+    fn schema_keys_are_the_readers() {
+        let s = schema();
+        let p = &s["properties"];
+        assert_eq!(keys(&s), sorted(&TOP_KEYS));
+        assert_eq!(keys(&p["body"]["additionalProperties"]), sorted(&BODY_KEYS));
+        assert_eq!(
+            keys(&p["defaults"]["properties"]["body"]),
+            sorted(&BODY_KEYS)
+        );
+        let b = &p["boundary"]["additionalProperties"];
+        assert_eq!(keys(b), sorted(&BOUNDARY_KEYS));
+        let i = &p["interface"]["additionalProperties"];
+        assert_eq!(keys(i), sorted(&INTERFACE_KEYS));
+        let d = &p["defaults"]["properties"]["interface"];
+        assert_eq!(keys(d), sorted(&INTERFACE_KEYS));
+        assert_eq!(keys(&p["defaults"]), sorted(&DEFAULTS_KEYS));
+        assert_eq!(keys(&p["units"]), sorted(&UNITS_KEYS));
+        assert_eq!(keys(&p["contact"]), sorted(&CONTACT_KEYS));
+        assert_eq!(keys(&p["solve"]), sorted(&SOLVE_KEYS));
+        assert_eq!(keys(&p["output"]), sorted(&OUTPUT_KEYS));
+        let sec = &p["output"]["properties"]["section"]["items"];
+        assert_eq!(keys(sec), sorted(&SECTION_KEYS));
+    }
+}
