@@ -157,7 +157,7 @@ const SPARSE_PAIRS_PER_ITERATION: f64 = 400.0;
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a
 /// unilateral interface.
 pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<ContactEstimate> {
-    use crate::input::scene::{History, InterfaceModel, Method, Tangential};
+    use crate::input::scene::{HistoryLevel, InterfaceModel, Method, Tangential};
     let (mut pairs, mut rows) = (0usize, 0usize);
     for it in &model.interfaces {
         if it.spec.model == InterfaceModel::Unilateral {
@@ -201,10 +201,10 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     per_state =
         1.15 * (per_state + 8.0 * (6.0 + 4.25) * model.pair_count() as f64 + 9.0 * rows as f64);
     let recorded = match scene.output.history {
-        History::Full => ((switches as f64 + 1.0) / scene.output.every as f64)
+        HistoryLevel::Full => ((switches as f64 + 1.0) / scene.output.every as f64)
             .ceil()
             .max(k),
-        History::Steps | History::Final => k,
+        HistoryLevel::Steps | HistoryLevel::Final => k,
     };
     // A collapse search solves one step per trial before the run itself: the two bounds and
     // the bisection down to the tolerance.
@@ -284,7 +284,7 @@ pub const FULL_HISTORY_LIMIT: f64 = 1e7;
 /// `output.history` nor `output.every` is set and a full history would record more than
 /// [`FULL_HISTORY_LIMIT`] unknowns. Returns the run note that says so.
 pub fn scale_history(scene: &mut Scene, model: &Model) -> Option<String> {
-    use crate::input::scene::History;
+    use crate::input::scene::HistoryLevel;
     if scene.output.history_given || scene.output.every != 1 {
         return None;
     }
@@ -295,7 +295,7 @@ pub fn scale_history(scene: &mut Scene, model: &Model) -> Option<String> {
     if recorded <= FULL_HISTORY_LIMIT {
         return None;
     }
-    scene.output.history = History::Steps;
+    scene.output.history = HistoryLevel::Steps;
     Some(format!(
         "output.history = \"steps\" (the state at the end of each load step) was chosen for \
          this scene: a full history would record about {recorded:.1e} unknowns ({unknowns} \

@@ -16,7 +16,7 @@ use crate::contact::interface;
 use crate::error::{Error, Result};
 use crate::input::mesh::{self, Mesh};
 use crate::input::model::{self, Model};
-use crate::input::scene::History as HistoryLevel;
+use crate::input::scene::HistoryLevel;
 use crate::input::scene::{self, Scene};
 use crate::output::archive::{ArchivePart, ArchiveWriter};
 use crate::output::folder::RunFolder;
@@ -244,7 +244,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     let progress = Progress::new(opts.quiet);
     let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
     let ops = prepare_bodies(&loaded, &settings, &mut timings, &progress)?;
-    let archive = start_archive(&folder, &loaded.scene, &rec, &ops);
+    let archive = start_archive(&folder, &loaded.scene, &rec, &ops)?;
     let mut solved = solve_contact(&loaded, &settings, &ops, &mut timings, &progress)?;
     let ops = solved.operators.take().unwrap_or(ops);
     let loads = record_solution(&loaded, &ops, &mut solved, &mut rec, &archive, &mut timings)?;
@@ -343,12 +343,15 @@ fn start_archive(
     scene: &Scene,
     rec: &RunRecord,
     ops: &Operators,
-) -> ArchiveWriter {
+) -> Result<ArchiveWriter> {
     let mut model = rec.clone();
     if scene.output.operators {
-        model.set_operators(&ops.systems, &ops.condensed);
+        model.set_operators(&ops.systems, &ops.condensed)?;
     }
-    ArchiveWriter::start(&folder.staging().join("archive.h5"), model)
+    Ok(ArchiveWriter::start(
+        &folder.staging().join("archive.h5"),
+        model,
+    ))
 }
 
 /// What the section paths need of each recorded state besides its fields (iteration, load

@@ -10,7 +10,7 @@
 
 use crate::error::{Error, Result};
 use crate::input::model::Model;
-use crate::input::scene::{History, InitialState, InterfaceModel, Method, Scene};
+use crate::input::scene::{HistoryLevel, InitialState, InterfaceModel, Method, Scene};
 
 /// Which unilateral problem the contact solver faces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -495,12 +495,12 @@ fn write_stage(scene: &Scene, model: &Model) -> String {
             ""
         };
         write.push(match (scene.output.history, scene.output.every) {
-            (History::Full, 1) => format!("vtk (every iteration{compressed})"),
-            (History::Full, n) => {
+            (HistoryLevel::Full, 1) => format!("vtk (every iteration{compressed})"),
+            (HistoryLevel::Full, n) => {
                 format!("vtk (every {n}-th iteration and the last of each load step{compressed})")
             }
-            (History::Steps, _) => format!("vtk (the end of each load step{compressed})"),
-            (History::Final, _) => format!("vtk (final state{compressed})"),
+            (HistoryLevel::Steps, _) => format!("vtk (the end of each load step{compressed})"),
+            (HistoryLevel::Final, _) => format!("vtk (final state{compressed})"),
         });
     }
     if !model.interfaces.is_empty() {

@@ -14,12 +14,12 @@
 //! traction (F) and displacement (U) scales. A singular A (a body not held, or a degenerate
 //! scale) is reported as a numerical failure naming the body, never hidden.
 
-use faer::linalg::solvers::Solve;
 use faer::Mat;
 
 use crate::bem::assembly::{BodySystem, Unknown};
 use crate::error::{Error, Result};
 use crate::input::model::Model;
+use crate::linalg::{scaled_lu_solve, ScaledSolveFailure};
 use crate::solution::BodyField;
 
 /// A body condensed onto its interface unknowns.
@@ -44,54 +44,26 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
     let (nx, n) = (sys.n_x, sys.n());
     let nx0 = n - nx;
     let g = &sys.g;
-    // Jacobi scaling of A.
-    let s: Vec<f64> = (0..nx)
-        .map(|i| {
-            let d = g[(i, i)].abs();
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let a = Mat::<f64>::from_fn(nx, nx, |i, j| s[i] * g[(i, j)] * s[j]);
-    // Right-hand sides [A0 | L̂], scaled by rows.
+    // A⁻¹ [A0 | L̂] by the Jacobi-scaled LU of A.
     let rhs = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| {
-        s[i] * if j < nx0 { g[(i, nx + j)] } else { sys.load[i] }
-    });
-    let (sol, pivot_ratio, residual) = if nx > 0 {
-        let lu = a.partial_piv_lu();
-        let u = lu.U();
-        let mut pmin = f64::INFINITY;
-        let mut pmax = 0.0f64;
-        for i in 0..nx {
-            let p = u[(i, i)].abs();
-            pmin = pmin.min(p);
-            pmax = pmax.max(p);
+        if j < nx0 {
+            g[(i, nx + j)]
+        } else {
+            sys.load[i]
         }
-        let ratio = if pmax > 0.0 { pmin / pmax } else { 0.0 };
-        if ratio.is_nan() || ratio <= 1e-14 {
-            return Err(Error::numerical(format!(
+    });
+    let solved =
+        scaled_lu_solve(g.as_ref().submatrix(0, 0, nx, nx), rhs.as_ref()).map_err(|f| match f {
+            ScaledSolveFailure::Singular { pivot_ratio: ratio } => Error::numerical(format!(
                 "the boundary system of body \"{body}\" is singular (pivot ratio {ratio:.1e}): \
                  the body may not be held, or its size meets a degenerate scale"
-            )));
-        }
-        let sol = lu.solve(&rhs);
-        let res = &a * &sol - &rhs;
-        let residual = res.norm_max() / rhs.norm_max().max(f64::MIN_POSITIVE);
-        (sol, ratio, residual)
-    } else {
-        (Mat::<f64>::zeros(0, nx0 + 1), 1.0, 0.0)
-    };
-    if residual.is_nan() || residual >= 1e-8 {
-        return Err(Error::numerical(format!(
-            "solving the boundary system of body \"{body}\" left a relative residual of \
-             {residual:.1e} (ill-conditioned)"
-        )));
-    }
-    // Unscale: A⁻¹[A0 | L̂] = S · sol.
-    let ainv = Mat::<f64>::from_fn(nx, nx0 + 1, |i, j| s[i] * sol[(i, j)]);
+            )),
+            ScaledSolveFailure::Inaccurate { residual } => Error::numerical(format!(
+                "solving the boundary system of body \"{body}\" left a relative residual of \
+                 {residual:.1e} (ill-conditioned)"
+            )),
+        })?;
+    let (ainv, pivot_ratio, residual) = (solved.x, solved.pivot_ratio, solved.residual);
     // [D00 | Z̄0] = [A00 | L̂0] − A0ᵀ A⁻¹ [A0 | L̂]  (one dense product).
     let a0t = g.as_ref().submatrix(0, nx, nx, nx0).transpose();
     let prod = a0t * ainv.as_ref();
@@ -129,11 +101,6 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
 }
 
 impl Condensed {
-    /// X = R X0 + r.
-    pub fn recover_x(&self, x0: &[f64]) -> Vec<f64> {
-        self.recover_x_scaled(x0, 1.0)
-    }
-
     /// X = R X0 + factor·r (loads scaled by `factor`).
     pub fn recover_x_scaled(&self, x0: &[f64], factor: f64) -> Vec<f64> {
         if self.recover.nrows() == 0 {

@@ -14,12 +14,10 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
-use crate::contact::{
-    status_differences, ContactResult, RecordedState, Session, Solver, StepState,
-};
+use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
-use crate::input::scene::{History as HistoryLevel, Method, Scene};
+use crate::input::scene::{HistoryLevel, Method, Scene};
 use crate::output::progress::{ContactTick, Progress, Stage};
 use crate::plan::{ContactProblem, Plan};
 use crate::solution::{BodyField, History, InterfaceResult, PairStatus, RunStatus};
@@ -48,7 +46,7 @@ pub struct ContactRun {
     /// positive): the force the complementarity conditions hold.
     pub nodal_force: Vec<Vec<f64>>,
     pub history: History,
-    pub states: Vec<RecordedState>,
+    pub states: Vec<Iterate>,
     pub contact: serde_json::Value,
     /// The QP's solution at the last load step, where it ran.
     pub qp: Option<QpCheck>,
@@ -634,7 +632,7 @@ pub(super) struct StepAcc {
     qp_block: Option<QpCheck>,
     notes: Vec<String>,
     history: History,
-    states: Vec<RecordedState>,
+    states: Vec<Iterate>,
     /// The states of a full history so far (those kept and those `output.every` or
     /// "steps" left out): the number of the next one.
     recorded: usize,

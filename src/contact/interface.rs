@@ -24,6 +24,7 @@ use crate::bem::condensation::Condensed;
 use crate::bem::operators::X0Map;
 use crate::error::{Error, Result};
 use crate::input::model::Model;
+use crate::linalg::{scaled_lu_solve, ScaledSolveFailure};
 use crate::solution::PairStatus;
 
 /// Where the unknowns of one pair component sit in Y.
@@ -162,57 +163,18 @@ pub fn assemble_scaled(
 /// Solves `K Y + L = 0` with Jacobi scaling and LU; reports a singular or inaccurate system.
 pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
     let n = k.nrows();
-    if n == 0 {
-        return Ok((Vec::new(), 0.0));
-    }
-    let s: Vec<f64> = (0..n)
-        .map(|i| {
-            let d = k[(i, i)].abs();
-            if d > 0.0 {
-                1.0 / d.sqrt()
-            } else {
-                1.0
-            }
-        })
-        .collect();
-    let a = Mat::<f64>::from_fn(n, n, |i, j| s[i] * k[(i, j)] * s[j]);
-    let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -s[i] * l[i]);
-    let lu = a.partial_piv_lu();
-    let u = lu.U();
-    let (mut pmin, mut pmax) = (f64::INFINITY, 0.0f64);
-    for i in 0..n {
-        pmin = pmin.min(u[(i, i)].abs());
-        pmax = pmax.max(u[(i, i)].abs());
-    }
-    let ratio = if pmax > 0.0 { pmin / pmax } else { 0.0 };
-    if ratio.is_nan() || ratio <= 1e-14 {
-        return Err(Error::numerical(format!(
+    let rhs = Mat::<f64>::from_fn(n, 1, |i, _| -l[i]);
+    let solved = scaled_lu_solve(k.as_ref(), rhs.as_ref()).map_err(|f| match f {
+        ScaledSolveFailure::Singular { pivot_ratio: ratio } => Error::numerical(format!(
             "the {what} system is singular (pivot ratio {ratio:.1e}): a body may be held by \
              nothing but open interfaces, or free to slide"
-        )));
-    }
-    let y = lu.solve(&rhs);
-    let res = &a * &y - &rhs;
-    let residual = res.norm_max() / rhs.norm_max().max(f64::MIN_POSITIVE);
-    if residual.is_nan() || residual >= 1e-8 {
-        return Err(Error::numerical(format!(
+        )),
+        ScaledSolveFailure::Inaccurate { residual } => Error::numerical(format!(
             "the {what} system left a relative residual of {residual:.1e} after solving \
              (ill-conditioned)"
-        )));
-    }
-    Ok(((0..n).map(|i| s[i] * y[(i, 0)]).collect(), residual))
-}
-
-/// X0 of body `b` from Y.
-pub fn body_x0(layout: &Layout, b: usize, n_x0: usize, y: &[f64]) -> Vec<f64> {
-    let mut x0 = vec![0.0; n_x0];
-    for &(xi, yi, si) in &layout.select[b] {
-        x0[xi] = si * y[yi];
-    }
-    for &(xi, h) in &layout.offset[b] {
-        x0[xi] += h;
-    }
-    x0
+        )),
+    })?;
+    Ok(((0..n).map(|i| solved.x[(i, 0)]).collect(), solved.residual))
 }
 
 /// The interface system with the shared displacements of the closed pairs eliminated

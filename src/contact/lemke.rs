@@ -9,6 +9,7 @@
 //! error, never hidden.
 
 use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
+use crate::linalg::jacobi_scaling;
 
 /// Outcome of Lemke's method.
 #[derive(Debug, Clone)]
@@ -154,9 +155,7 @@ pub fn lemke(m: &[f64], q: &[f64], max_pivots: usize) -> Result<LemkeSolution, L
 /// O(1); returns D (the solution's z is D z̃, its w is w̃ / D).
 fn jacobi_scale(m: &mut [f64], q: &mut [f64]) -> Vec<f64> {
     let n = q.len();
-    let d: Vec<f64> = (0..n)
-        .map(|i| 1.0 / m[i * n + i].abs().sqrt().max(f64::MIN_POSITIVE))
-        .collect();
+    let d = jacobi_scaling((0..n).map(|i| m[i * n + i]));
     for i in 0..n {
         q[i] *= d[i];
         for j in 0..n {

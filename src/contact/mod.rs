@@ -109,7 +109,7 @@ pub struct StepState {
 
 /// The solution after one iteration, kept for output.
 #[derive(Debug, Clone)]
-pub struct RecordedState {
+pub struct Iterate {
     pub load_step: usize,
     pub load_factor: f64,
     /// Pseudo-time of the step (1 without `[solve] time`).
@@ -139,7 +139,7 @@ pub struct ContactResult {
     /// Largest relative complementarity violation left.
     pub residual: f64,
     pub rows: Vec<HistoryRow>,
-    pub states: Vec<RecordedState>,
+    pub states: Vec<Iterate>,
     pub notes: Vec<String>,
     pub failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
@@ -760,7 +760,7 @@ impl<'a> Session<'a> {
                 method.name(),
             ));
             if record {
-                states.push(RecordedState {
+                states.push(Iterate {
                     load_step,
                     load_factor: factor,
                     time: self.model.time,
@@ -831,7 +831,7 @@ impl<'a> Session<'a> {
             result
                 .rows
                 .push(history_row(self.model, &i, step, factor, it, result.solver));
-            result.states.push(RecordedState {
+            result.states.push(Iterate {
                 load_step: step,
                 load_factor: factor,
                 time: self.model.time,

@@ -22,6 +22,7 @@ use clarabel::solver::{
 };
 
 use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
+use crate::linalg::jacobi_scaling;
 
 /// What the QP found.
 pub struct QpOutcome {
@@ -39,9 +40,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutc
     let dense = inner.dense(cols).ok_or(InnerFailure::LeavesBodyFree)?;
     let nv = dense.q.len();
     let a = &dense.m;
-    let d: Vec<f64> = (0..nv)
-        .map(|i| 1.0 / a[i * nv + i].abs().sqrt().max(f64::MIN_POSITIVE))
-        .collect();
+    let d = jacobi_scaling((0..nv).map(|i| a[i * nv + i]));
     let q: Vec<f64> = dense.q.iter().zip(&d).map(|(q, di)| q * di).collect();
     let qscale = q
         .iter()

@@ -416,7 +416,7 @@ impl InteriorRecord {
     }
 }
 
-/// One solved state, the record of an iterate (`contact::RecordedState`): the boundary
+/// One solved state, the record of an iterate (`contact::Iterate`): the boundary
 /// solution of every body and the interface results after one contact iteration (or the
 /// final state).
 #[derive(Debug, Clone, Default)]
@@ -556,17 +556,22 @@ impl RunRecord {
         Ok(r)
     }
 
-    /// Attaches the Galerkin blocks of every body (`output.operators = true`).
-    pub fn set_operators(&mut self, systems: &[BodySystem], condensed: &[Condensed]) {
-        assert_eq!(systems.len(), self.bodies.len(), "one system per body");
-        assert_eq!(
-            condensed.len(),
-            self.bodies.len(),
-            "one condensation per body"
-        );
+    /// Attaches the Galerkin blocks of every body (`output.operators = true`); refuses
+    /// systems or condensations that are not one per body of the record.
+    pub fn set_operators(&mut self, systems: &[BodySystem], condensed: &[Condensed]) -> Result<()> {
+        let n = self.bodies.len();
+        if systems.len() != n || condensed.len() != n {
+            return Err(Error::numerical(format!(
+                "cannot record the bodies' operators: {} systems and {} condensations for {n} \
+                 bodies",
+                systems.len(),
+                condensed.len()
+            )));
+        }
         for ((b, s), c) in self.bodies.iter_mut().zip(systems).zip(condensed) {
             b.operators = Some(BodyOperators::from_system(s, c));
         }
+        Ok(())
     }
 
     /// Checks every size and cross-reference the writers rely on, so that writing a record

@@ -34,7 +34,7 @@
 
 use crate::estimate::{fmt_bytes, BodySize, ContactEstimate};
 use crate::input::model::Model;
-use crate::input::scene::{History, InterfaceModel, Scene, Tangential};
+use crate::input::scene::{HistoryLevel, InterfaceModel, Scene, Tangential};
 
 /// The estimated sizes, in bytes.
 #[derive(Debug, Clone, PartialEq)]
@@ -57,7 +57,7 @@ impl OutputSize {
 
     /// One line for `sgbem check`.
     pub fn line(&self, scene: &Scene) -> String {
-        let states = if scene.output.history == History::Full && self.states > 1 {
+        let states = if scene.output.history == HistoryLevel::Full && self.states > 1 {
             format!(
                 "a full history of about {} states, as many as the contact estimate's switches",
                 self.states
@@ -100,7 +100,7 @@ pub fn kept_states(scene: &Scene, contact: Option<&ContactEstimate>) -> (usize, 
     let steps = scene.solve.steps().len();
     match contact {
         None => (1, 0),
-        Some(_) if scene.output.history == History::Final => (1, steps),
+        Some(_) if scene.output.history == HistoryLevel::Final => (1, steps),
         Some(c) => (c.states.max(1), c.states.max(1)),
     }
 }
@@ -198,7 +198,7 @@ pub fn output_size(
     for sec in &scene.output.sections {
         let p = sec.points as f64;
         csv += 115.0 * p;
-        if scene.output.history != History::Final && contact.is_some() {
+        if scene.output.history != HistoryLevel::Final && contact.is_some() {
             csv += 145.0 * p * s;
         }
     }

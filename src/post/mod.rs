@@ -81,7 +81,7 @@ pub const NEAR_BOUNDARY_FRACTION: f64 = 1e-3;
 
 /// A point within this fraction of the body's scaling length ([`scaling`]: twice the largest
 /// distance of a boundary node from their centroid) of the boundary is on the boundary: it
-/// belongs to the body in [`locate`].
+/// belongs to the body when points are located ([`evaluate_points`], [`PointSampler`]).
 pub const ON_BOUNDARY_TOLERANCE: f64 = 1e-9;
 
 /// Turning angle at a node above which the nodal stress is fitted to the tractions of both
@@ -827,15 +827,9 @@ fn contains(body: &Body, (c, l): (Vec2, f64), x: Vec2) -> bool {
     winding_number(body, x) != 0 || boundary_distance(body, x) <= tol
 }
 
-/// Index of the first body that contains x: inside by [`winding_number`], or on its boundary
-/// within [`ON_BOUNDARY_TOLERANCE`] of the body size. A point on an interface shared by two
-/// bodies therefore belongs to the one that comes first in `bodies`.
-pub fn locate(bodies: &[&Body], x: Vec2) -> Option<usize> {
-    bodies.iter().position(|b| contains(b, scaling(b), x))
-}
-
-/// Displacement and stress at each point, with the index of the body containing it
-/// ([`locate`]: the first body wins on an interface), or `None` for a point in no body.
+/// Displacement and stress at each point, with the index of the first body that contains it
+/// (inside by [`winding_number`], or on its boundary within [`ON_BOUNDARY_TOLERANCE`] of the
+/// body size: the first body wins on an interface), or `None` for a point in no body.
 /// Values by [`interior`]; points are evaluated in parallel (rayon).
 pub fn evaluate_points(
     bodies: &[BodyInput],

@@ -294,7 +294,7 @@ impl SolveSpec {
 
 /// Which solved states a run keeps (`output.history`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum History {
+pub enum HistoryLevel {
     /// Every contact iteration (every `output.every`-th, and the last of each load step).
     Full,
     /// The state at the end of each load step.
@@ -303,13 +303,13 @@ pub enum History {
     Final,
 }
 
-impl History {
+impl HistoryLevel {
     /// The name written in the scene.
     pub fn name(self) -> &'static str {
         match self {
-            History::Full => "full",
-            History::Steps => "steps",
-            History::Final => "final",
+            HistoryLevel::Full => "full",
+            HistoryLevel::Steps => "steps",
+            HistoryLevel::Final => "final",
         }
     }
 }
@@ -344,7 +344,7 @@ pub struct SectionSpec {
 #[derive(Debug, Clone)]
 pub struct OutputSpec {
     pub directory: PathBuf,
-    pub history: History,
+    pub history: HistoryLevel,
     /// Whether `output.history` was given (else the run may choose "steps" for a large
     /// scene).
     pub history_given: bool,

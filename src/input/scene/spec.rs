@@ -11,9 +11,9 @@ use super::raw::{
     RawSolve, RawVtk,
 };
 use super::{
-    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame, History,
-    InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane, Quadrature,
-    SectionSpec, SolveSpec, Tangential, VtkStyle, YOUNG_RANGE,
+    file_name_problem, BodySpec, BoundarySpec, Collapse, Condition, ContactSpec, Frame,
+    HistoryLevel, InitialState, InterfaceModel, InterfaceSpec, Method, OutputSpec, Plane,
+    Quadrature, SectionSpec, SolveSpec, Tangential, VtkStyle, YOUNG_RANGE,
 };
 
 /// A body table (exact, glob or default) validated: `key` names it in messages.
@@ -515,9 +515,9 @@ pub(super) fn output_spec(
 ) -> Result<OutputSpec> {
     let err = |msg: String| Error::input(path, msg);
     let history = match raw.history.as_deref() {
-        None | Some("full") => History::Full,
-        Some("steps") => History::Steps,
-        Some("final") => History::Final,
+        None | Some("full") => HistoryLevel::Full,
+        Some("steps") => HistoryLevel::Steps,
+        Some("final") => HistoryLevel::Final,
         Some(other) => {
             return Err(err(choice_error(
                 "output.history",
@@ -533,7 +533,7 @@ pub(super) fn output_spec(
                 "`output.every` = {n} must be an integer of at least 1 (1 keeps every iteration)"
             )))
         }
-        Some(n) if history != History::Full => {
+        Some(n) if history != HistoryLevel::Full => {
             return Err(err(format!(
                 "`output.every` = {n} thins a full history, but `output.history` is \"{}\": \
                  set history = \"full\" or remove `every`",

@@ -103,22 +103,13 @@ type R<T> = std::result::Result<T, String>;
 
 /// Writes the archive of `rec` to `path` atomically and durably (synced before the rename).
 pub fn write_archive(path: &Path, rec: &RunRecord) -> Result<()> {
-    write_archive_with(path, rec, true)
-}
-
-/// [`write_archive`] into a run's staging folder: not synced (the folder's commit syncs it).
-pub fn write_archive_staged(path: &Path, rec: &RunRecord) -> Result<()> {
-    write_archive_with(path, rec, false)
-}
-
-fn write_archive_with(path: &Path, rec: &RunRecord, durable: bool) -> Result<()> {
     rec.validate().map_err(|m| {
         Error::io(
             path,
             format!("cannot write the archive: the run record is inconsistent: {m}"),
         )
     })?;
-    write_file(path, durable, rec.compress, |file| write_all(file, rec))
+    write_file(path, true, rec.compress, |file| write_all(file, rec))
 }
 
 /// Creates the archive under a temporary name beside `path`, lets `write` fill it, closes it,
