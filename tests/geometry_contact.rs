@@ -335,7 +335,7 @@ fn pin_in_a_hole_follows_persson() {
              [boundary.outer]\nux = 0.0\nuy = 0.0\n\
              [interface.contact]\nmodel = \"unilateral\"\ninitial = \"open\"\n\
              tangential = \"slide\"\nbetween = [\"pin_side\", \"hole\"]\n\
-             [solve]\ntolerance = 1e-10\n[output]\nvtk = false\n",
+             [solve]\ntolerance = 1e-10\n[output]\nvtk = false\noperators = false\nhistory = \"final\"\n",
             geo("pin_in_hole")
         );
         let (rows, summary) = run(&dir, &scene, "contact");
