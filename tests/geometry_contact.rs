@@ -11,6 +11,10 @@
 //!   0.01 above a flat block, meshed on its own, with no gap in the scene: the gap on the
 //!   axis as drawn, the half-width within one element and the peak pressure within 1 % of
 //!   Johnson's, for the load of the run.
+//! * A pin in a hole with clearance (`geo/pin_in_hole.geo`): a pin drawn touching the hole
+//!   of a large plate, the two circles meshed on their own, frictionless, loaded through
+//!   its centre: the contact half-angle within 2 % of the closed form of conforming contact
+//!   (Persson 1964) from about 20° to 80°, and the contact resultant equal to the load.
 //!
 //! Run with `cargo test --release --test geometry_contact -- --nocapture` to see the numbers.
 
@@ -259,6 +263,128 @@ fn hertz_with_the_gap_from_the_drawing() {
         .map(|r| r.num("tangential_traction").abs())
         .fold(0.0, f64::max);
     assert_eq!(tangential, 0.0, "frictionless: tangential traction");
+}
+
+/// The closed form of the frictionless pin in a hole, the problem solved by Persson (1964)
+/// and by Ciavarella & Decuzzi (Int. J. Solids Struct. 38, 2001, the case of elastic
+/// similarity), derived anew for this test (below; checked against the mode sum, which it
+/// zeroes on the arc to 1e-8 of ΔR and leaves open outside it): a pin of radius R1 in a
+/// hole of radius R2 = R1 + ΔR (ΔR ≪ R2) of an infinite plate of the same material, pushed
+/// against it by a force P per unit thickness through its centre, touches it over the arc
+/// |θ| ≤ ε with
+///
+/// ```text
+/// π E* ΔR / P = cos⁴(ε/2) (1 + ln cos(ε/2)) / sin²(ε/2) − sin²(ε/2),
+/// 1/E* = (1 − ν₁²)/E₁ + (1 − ν₂²)/E₂ = 2 (1 − ν²)/E   (plane strain)
+/// ```
+///
+/// (linear theory: the contact conditions on the circle of radius R; small ε gives Hertz,
+/// ε² = 4P/(π E* ΔR); the neat fit ΔR = 0 gives ε = 84.8°). Derivation (docs/formulation.md
+/// §5.6): per Fourier mode cos nθ of the pressure, the disc and the hole together close the
+/// gap by (2R/E*) n/(n² − 1) (n ≥ 2) and R/E* (n = 0); mode 1 is the pin's approach;
+/// (d²/dθ² + 1) of the gap condition is a finite Hilbert transform on the arc, which
+/// x = tan(θ/2) maps onto a straight crack, and the two conditions p₁ = P/(πR) and the mean
+/// pressure give the relation. Returns π E* ΔR / P for the half-angle ε (radians).
+fn persson_clearance(eps: f64) -> f64 {
+    let (c, s2) = ((eps / 2.0).cos(), (eps / 2.0).sin().powi(2));
+    c.powi(4) * (1.0 + c.ln()) / s2 - s2
+}
+
+/// The half-angle ε of `persson_clearance(ε) = π E* ΔR / P` (decreasing in ε), by bisection.
+fn persson_angle(p: f64, e_star: f64, clearance: f64) -> f64 {
+    let target = std::f64::consts::PI * e_star * clearance / p;
+    let (mut lo, mut hi) = (1e-9, std::f64::consts::FRAC_PI_2);
+    for _ in 0..100 {
+        let mid = 0.5 * (lo + hi);
+        if persson_clearance(mid) > target {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
+
+/// `geo/pin_in_hole.geo`, half model: a pin of radius 9.99 drawn touching the hole of radius
+/// 10 (ΔR = 0.01, the pin's centre at (ΔR, 0)) of a plate held on its outer circle of radius
+/// 200, one material (E = 1000, ν = 0.3, plane strain); 400 uniform elements on the pin's
+/// circle and 360 on the hole's over 0 ≤ θ ≤ 100° (0.25° and 0.28°), frictionless and
+/// unilateral with the gap from the drawing. The pin is pushed along x by a uniform traction
+/// on a small hole of radius 0.5 at its centre (a force through the centre, up to
+/// (0.5/10)²). For loads P/(E* ΔR) = 0.1, 0.5, 2 and 15 the contact half-angle, measured at
+/// the pin's centre midway between the last closed pair and the first open one (within half
+/// an element, 0.125°, of the pairs' edge), is within 2 % of Persson's for the applied load;
+/// the closed pairs are one arc from θ = 0; the contact forces on the pin balance the load to
+/// 1e-6 and the tangential tractions are zero.
+#[test]
+fn pin_in_a_hole_follows_persson() {
+    let (young, poisson, clearance, r0) = (1000.0, 0.3, 0.01, 0.5);
+    let e_star = young / (2.0 * (1.0 - poisson * poisson));
+    let mut angles = Vec::new();
+    for load in [0.1, 0.5, 2.0, 15.0] {
+        let dir = support::tmpdir("pin_in_hole");
+        // The half of P on the half of the small hole's circumference.
+        let q = load * e_star * clearance / (2.0 * std::f64::consts::PI * r0);
+        let scene = format!(
+            "title = \"pin in a hole\"\nplane = \"strain\"\n\
+             [mesh]\nfile = \"{}\"\ndR = {clearance}\nr0 = {r0}\n\
+             [body.pin]\nyoung = {young}\npoisson = {poisson}\n\
+             [body.plate]\nyoung = {young}\npoisson = {poisson}\n\
+             [boundary.load]\ntx = {q}\nty = 0.0\n\
+             [boundary.symmetry]\nun = 0.0\ntt = 0.0\n\
+             [boundary.outer]\nux = 0.0\nuy = 0.0\n\
+             [interface.contact]\nmodel = \"unilateral\"\ninitial = \"open\"\n\
+             tangential = \"slide\"\nbetween = [\"pin_side\", \"hole\"]\n\
+             [solve]\ntolerance = 1e-10\n[output]\nvtk = false\noperators = false\nhistory = \"final\"\n",
+            geo("pin_in_hole")
+        );
+        let (rows, summary) = run(&dir, &scene, "contact");
+        assert_eq!(summary["status"], "converged");
+        // The load as applied (on the drawn polygon) and the contact forces on the pin.
+        let pin = &summary["equilibrium"]["pin"]["loads"];
+        let applied = pin["boundary load"]["fx"].as_f64().unwrap();
+        let contact = pin["interface contact"]["fx"].as_f64().unwrap();
+        let p = 2.0 * applied;
+        let mut rows: Vec<(f64, bool, f64)> = rows
+            .iter()
+            .map(|r| {
+                let theta = r.num("y").atan2(r.num("x") - clearance).to_degrees();
+                (theta, r.closed(), r.num("tangential_traction"))
+            })
+            .collect();
+        rows.sort_by(|a, b| a.0.total_cmp(&b.0));
+        let closed = rows.iter().take_while(|r| r.1).count();
+        assert!(closed > 1, "the pin does not touch the hole");
+        assert!(
+            rows[closed..].iter().all(|r| !r.1),
+            "the closed pairs are not one arc from θ = 0"
+        );
+        let (last_closed, first_open) = (rows[closed - 1].0, rows[closed].0);
+        let measured = 0.5 * (last_closed + first_open);
+        let persson = persson_angle(p, e_star, clearance).to_degrees();
+        let error = measured / persson - 1.0;
+        println!(
+            "pin in a hole: P/(E* ΔR) = {:.4}: contact half-angle {measured:.3}° (last closed \
+             {last_closed:.3}°, first open {first_open:.3}°), Persson {persson:.3}° \
+             ({:+.2} %); contact resultant + load = {:.1e} of the load",
+            p / (e_star * clearance),
+            100.0 * error,
+            (contact + applied).abs() / applied
+        );
+        assert!(
+            error.abs() <= 0.02,
+            "P/(E* ΔR) = {load}: half-angle {measured}° vs Persson's {persson}°"
+        );
+        assert!(
+            (contact + applied).abs() <= 1e-6 * applied,
+            "contact resultant {contact} vs the load {applied}"
+        );
+        let tangential = rows.iter().map(|r| r.2.abs()).fold(0.0, f64::max);
+        assert_eq!(tangential, 0.0, "frictionless: tangential traction");
+        angles.push(persson);
+    }
+    // The loads span small to large arcs.
+    assert!(angles[0] < 25.0 && angles[3] > 75.0, "{angles:?}");
 }
 
 /// `geo/stacked_blocks.geo` with `nb` blocks and `[contact]`, the other keys in `rest`.
