@@ -113,6 +113,15 @@ enum Command {
         /// sweep.md, running nothing; exit_code is 0 for a converged run, 3 otherwise.
         #[arg(long)]
         table: bool,
+        /// The figures tabulated per interface, e.g. `--columns
+        /// detached_length,slip_length,tangential_resultant` (default
+        /// detached_length,normal_resultant): any key of an interface in summary.json.
+        #[arg(long, value_name = "K1,K2,...")]
+        columns: Option<String>,
+        /// Tabulate each part of a Physical Curve split per pair of bodies, not the curve's
+        /// totals.
+        #[arg(long)]
+        parts: bool,
     },
     /// Print what an archive holds.
     Inspect {
@@ -424,6 +433,8 @@ fn main() -> ExitCode {
             list,
             point,
             table,
+            columns,
+            parts,
         } => {
             let mode = match (list, point, table) {
                 (true, _, _) => sgbem::sweep::Mode::List,
@@ -431,7 +442,17 @@ fn main() -> ExitCode {
                 (_, _, true) => sgbem::sweep::Mode::Table,
                 _ => sgbem::sweep::Mode::All,
             };
-            sweep_command(&scene, &set, jobs, &out, allow_geo_shell, mode, &mut interrupted)
+            match sgbem::sweep::Columns::parse(columns.as_deref(), parts) {
+                Ok(cols) => sweep_command(
+                    &scene,
+                    &set,
+                    (jobs, allow_geo_shell),
+                    &out,
+                    (mode, &cols),
+                    &mut interrupted,
+                ),
+                Err(m) => Err(sgbem::error::Error::input(&scene, m)),
+            }
         }
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
@@ -461,17 +482,15 @@ fn fail(e: &Error) -> ExitCode {
 
 /// `sgbem sweep` in `mode`: the runs, the table, and the exit status of the sweep (130 when
 /// a signal ended it, through `interrupted`).
-#[allow(clippy::too_many_arguments)]
 fn sweep_command(
     scene: &std::path::Path,
     set: &[String],
-    jobs: usize,
+    (jobs, allow_geo_shell): (usize, bool),
     out: &std::path::Path,
-    allow_geo_shell: bool,
-    mode: sgbem::sweep::Mode,
+    (mode, columns): (sgbem::sweep::Mode, &sgbem::sweep::Columns),
     interrupted: &mut bool,
 ) -> sgbem::error::Result<()> {
-    let w = sgbem::sweep::sweep(scene, set, jobs, out, allow_geo_shell, mode)?;
+    let w = sgbem::sweep::sweep(scene, set, jobs, out, allow_geo_shell, mode, columns)?;
     match mode {
         sgbem::sweep::Mode::List => return Ok(()),
         sgbem::sweep::Mode::Point(k) => {

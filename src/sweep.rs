@@ -179,6 +179,7 @@ pub fn sweep(
     out: &Path,
     allow_geo_shell: bool,
     mode: Mode,
+    columns: &Columns,
 ) -> Result<Swept> {
     if !scene_path.is_file() {
         return Err(Error::input(
@@ -215,7 +216,7 @@ pub fn sweep(
                 ));
             }
             let codes = finished(&pts, out);
-            let (csv, md, failed) = table(&axes, &pts, &codes, out);
+            let (csv, md, failed) = table(&axes, &pts, &codes, out, columns);
             super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
             let path = out.join("sweep.csv");
             super::output::write_atomic(&path, csv.as_bytes())?;
@@ -241,7 +242,7 @@ pub fn sweep(
     // The table is written after every finished point, so that whatever ends the sweep
     // (even SIGKILL) leaves the results of the points that finished.
     let write = |codes: &[Option<i32>]| -> Result<(PathBuf, usize)> {
-        let (csv, md, failed) = table(&axes, &pts, codes, out);
+        let (csv, md, failed) = table(&axes, &pts, codes, out, columns);
         super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
         let path = out.join("sweep.csv");
         super::output::write_atomic(&path, csv.as_bytes())?;
@@ -261,7 +262,12 @@ pub fn sweep(
 fn list(pts: &[Point], out: &Path) -> Swept {
     for (k, p) in pts.iter().enumerate() {
         let sets: Vec<String> = p.sets.iter().map(|s| format!("--set '{s}'")).collect();
-        println!("{}\t{}\t{}", k + 1, out.join(&p.name).display(), sets.join(" "));
+        println!(
+            "{}\t{}\t{}",
+            k + 1,
+            out.join(&p.name).display(),
+            sets.join(" ")
+        );
     }
     Swept {
         table: PathBuf::new(),
@@ -450,13 +456,97 @@ fn run_points(
     Ok(codes)
 }
 
+/// The figures of an interface that `--columns` can tabulate (its keys in summary.json).
+pub const COLUMN_KEYS: [&str; 11] = [
+    "closed_length",
+    "detached_length",
+    "max_accumulated_slip",
+    "max_normal_traction",
+    "min_normal_traction",
+    "normal_resultant",
+    "open_pairs",
+    "pairs",
+    "slip_length",
+    "stick_length",
+    "tangential_resultant",
+];
+
+/// What the table shows per interface: the figures `keys`, and for a Physical Curve split
+/// per pair of bodies its parts (`parts`) or its totals (`interface_curves`, the default).
+#[derive(Debug, Clone)]
+pub struct Columns {
+    pub keys: Vec<String>,
+    pub parts: bool,
+}
+
+impl Columns {
+    /// From `--columns K1,K2,...` (default the detached length and normal resultant).
+    pub fn parse(list: Option<&str>, parts: bool) -> std::result::Result<Columns, String> {
+        let keys: Vec<String> = match list {
+            None => vec!["detached_length".into(), "normal_resultant".into()],
+            Some(l) => l.split(',').map(|k| k.trim().to_string()).collect(),
+        };
+        for k in &keys {
+            if !COLUMN_KEYS.contains(&k.as_str()) {
+                return Err(format!(
+                    "--columns: \"{k}\" is not a figure of an interface{}; valid: {}",
+                    crate::error::did_you_mean(k, COLUMN_KEYS.iter().copied()),
+                    COLUMN_KEYS.join(", ")
+                ));
+            }
+        }
+        Ok(Columns { keys, parts })
+    }
+
+    /// The unit of a figure from the summary's `units` (lengths L, resultants F, tractions
+    /// F/L²), empty for counts or where the scene names no units.
+    fn unit(key: &str, units: &serde_json::Value) -> String {
+        let (l, f) = (units["length"].as_str(), units["force"].as_str());
+        match (key, l, f) {
+            ("open_pairs" | "pairs", _, _) => String::new(),
+            (k, _, Some(f)) if k.ends_with("_resultant") => format!(" ({f})"),
+            (k, Some(l), Some(f)) if k.ends_with("_traction") => format!(" ({f}/{l}²)"),
+            (k, Some(l), _) if k.ends_with("_length") || k.ends_with("_slip") => {
+                format!(" ({l})")
+            }
+            _ => String::new(),
+        }
+    }
+}
+
+/// The interfaces of the table, in the order of `s` (the first summary that has them):
+/// each with the summary block it is read from. A split curve is one entry
+/// (`interface_curves`) unless `parts`.
+fn tabulated(s: &serde_json::Value, parts: bool) -> Vec<(String, &'static str)> {
+    let mut names: Vec<(String, &'static str)> = Vec::new();
+    let mut in_curve = std::collections::HashSet::new();
+    if let (false, Some(curves)) = (parts, s["interface_curves"].as_object()) {
+        for (curve, c) in curves {
+            names.push((curve.clone(), "interface_curves"));
+            for p in c["parts"].as_array().into_iter().flatten() {
+                in_curve.insert(p.as_str().unwrap_or("").to_string());
+            }
+        }
+    }
+    if let Some(m) = s["interfaces"].as_object() {
+        names.extend(
+            m.keys()
+                .filter(|n| !in_curve.contains(*n))
+                .map(|n| (n.clone(), "interfaces")),
+        );
+    }
+    names
+}
+
 /// The headline table: per point the swept values, exit code, status, contact iterations
-/// and per interface the detached length and normal resultant (from its summary.json).
+/// and per interface (or split curve) the figures `columns` (from its summary.json); the
+/// Markdown table's headers carry the units.
 fn table(
     axes: &[Axis],
     pts: &[Point],
     codes: &[Option<i32>],
     out: &Path,
+    columns: &Columns,
 ) -> (String, String, usize) {
     let summaries: Vec<Option<serde_json::Value>> = pts
         .iter()
@@ -468,23 +558,17 @@ fn table(
                 .and_then(|t| serde_json::from_str(&t).ok())
         })
         .collect();
-    // Interfaces in the order of the first summary that has them.
-    let names: Vec<String> = summaries
-        .iter()
-        .flatten()
-        .find_map(|s| {
-            s["interfaces"]
-                .as_object()
-                .map(|m| m.keys().cloned().collect())
-        })
-        .unwrap_or_default();
+    let first = summaries.iter().flatten().next();
+    let names = first.map_or_else(Vec::new, |s| tabulated(s, columns.parts));
+    let units = first.map_or(serde_json::Value::Null, |s| s["units"].clone());
     let mut head: Vec<String> = vec!["point".into()];
     head.extend(axes.iter().map(|a| a.key.clone()));
     head.extend(["exit_code", "status", "contact_iterations"].map(String::from));
-    for n in &names {
-        head.push(format!("{n}.detached_length"));
-        head.push(format!("{n}.normal_resultant"));
+    let fixed = head.len();
+    for (n, _) in &names {
+        head.extend(columns.keys.iter().map(|k| format!("{n}.{k}")));
     }
+    let width = columns.keys.len() * names.len();
     let mut rows = Vec::new();
     let mut failed = 0;
     for ((p, code), s) in pts.iter().zip(codes).zip(&summaries) {
@@ -494,7 +578,7 @@ fn table(
             // Not run yet, or ended with the sweep: no result of it is credited.
             row.push(String::new());
             row.push("not finished".into());
-            row.extend(std::iter::repeat_n(String::new(), 1 + 2 * names.len()));
+            row.extend(std::iter::repeat_n(String::new(), 1 + width));
             rows.push(row);
             continue;
         };
@@ -507,17 +591,22 @@ fn table(
             Some(s) => {
                 row.push(s["status"].as_str().unwrap_or("").to_string());
                 row.push(num(&s["contact"]["iterations"]));
-                for n in &names {
-                    row.push(num(&s["interfaces"][n]["detached_length"]));
-                    row.push(num(&s["interfaces"][n]["normal_resultant"]));
+                for (n, block) in &names {
+                    row.extend(columns.keys.iter().map(|k| num(&s[*block][n][k])));
                 }
             }
             None => {
                 row.push("no summary".into());
-                row.extend(std::iter::repeat_n(String::new(), 1 + 2 * names.len()));
+                row.extend(std::iter::repeat_n(String::new(), 1 + width));
             }
         }
         rows.push(row);
+    }
+    // The Markdown headers with units.
+    let mut md_head = head.clone();
+    for (i, h) in md_head.iter_mut().enumerate().skip(fixed) {
+        let key = &columns.keys[(i - fixed) % columns.keys.len()];
+        h.push_str(&Columns::unit(key, &units));
     }
     let quote = |c: &String| {
         if c.contains([',', '"', '\n']) {
@@ -535,7 +624,7 @@ fn table(
     let _ = writeln!(
         md,
         "| {} |",
-        head.iter().map(cell).collect::<Vec<_>>().join(" | ")
+        md_head.iter().map(cell).collect::<Vec<_>>().join(" | ")
     );
     let _ = writeln!(md, "|{}", "---|".repeat(head.len()));
     for r in &rows {

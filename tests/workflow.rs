@@ -347,6 +347,90 @@ points = 5
     );
 }
 
+/// `sgbem sweep SCENE --set S... --out OUT EXTRA...`.
+fn sweep_into(scene: &str, sets: &[&str], out: &Path, extra: &[&str]) -> (i32, String, String) {
+    let mut args = vec!["sweep", scene];
+    for s in sets {
+        args.extend(["--set", s]);
+    }
+    args.extend(["--out", out.to_str().unwrap()]);
+    args.extend_from_slice(extra);
+    sgbem(&args)
+}
+
+/// `--columns` picks the figures of each interface, a Physical Curve split per pair of
+/// bodies is tabulated by its totals (`interface_curves`; `--parts` lists each part), the
+/// Markdown headers carry the units, and an unknown figure is refused naming the valid ones.
+#[test]
+fn sweep_columns_tabulate_curve_totals_with_units() {
+    let dir = tmpdir("workflow-sweep-columns");
+    let scene = support::root().join("pipelines/wall_running_bond.toml");
+    let s = scene.to_str().unwrap();
+    let sets = [
+        "mesh.courses=2",
+        "mesh.bricks=2",
+        "defaults.interface.friction=0.5,0.7",
+        "output.vtk=false",
+    ];
+    let sweep = |out: &Path, extra: &[&str]| sweep_into(s, &sets, out, extra);
+    let out = dir.join("curves");
+    let keys = "detached_length,slip_length,tangential_resultant";
+    let (code, _, err) = sweep(&out, &["--columns", keys]);
+    assert_eq!(code, 0, "{err}");
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let lines: Vec<&str> = csv.lines().collect();
+    let head: Vec<&str> = lines[0].split(',').collect();
+    assert_eq!(
+        &head[head.len() - 3..],
+        [
+            "joints.detached_length",
+            "joints.slip_length",
+            "joints.tangential_resultant"
+        ],
+        "{csv}"
+    );
+    for line in &lines[1..] {
+        let c: Vec<&str> = line.split(',').collect();
+        let sm = summary(&out.join(c[0]));
+        let curve = &sm["interface_curves"]["joints"];
+        for (k, v) in keys.split(',').zip(&c[c.len() - 3..]) {
+            assert_eq!(v.parse::<f64>().unwrap(), curve[k].as_f64().unwrap(), "{k}");
+        }
+        // The curve's slip length is the sum over its parts.
+        let parts: f64 = curve["parts"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|p| {
+                sm["interfaces"][p.as_str().unwrap()]["slip_length"]
+                    .as_f64()
+                    .unwrap()
+            })
+            .sum();
+        assert!((parts - curve["slip_length"].as_f64().unwrap()).abs() < 1e-12);
+    }
+    let md = std::fs::read_to_string(out.join("sweep.md")).unwrap();
+    assert!(
+        md.contains("joints.slip_length (m)") && md.contains("joints.tangential_resultant (kN)"),
+        "{md}"
+    );
+    let out = dir.join("parts");
+    assert_eq!(sweep(&out, &["--parts"]).0, 0);
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    let head = csv.lines().next().unwrap();
+    assert!(
+        head.contains("joints[brick_1|brick_2].normal_resultant")
+            && !head.contains("joints.normal_resultant"),
+        "{head}"
+    );
+    let (code, _, err) = sweep(&dir.join("bad"), &["--columns", "slip_lenght"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(
+        err.contains("slip_length") && err.contains("tangential_resultant"),
+        "{err}"
+    );
+}
+
 /// A sweep as a job array: `--list` numbers the points, `--point K` runs one (as a SLURM
 /// task would, side by side with the others), `--table` tabulates what has run; the table
 /// of all points equals the one of the whole sweep.
@@ -355,18 +439,8 @@ fn sweep_points_run_one_by_one_and_tabulate_as_the_whole_sweep() {
     let dir = tmpdir("workflow-sweep-points");
     let scene = geo_scene(&dir, "");
     let s = scene.to_str().unwrap();
-    let sweep = |out: &Path, extra: &[&str]| {
-        let mut args = vec![
-            "sweep",
-            s,
-            "--set",
-            "boundary.top.ty=-1,-2,-3",
-            "--out",
-            out.to_str().unwrap(),
-        ];
-        args.extend_from_slice(extra);
-        sgbem(&args)
-    };
+    let sweep =
+        |out: &Path, extra: &[&str]| sweep_into(s, &["boundary.top.ty=-1,-2,-3"], out, extra);
     let whole = dir.join("whole");
     assert_eq!(sweep(&whole, &[]).0, 0);
     let arr = dir.join("array");
@@ -374,13 +448,19 @@ fn sweep_points_run_one_by_one_and_tabulate_as_the_whole_sweep() {
     assert_eq!(code, 0, "{err}");
     let lines: Vec<&str> = listed.lines().collect();
     assert_eq!(lines.len(), 3, "{listed}");
-    assert!(lines[1].starts_with("2\t") && lines[1].contains("ty=-2"), "{listed}");
+    assert!(
+        lines[1].starts_with("2\t") && lines[1].contains("ty=-2"),
+        "{listed}"
+    );
     assert!(lines[1].contains("--set 'boundary.top.ty=-2'"), "{listed}");
     assert!(!arr.exists(), "--list runs nothing");
     for bad in ["0", "4"] {
         let (code, _, err) = sweep(&arr, &["--point", bad]);
         assert_eq!(code, 2, "{err}");
-        assert!(err.contains("points 1 to 3") && err.contains("--list"), "{err}");
+        assert!(
+            err.contains("points 1 to 3") && err.contains("--list"),
+            "{err}"
+        );
     }
     let (code, _, err) = sweep(&arr, &["--point", "2"]);
     assert_eq!(code, 0, "{err}");
@@ -388,7 +468,10 @@ fn sweep_points_run_one_by_one_and_tabulate_as_the_whole_sweep() {
     assert!(!arr.join("ty=-1").exists() && !arr.join("ty=-3").exists());
     assert_eq!(sweep(&arr, &["--table"]).0, 0);
     let partial = std::fs::read_to_string(arr.join("sweep.csv")).unwrap();
-    assert!(partial.lines().nth(1).unwrap().contains("not finished"), "{partial}");
+    assert!(
+        partial.lines().nth(1).unwrap().contains("not finished"),
+        "{partial}"
+    );
     for k in ["3", "1"] {
         assert_eq!(sweep(&arr, &["--point", k]).0, 0);
     }
