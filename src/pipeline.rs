@@ -137,13 +137,16 @@ pub(crate) fn prepare_bodies(
     let Loaded {
         scene, model, plan, ..
     } = loaded;
-    // Two steps per body (assembly, condensation); each message starts the next.
-    let stage = progress.bar("assemble", 2 * model.bodies.len() as u64);
-    let started = std::cell::Cell::new(0u64);
+    // One step per body, counted as each is assembled and condensed (in parallel).
+    let stage = progress.bar("assemble", model.bodies.len() as u64);
+    let messages = std::sync::atomic::AtomicU64::new(0);
     let ops = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
-        stage.set_position(started.get());
-        started.set(started.get() + 1);
-        stage.set_message(m.to_string())
+        if messages.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 0 {
+            stage.set_message(m.to_string());
+        } else {
+            stage.inc(1);
+            stage.set_message(format!("last done: {m}"));
+        }
     })
     .map_err(|e| plan.explain(e))?;
     stage.finish();

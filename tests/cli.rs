@@ -646,3 +646,63 @@ fn set_on_a_defaulted_table_points_to_the_defaults() {
     assert_eq!(code, 0, "{err}");
     assert!(out.contains("cohesion 0.25"), "{out}");
 }
+
+/// Progress that moves, seen on a terminal (a pseudo-terminal from `script`): the assembly
+/// bar counts the bodies as they are done, and the contact bar's message follows the outer
+/// iterations of the load step (before, the bars sat at 0/N and "load step 1" until each
+/// stage ended).
+#[test]
+fn progress_moves_on_a_terminal() {
+    let dir = support::tmpdir("progress_pty");
+    let out = dir.join("run");
+    let log = dir.join("terminal.log");
+    let scene = support::root().join("pipelines/wall_running_bond.toml");
+    let command = format!(
+        "'{}' run '{}' --set mesh.courses=12 --set mesh.bricks=12 --set output.history=final \
+         --set output.vtk=false --out '{}'",
+        env!("CARGO_BIN_EXE_sgbem"),
+        scene.display(),
+        out.display()
+    );
+    let status = std::process::Command::new("script")
+        .args(["-qfec", &command, log.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .status()
+        .expect("script (util-linux) runs");
+    assert!(status.success(), "{status}");
+    let raw = std::fs::read(&log).unwrap();
+    let text = String::from_utf8_lossy(&raw);
+    let frames: Vec<&str> = text.split(['\r', '\n']).collect();
+    let distinct = |word: &str, pick: &dyn Fn(&str) -> Option<String>| {
+        let mut seen: Vec<String> = frames
+            .iter()
+            .filter(|f| f.contains(word))
+            .filter_map(|f| pick(f))
+            .collect();
+        seen.sort();
+        seen.dedup();
+        seen
+    };
+    // "assemble [===   ] 57/150 last done: brick_12": the counts drawn.
+    let counts = distinct("assemble", &|f| {
+        f.split_whitespace()
+            .find(|w| w.contains('/') && w.split('/').all(|n| n.parse::<u32>().is_ok()))
+            .map(str::to_string)
+    });
+    assert!(counts.len() >= 3, "assembly counts drawn: {counts:?}");
+    let pairs: Vec<(u32, u32)> = counts
+        .iter()
+        .map(|c| {
+            let (a, b) = c.split_once('/').unwrap();
+            (a.parse().unwrap(), b.parse().unwrap())
+        })
+        .collect();
+    let bodies = pairs[0].1;
+    assert!(pairs.iter().all(|p| p.1 == bodies), "{counts:?}");
+    assert!(pairs.iter().any(|p| 0 < p.0 && p.0 < bodies), "{counts:?}");
+    let outer = distinct("contact", &|f| {
+        let i = f.find("outer iteration ")?;
+        Some(f[i..].split(':').next()?.to_string())
+    });
+    assert!(outer.len() >= 2, "outer iterations drawn: {outer:?}");
+}

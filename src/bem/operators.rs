@@ -25,14 +25,16 @@ pub struct Operators {
     pub condense_seconds: f64,
 }
 
-/// Assembles and condenses every body for the loads scaled by `load_factor`.
+/// Assembles and condenses every body for the loads scaled by `load_factor`. `progress`
+/// hears the stage's start (a sentence) and then each body's name as it is done (from the
+/// worker threads, in any order).
 pub fn prepare(
     model: &Model,
     plane: Plane,
     settings: &QuadratureSettings,
     load_factor: f64,
     scene_file: &std::path::Path,
-    progress: &dyn Fn(&str),
+    progress: &(dyn Fn(&str) + Sync),
 ) -> Result<Operators> {
     let t_start = Instant::now();
     use rayon::prelude::*;
@@ -52,6 +54,7 @@ pub fn prepare(
             let ta = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();
             let c = condense(&sys, &body.name)?;
+            progress(&body.name);
             Ok((sys, c, ta, t1.elapsed().as_secs_f64()))
         })
         .collect();

@@ -92,6 +92,7 @@ pub fn solve(
     let (main, checks) = solvers(scene.solve.method, session.problem.n_open_rows);
     let steps = scene.solve.steps();
     let stage = progress.contact(steps.len());
+    session.stage = Some(stage.clone());
     let stepper = Stepper {
         case,
         timed: timed(scene),

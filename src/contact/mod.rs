@@ -215,6 +215,8 @@ pub struct Session<'a> {
     /// Outer iterations of the Tresca fixed point after which Coulomb's problem is solved
     /// exactly (Klarbring's LCP through Lemke) to restart it.
     pub coupled_after: usize,
+    /// The contact stage's bar: each outer iteration of a load step shows on it.
+    pub stage: Option<crate::output::progress::Stage>,
 }
 
 impl<'a> Session<'a> {
@@ -226,6 +228,7 @@ impl<'a> Session<'a> {
             cols: Columns::default(),
             sparse: None,
             coupled_after: FRICTION_COUPLED_AFTER,
+            stage: None,
         })
     }
 
@@ -613,6 +616,19 @@ impl<'a> Session<'a> {
             let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
             let change = bound_change(&bound, &new_bound);
             let settled = !friction || change <= 1e-10;
+            if let Some(stage) = &self.stage {
+                let open = state.open.iter().filter(|&&o| o).count();
+                stage.set_message(format!(
+                    "step {}, outer iteration {outer}: {iterations} switches, {open} of {n} rows \
+                     open or slipping{}",
+                    load_step + 1,
+                    if friction {
+                        format!(", bound change {change:.1e}")
+                    } else {
+                        String::new()
+                    }
+                ));
+            }
             bound_changes.extend(friction.then_some(change));
             relax.update(outer, change);
             bound = relax.next(outer, status_key(&state), &bound, new_bound);

@@ -43,17 +43,24 @@ impl Progress {
         self.enabled
     }
 
-    /// A bar for a stage of `total` steps, labelled `stage`.
+    /// A bar for a stage of `total` steps, labelled `stage`, with the time left at the rate
+    /// so far.
     pub fn bar(&self, stage: &str, total: u64) -> Stage {
+        self.styled(
+            stage,
+            total,
+            "{prefix:>12} [{bar:30}] {pos}/{len} {msg} ({elapsed}, eta {eta})",
+        )
+    }
+
+    fn styled(&self, stage: &str, total: u64, template: &str) -> Stage {
         if !self.enabled {
             return Stage::hidden();
         }
         let bar = ProgressBar::with_draw_target(Some(total), ProgressDrawTarget::stderr());
-        let style = ProgressStyle::with_template(
-            "{prefix:>12} [{bar:30}] {pos}/{len} {msg} ({elapsed}, eta {eta})",
-        )
-        .unwrap_or_else(|_| ProgressStyle::default_bar())
-        .progress_chars("=> ");
+        let style = ProgressStyle::with_template(template)
+            .unwrap_or_else(|_| ProgressStyle::default_bar())
+            .progress_chars("=> ");
         bar.set_style(style);
         bar.set_prefix(stage.to_string());
         bar.enable_steady_tick(Duration::from_millis(200));
@@ -62,8 +69,14 @@ impl Progress {
 
     /// A bar for the contact stage: its length is the number of load steps; the message
     /// shows the latest [`ContactTick`] (iteration, open pairs, detached length).
+    /// No time left is shown: the iterations a load step needs are not known ahead (the
+    /// message moves with each outer iteration instead).
     pub fn contact(&self, load_steps: usize) -> Stage {
-        let stage = self.bar("contact", load_steps as u64);
+        let stage = self.styled(
+            "contact",
+            load_steps as u64,
+            "{prefix:>12} [{bar:30}] {pos}/{len} {msg} ({elapsed})",
+        );
         stage.set_message("load step 1");
         stage
     }
