@@ -1080,6 +1080,12 @@ fn fabricated_run(dir: &Path) -> PathBuf {
     rec.status = "converged".into();
     rec.timings = vec![("read".into(), 0.25), ("write".into(), 0.5)];
     let last = rec.states.last().unwrap();
+    let thrusts: Vec<sgbem::post::thrust::Thrust> = model
+        .interfaces
+        .iter()
+        .zip(last.interfaces.iter())
+        .map(|(it, r)| sgbem::post::thrust::thrust(&sgbem::post::thrust::Joint::of(it), r, 1.0))
+        .collect();
     let summary = serde_json::json!({
         "title": "stacked",
         "status": "converged",
@@ -1090,6 +1096,7 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             "field_nodes": last.interior.iter().map(|i| i.mesh_nodes.len()).sum::<usize>(),
         },
         "interfaces": sgbem::output::summary::interfaces(&model.interfaces, &last.interfaces, 1.0),
+        "thrust": sgbem::output::summary::thrust(&model.interfaces, &thrusts),
     });
     rec.summary_json = summary.to_string();
     let run = dir.join("run");
@@ -1107,6 +1114,18 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             &last.interfaces[0],
             &model.bodies,
         ),
+    )
+    .unwrap();
+    let name = |b: usize| model.bodies[b].name.as_str();
+    let rows: Vec<sgbem::output::csv::ThrustRow> = model
+        .interfaces
+        .iter()
+        .zip(&thrusts)
+        .map(|(it, t)| (it.spec.name.as_str(), name(it.body_a), name(it.body_b), t))
+        .collect();
+    std::fs::write(
+        run.join("thrust.csv"),
+        sgbem::output::csv::thrust_table(&rows, "", ""),
     )
     .unwrap();
     write_archive(&run.join("archive.h5"), &rec).unwrap();

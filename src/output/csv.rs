@@ -87,13 +87,13 @@ pub(crate) fn section_table(rows: &[SectionRow]) -> String {
 }
 
 /// One joint of `thrust.csv`: its name, the names of its two bodies and its resultant.
-pub(crate) type ThrustRow<'a> = (&'a str, &'a str, &'a str, &'a Thrust);
+pub type ThrustRow<'a> = (&'a str, &'a str, &'a str, &'a Thrust);
 
 /// `thrust.csv`: per joint `joint,body_a,body_b,N,T,x,y,s,e,e_over_half_length,inside,
 /// in_closed_part` (post/thrust.rs), the units of the scene in brackets (`force` and
 /// `length` where it gives none); N compression positive. A fully open joint has N = 0 and
 /// empty fields from `x` on (it has no point of application).
-pub(crate) fn thrust_table(rows: &[ThrustRow], force: &str, length: &str) -> String {
+pub fn thrust_table(rows: &[ThrustRow], force: &str, length: &str) -> String {
     let f = if force.is_empty() { "force" } else { force };
     let l = if length.is_empty() { "length" } else { length };
     let mut o = format!(
