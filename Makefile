@@ -172,7 +172,8 @@ accuracy: build mesh
 	$(PY) pipelines/accuracy.py
 
 # Pictures of every run (docs/img/<run>_*.png: strained shapes, detachment along the
-# interfaces per iteration, sections, the paper's Figs. 5 and 6) and docs/results.md (headline
+# interfaces per iteration, sections, the paper's Figs. 5 and 6; thrust_arch.png and
+# thrust_wall.png: the thrust lines of out/arch and out/wall) and docs/results.md (headline
 # figures beside the paper's Tables 1-4). A run folder missing under out/ is skipped.
 report: setup
 	@$(MAKE) --no-print-directory -k examples || \
@@ -181,6 +182,7 @@ report: setup
 	$(PY) pipelines/report.py $(dir $(RESULTS)) --out docs/img
 	$(PY) pipelines/results.py out --img docs/img --md docs/results.md
 	$(PY) pipelines/friction_plots.py out docs/img
+	$(PY) pipelines/thrust_plots.py out docs/img
 	@if [ -f out/accuracy/accuracy_benchmarks.png ]; then \
 	  cp out/accuracy/accuracy_benchmarks.png docs/img/ && echo "report: docs/img/accuracy_benchmarks.png from out/accuracy/"; \
 	else echo "report: no out/accuracy/ (make accuracy): docs/img/accuracy_benchmarks.png left as it is"; fi

@@ -9,6 +9,9 @@ csv (interfaces/*.csv, sections/*.csv), json (summary.json). Checks:
              open pairs, resultants, extreme tractions) recomputed from /solution; timings;
   history    detached lengths recomputed from each row's statuses;
   csv        interface tables agree with /solution; section tables have their columns;
+  thrust     thrust.csv and summary.json `thrust`: per joint N, T, the point of application
+             and its eccentricity recomputed from /solution (docs/thrust.md); the last VTK
+             thrust file holds the same points;
   vtk        history.pvd lists existing files, one boundary file per archived state, times
              increasing; each file read by meshio and pyvista with the point data of SPEC.md
              and values equal to the archive's.
@@ -260,6 +263,67 @@ def check_timings(c, h5, run):
             c.close(h5["timings"][stage][()], t[stage], f"timing of stage {stage}: archive vs timings.json", 1e-6)
 
 
+def tributary(i, x, elements):
+    """Each pair's tributary length: the pairing's weights, else half of each adjacent element."""
+    if "pairing" in i:
+        return i["pairing"]["weight"][()]
+    w = np.zeros(x.shape[0])
+    lengths = segment_lengths(x, elements)
+    for (j, k), length in zip(elements, lengths):
+        w[j] += 0.5 * length
+        w[k] += 0.5 * length
+    return w
+
+
+def check_thrust(c, run, h5, summary, ifaces):
+    path = run / "thrust.csv"
+    if not c.ok(path.exists() == bool(ifaces), f"{path}: written {path.exists()}, interfaces {len(ifaces)}"):
+        return
+    if not ifaces:
+        return
+    rows = list(csv.reader(path.open()))
+    header, rows = rows[0], rows[1:]
+    c.ok([h.split(" [")[0] for h in header] == ["joint", "body_a", "body_b", "N", "T", "x", "y", "s", "e",
+                                               "e_over_half_length", "inside", "in_closed_part"],
+         f"{path}: header {header}")
+    c.ok(len(rows) == len(ifaces), f"{path}: {len(rows)} rows for {len(ifaces)} interfaces")
+    thickness = float(h5.attrs.get("thickness", 1.0))
+    sol = h5["solution"]["interfaces"]
+    points = []
+    for i, row in zip(ifaces, rows):
+        name = text(i.attrs["name"])
+        c.ok(row[0] == name, f"{path}: row {row[0]}, want {name} (run order)")
+        r = sol[i.name.split("/")[-1]]
+        traction, x, s = r["traction"][()], i["x"][()], i["s"][()]
+        w = tributary(i, x, i["elements"][()])
+        f = traction[:, 1] * w
+        n, tt = -thickness * f.sum(), thickness * float(np.sum(traction[:, 0] * w))
+        scale = thickness * float(np.sum(np.abs(f))) or 1.0
+        c.close(float(row[3]), n, f"{path}: {name} N vs the archive", scale)
+        c.close(float(row[4]), tt, f"{path}: {name} T vs the archive",
+                thickness * float(np.sum(np.abs(traction[:, 0] * w))) or 1.0)
+        figures = summary.get("thrust", {}).get(name, {})
+        c.ok(figures.get("normal_force") == float(row[3]), f"{path}: {name} N differs from summary.json")
+        if not np.any(f):
+            c.ok(all(v == "" for v in row[5:]), f"{path}: {name} is fully open but has a point")
+            continue
+        span = s[w > 0]
+        xc, sc = (x * f[:, None]).sum(axis=0) / f.sum(), float(np.sum(s * f) / f.sum())
+        length = float(span.max() - span.min())
+        e = sc - 0.5 * (span.max() + span.min())
+        c.close([float(v) for v in row[5:9]], [xc[0], xc[1], sc, e], f"{path}: {name} point vs the archive",
+                float(np.abs(x).max()) or 1.0)
+        c.ok(row[10] == ("true" if abs(e) <= 0.5 * length * (1 + 1e-9) else "false"),
+             f"{path}: {name} inside {row[10]} with e {e} and L {length}")
+        c.ok(figures.get("x") == float(row[5]), f"{path}: {name} x differs from summary.json")
+        points.append(xc)
+    last = sorted((run / "vtk").glob("thrust_*.vtu"))
+    if last:
+        m = meshio.read(last[-1])
+        c.close(m.points[:, :2], np.array(points).reshape(-1, 2), f"{last[-1]}: points vs thrust.csv",
+                float(np.abs(m.points).max(initial=1.0)))
+
+
 def check_csv(c, run, h5, ifaces):
     for i in ifaces:
         name = text(i.attrs["name"])
@@ -449,6 +513,7 @@ def main():
         check_timings(c, h5, run)
         if count:
             check_csv(c, run, h5, ifaces)
+            check_thrust(c, run, h5, summary, ifaces)
         check_vtk(c, run, h5, bodies, count)
     if c.failures:
         for f in c.failures:

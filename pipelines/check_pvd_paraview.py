@@ -7,8 +7,10 @@ boundary alone for a run without an interior field; the field block has `stress`
 6-component symmetric tensor (components XX YY ZZ XY YZ XZ) and the scalars sxx, syy, sxy
 that equal its components; every block carries the title and units as field data; the
 boundary's `iteration` field data increases with time; the times increase. Then states.pvd:
-the same times, at each a multiblock with a block named "boundary" and, only in a state
-that has its interior field (the final one, where computed), a block named "field".
+the same times, at each a multiblock with a block named "boundary", only in a state
+that has its interior field (the final one, where computed) a block named "field", and
+where the run has interfaces a block named "thrust" (the thrust line: a vertex per joint
+that carries a normal force, with N, T and e, and lines through the bodies).
 Prints one line per check group; exits 1 on the first failure.
 """
 import os
@@ -59,8 +61,9 @@ def leaves(obj):
     return [b for _, b in named_leaves(obj)]
 
 
-def check_states(run, times, with_field):
-    """states.pvd: one multiblock per time, named blocks, the field only at the last time."""
+def check_states(run, times, with_field, with_thrust):
+    """states.pvd: one multiblock per time, named blocks, the field only at the last time,
+    the thrust line at every time where the run has interfaces."""
     pvd = os.path.join(run, "vtk", "states.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -70,17 +73,24 @@ def check_states(run, times, with_field):
         reader.UpdatePipeline(t)
         named = named_leaves(servermanager.Fetch(reader))
         want = ["boundary", "field"] if with_field and k == len(times) - 1 else ["boundary"]
+        want += ["thrust"] if with_thrust else []
         if [n for n, _ in named] != want:
             fail(f"{pvd} at time {t}: blocks {[n for n, _ in named]}, want {want}")
-        if named[-1][1].GetNumberOfPoints() == 0:
-            fail(f"{pvd} at time {t}: empty block {named[-1][0]}")
+        for n, b in named:
+            if n != "thrust" and b.GetNumberOfPoints() == 0:
+                fail(f"{pvd} at time {t}: empty block {n}")
+            if n == "thrust" and b.GetPointData().GetArray("N") is None:
+                fail(f"{pvd} at time {t}: the thrust block has no N")
     print(f"check_pvd_paraview: {pvd}: {len(times)} multiblocks, block boundary at every "
-          f"time, field {'at the last time only' if with_field else 'nowhere'}: ok")
+          f"time, field {'at the last time only' if with_field else 'nowhere'}, thrust "
+          f"{'at every time' if with_thrust else 'nowhere (no interfaces)'}: ok")
 
 
 def main():
     run = sys.argv[1]
-    with_field = any(f.startswith("field_") for f in os.listdir(os.path.join(run, "vtk")))
+    files = os.listdir(os.path.join(run, "vtk"))
+    with_field = any(f.startswith("field_") for f in files)
+    with_thrust = any(f.startswith("thrust_") for f in files)
     pvd = os.path.join(run, "vtk", "history.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -133,7 +143,7 @@ def main():
             if with_field else "the boundary at every time (no interior field)")
     print(f"check_pvd_paraview: {pvd}: {len(times)} times from {times[0]:g} to {times[-1]:g}, "
           f"{what}: ok")
-    check_states(run, times, with_field)
+    check_states(run, times, with_field, with_thrust)
 
 
 main()

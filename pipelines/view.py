@@ -1,11 +1,19 @@
 """Renders a run's final state off-screen in ParaView: the interior field (where the run
 computed one) warped by the displacement and coloured by von Mises stress, with the boundary
-lines on top; saves the same view as a ParaView state file for the GUI.
+lines on top (black over a field, else coloured by contact status), and the thrust line
+(where the run has interfaces: the joints' points of application, in blue); saves the same
+view as a ParaView state file for the GUI.
+
+Contact status as named categories: the colour maps of `contact_status` (-1 not an
+interface, 0 open, 1 closed) and `tangential_status` (-1 no friction, 0 open, 1 stick,
+2 slip) are set to categories with these names (ParaView's annotations), in the picture and
+in the saved state, so that colouring by them in the GUI shows a legend of names. (The
+files keep integers: a string array would make meshio refuse the whole file.)
 
 Usage: xvfb-run -a pvpython pipelines/view.py RUN_DIR OUT.png   (what `make view` runs)
 
-Reads RUN_DIR/vtk/states.pvd (one multiblock per time, blocks "boundary" and, where
-computed, "field"), or history.pvd of older runs; either may come back from ParaView's
+Reads RUN_DIR/vtk/states.pvd (one multiblock per time, blocks "boundary", where computed
+"field", where the run has interfaces "thrust"), or history.pvd of older runs; either may come back from ParaView's
 reader as a multiblock or, with a single part, as a plain grid: both are handled. The view
 is set at the last time step. The warp factor comes from the results: 5 % of the model size
 (the larger side of its bounding box) over the largest displacement magnitude, rounded to
@@ -86,12 +94,41 @@ def part(reader, selector):
     return block
 
 
+# Named categories of the integer status arrays: (value, name, RGB).
+CATEGORIES = {
+    "contact_status": [(-1, "not an interface", (0.0, 0.0, 0.0)),
+                       (0, "open", (0.89, 0.10, 0.11)),
+                       (1, "closed", (0.13, 0.55, 0.13))],
+    "tangential_status": [(-1, "no friction", (0.0, 0.0, 0.0)),
+                          (0, "open", (0.89, 0.10, 0.11)),
+                          (1, "stick", (0.13, 0.55, 0.13)),
+                          (2, "slip", (0.12, 0.47, 0.71))],
+}
+
+
+def categories(name):
+    """The colour map of status array `name` as named categories (ParaView annotations)."""
+    lut = GetColorTransferFunction(name)
+    lut.InterpretValuesAsCategories = 1
+    lut.Annotations = [str(v) for c in CATEGORIES[name] for v in (c[0], c[1])]
+    lut.IndexedColors = [x for c in CATEGORIES[name] for x in c[2]]
+    return lut
+
+
 def show_part(source, view, factor, colour, unit):
     warp = WarpByVector(Input=source)
     warp.Vectors = ["POINTS", "displacement"]
     warp.ScaleFactor = factor
     d = Show(warp, view)
-    if colour:
+    if colour in CATEGORIES:
+        ColorBy(d, ("POINTS", colour))
+        bar = GetScalarBar(categories(colour), view)
+        d.SetScalarBarVisibility(view, True)
+        bar.Title = colour.replace("_", " ")
+        bar.ComponentTitle = ""
+        bar.TitleColor = bar.LabelColor = [0, 0, 0]
+        d.LineWidth = 2.0
+    elif colour:
         ColorBy(d, ("POINTS", colour))
         lut = GetColorTransferFunction(colour)
         lut.ApplyPreset("Viridis (matplotlib)", True)
@@ -111,8 +148,10 @@ def main():
     run, png = sys.argv[1], sys.argv[2]
     reader, t = open_series(run)
     blocks = leaves(servermanager.Fetch(reader))
+    thrust = [(s, b) for s, b in blocks if s is not None and s.endswith("/thrust")]
     field = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is not None]
-    boundary = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is None]
+    boundary = [(s, b) for s, b in blocks
+                if b.GetPointData().GetArray("stress") is None and (s, b) not in thrust]
     if not boundary:
         sys.exit(f"view: {run}: the series has no boundary block at time {t:g}")
     show = field[0][1] if field else boundary[0][1]
@@ -122,7 +161,8 @@ def main():
     umax = float(abs(u).max() and (u ** 2).sum(axis=1).max() ** 0.5)
     factor = nice(0.05 * size / umax) if umax > 0 else 1.0
     print(f"view: {run}: model size {size:g}, max |u| {umax:.4g}, warp factor {factor:g}, "
-          f"time {t:g}, blocks: {'boundary and field' if field else 'boundary only'}")
+          f"time {t:g}, blocks: {'boundary and field' if field else 'boundary only'}"
+          f"{', thrust line' if thrust else ''}")
 
     view = GetActiveViewOrCreate("RenderView")
     view.ViewTime = t
@@ -134,9 +174,20 @@ def main():
     except AttributeError:
         pass
     unit = text_field(show, "stress_unit")
+    for name in CATEGORIES:
+        categories(name)    # named categories in the saved state too
     if field:
         show_part(part(reader, field[0][0]), view, factor, "von_mises", unit)
-    show_part(part(reader, boundary[0][0]), view, factor, None, unit)
+    show_part(part(reader, boundary[0][0]), view, factor,
+              None if field else "contact_status", unit)
+    if thrust:
+        d = Show(WarpByVector(Input=part(reader, thrust[0][0]), Vectors=["POINTS", "displacement"],
+                              ScaleFactor=factor), view)
+        ColorBy(d, None)
+        d.AmbientColor = d.DiffuseColor = [0.0, 0.3, 0.85]
+        d.LineWidth = 3.0
+        d.PointSize = 9.0
+        d.RenderPointsAsSpheres = 1
     title = text_field(show, "title") or os.path.basename(run.rstrip("/"))
     label = Text(Text=f"{title}: final state, displacement x{factor:g}")
     ld = Show(label, view)

@@ -476,6 +476,8 @@ struct Post {
     interior: Vec<InteriorRecord>,
     field_nodes: usize,
     balances: Vec<crate::post::equilibrium::BodyBalance>,
+    /// Per interface (joint): its resultant and point of application.
+    thrust: Vec<crate::post::thrust::Thrust>,
     notes: Vec<String>,
     seconds: f64,
 }
@@ -518,6 +520,15 @@ fn postprocess(
         interior: Vec::new(),
         field_nodes: 0,
         balances,
+        thrust: model
+            .interfaces
+            .iter()
+            .zip(&solved.interfaces)
+            .map(|(it, r)| {
+                let joint = crate::post::thrust::Joint::of(it);
+                crate::post::thrust::thrust(&joint, r, scene.thickness)
+            })
+            .collect(),
         notes,
         seconds: 0.0,
     };
@@ -689,6 +700,24 @@ fn write_tables(
             csv::interface_table(it, r, &loaded.model.bodies).as_bytes(),
         )?;
     }
+    if !post.thrust.is_empty() {
+        let bodies = &loaded.model.bodies;
+        let rows: Vec<csv::ThrustRow> = loaded
+            .model
+            .interfaces
+            .iter()
+            .zip(&post.thrust)
+            .map(|(it, t)| {
+                let name = |b: usize| bodies.get(b).map_or("", |b| b.name.as_str());
+                (it.spec.name.as_str(), name(it.body_a), name(it.body_b), t)
+            })
+            .collect();
+        let units = &loaded.scene.units;
+        write_staged(
+            &out_dir.join("thrust.csv"),
+            csv::thrust_table(&rows, &units.force, &units.length).as_bytes(),
+        )?;
+    }
     for (name, rows) in &post.sections {
         write_staged(
             &out_dir.join("sections").join(format!("{name}.csv")),
@@ -769,6 +798,7 @@ fn summary_of(
         quadrature: scene.solve.quadrature.name(),
         status: solved.status,
         thickness: scene.thickness,
+        thrust: summary::thrust(&model.interfaces, &post.thrust),
         time: scene.solve.time.as_ref().map(|_| solved.time),
         title: scene.title.clone(),
         units: summary::Units {

@@ -541,11 +541,14 @@ fn export_rebuilds_identical_vtk_files() {
         names,
         [
             "boundary_0000.vtu",
+            "thrust_0000.vtu",
             "state_0000.vtm",
             "boundary_0001.vtu",
+            "thrust_0001.vtu",
             "state_0001.vtm",
             "boundary_0002.vtu",
             "field_0002.vtu",
+            "thrust_0002.vtu",
             "state_0002.vtm",
             "states.pvd",
             "history.pvd"
@@ -571,7 +574,7 @@ fn export_rebuilds_identical_vtk_files() {
         cli.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("9 VTK files"), "{out}");
+    assert!(out.contains("12 VTK files"), "{out}");
     let mut c = files(&cli);
     assert!(c.remove(".sgbem-run.json").is_some());
     assert_eq!(c, a);
@@ -692,6 +695,11 @@ fn vtk_content() {
         if k == 2 {
             want.push("    <DataSet index=\"1\" name=\"field\" file=\"field_0002.vtu\"/>".into());
         }
+        // The thrust line, where the run has interfaces (this one has).
+        let index = if k == 2 { 2 } else { 1 };
+        want.push(format!(
+            "    <DataSet index=\"{index}\" name=\"thrust\" file=\"thrust_000{k}.vtu\"/>"
+        ));
         assert_eq!(blocks, want, "state_000{k}.vtm");
         assert!(vtm.contains("<VTKFile type=\"vtkMultiBlockDataSet\""));
     }
@@ -958,9 +966,10 @@ fn record_from_a_model() {
     let back = read_archive(&dir.join("archive.h5")).unwrap();
     assert_eq!(back.mesh.nodes, loaded.mesh.nodes);
     assert_eq!(back.scene_text, loaded.scene.text);
-    // One state without a field: its boundary, its multiblock and the two series.
+    // One state without a field: its boundary, its thrust line, its multiblock and the two
+    // series.
     let files = write_vtk(&dir.join("vtk"), &back).unwrap();
-    assert_eq!(files.len(), 4);
+    assert_eq!(files.len(), 5);
 }
 
 /// A complete run folder (summary.json, CSV tables, archive, VTK files) from a real model
@@ -1071,6 +1080,12 @@ fn fabricated_run(dir: &Path) -> PathBuf {
     rec.status = "converged".into();
     rec.timings = vec![("read".into(), 0.25), ("write".into(), 0.5)];
     let last = rec.states.last().unwrap();
+    let thrusts: Vec<sgbem::post::thrust::Thrust> = model
+        .interfaces
+        .iter()
+        .zip(last.interfaces.iter())
+        .map(|(it, r)| sgbem::post::thrust::thrust(&sgbem::post::thrust::Joint::of(it), r, 1.0))
+        .collect();
     let summary = serde_json::json!({
         "title": "stacked",
         "status": "converged",
@@ -1081,6 +1096,7 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             "field_nodes": last.interior.iter().map(|i| i.mesh_nodes.len()).sum::<usize>(),
         },
         "interfaces": sgbem::output::summary::interfaces(&model.interfaces, &last.interfaces, 1.0),
+        "thrust": sgbem::output::summary::thrust(&model.interfaces, &thrusts),
     });
     rec.summary_json = summary.to_string();
     let run = dir.join("run");
@@ -1098,6 +1114,18 @@ fn fabricated_run(dir: &Path) -> PathBuf {
             &last.interfaces[0],
             &model.bodies,
         ),
+    )
+    .unwrap();
+    let name = |b: usize| model.bodies[b].name.as_str();
+    let rows: Vec<sgbem::output::csv::ThrustRow> = model
+        .interfaces
+        .iter()
+        .zip(&thrusts)
+        .map(|(it, t)| (it.spec.name.as_str(), name(it.body_a), name(it.body_b), t))
+        .collect();
+    std::fs::write(
+        run.join("thrust.csv"),
+        sgbem::output::csv::thrust_table(&rows, "", ""),
     )
     .unwrap();
     write_archive(&run.join("archive.h5"), &rec).unwrap();

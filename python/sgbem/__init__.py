@@ -5,6 +5,7 @@
     run.summary                                  # dict, as summary.json
     run.history                                  # DataFrame: one row per recorded contact state
     run.pairs("joint", state=-1)                 # DataFrame: one row per contact point
+    run.thrust()                                 # DataFrame: one row per joint (thrust line)
     run.to_pyvista(state=-1)                     # pyvista MultiBlock: boundary (+ field)
     sgbem.run("pipelines/x.toml", out="out/x", set={"interface.joint.cohesion": 2.0})
 

@@ -234,6 +234,48 @@ class Run:
         df.attrs["units"] = {c: units[c] for c in df.columns}
         return df
 
+    def thrust(self):
+        """The thrust line of the final state, one row per joint (interface) in run order,
+        with the columns of thrust.csv: joint, body_a, body_b, N (normal force, compression
+        positive), T (tangential force on body_a along the pairs' tangent), both times the
+        thickness; the point of application x, y and its arc position s; the eccentricity e
+        from the joint's mid-point along the joint, e_over_half_length (±1: a hinge at an
+        end), inside (within the joint) and in_closed_part (within its closed pairs). A fully
+        open joint (N = 0) has no point: NaN and <NA> there. Read from the summary's `thrust`
+        block (the archive's copy); an empty frame for a run without interfaces."""
+        block = self.summary.get("thrust") or {}
+        rows = []
+        with self._file() as f:
+            for name, gname in self._interfaces:
+                a = f["interfaces"][gname].attrs
+                t = block.get(name)
+                if t is None:
+                    continue
+
+                def num(key, t=t):
+                    v = t.get(key)
+                    return np.nan if v is None else float(v) + 0.0
+
+                rows.append({
+                    "joint": name, "body_a": _text(a.get("body_a", "")),
+                    "body_b": _text(a.get("body_b", "")),
+                    "N": num("normal_force"), "T": num("tangential_force"),
+                    "x": num("x"), "y": num("y"), "s": num("s"), "e": num("e"),
+                    "e_over_half_length": num("e_over_half_length"),
+                    "inside": t.get("inside"), "in_closed_part": t.get("in_closed_part")})
+        columns = ["joint", "body_a", "body_b", "N", "T", "x", "y", "s", "e",
+                   "e_over_half_length", "inside", "in_closed_part"]
+        df = pd.DataFrame(rows, columns=columns)
+        for c in ("inside", "in_closed_part"):
+            df[c] = df[c].astype("boolean")
+        force, length = self.units["force"], self.units["length"]
+        df.index.name = "joint_index"
+        df.attrs["units"] = {
+            "joint": "", "body_a": "", "body_b": "", "N": force, "T": force, "x": length,
+            "y": length, "s": length, "e": length, "e_over_half_length": "1", "inside": "",
+            "in_closed_part": ""}
+        return df
+
     def to_pyvista(self, state=-1):
         """A pyvista MultiBlock of archived state `state` (default the final one): block
         "boundary" (every body's boundary lines at their reference positions, point data

@@ -24,6 +24,10 @@ from paraview.simple import GetActiveView, GetAnimationScene, GetSources, LoadSt
 LoadState(sys.argv[1])
 print("sources", " ".join(sorted(k[0] for k in GetSources())))
 print("time", GetAnimationScene().AnimationTime, GetActiveView().ViewTime)
+from paraview.simple import GetColorTransferFunction
+for name in ("contact_status", "tangential_status"):
+    lut = GetColorTransferFunction(name)
+    print(name, lut.InterpretValuesAsCategories, " ".join(lut.Annotations))
 """
 
 
@@ -69,10 +73,11 @@ def test_view_renders_the_final_state(name, request, tmp_path):
     px = picture(png)
     assert px.shape == (700, 1600, 3)
     assert drawn(px) > 5000                     # the model is drawn, not an empty picture
+    assert "thrust line" in out                  # both runs have joints
     if with_field:
         assert coloured(px) > 20000             # von Mises over the beam
     else:
-        assert coloured(px) == 0                # boundary lines only, in black
+        assert coloured(px) > 500               # contact status and the thrust line
     # The saved state opens the same pipeline at the final time.
     state = run.folder / "vtk" / "view.pvsm"
     script = tmp_path / "load_state.py"
@@ -80,6 +85,9 @@ def test_view_renders_the_final_state(name, request, tmp_path):
     loaded = pvpython(script, state)
     assert "time 1.0 1.0" in loaded
     assert "PVDReader1" in loaded and "WarpByVector1" in loaded
+    # Contact status as named categories in the saved state.
+    assert "contact_status 1 -1 not an interface 0 open 1 closed" in loaded
+    assert "tangential_status 1 -1 no friction 0 open 1 stick 2 slip" in loaded
 
 
 def test_paraview_reads_the_series(beam, wall):

@@ -202,3 +202,30 @@ def test_steps_history_and_compressed_vtk(tmp_path):
             assert np.array_equal(a.point_data[name], b.point_data[name]), (k, name)
     f, s = full.pairs("joint", state=-1), steps.pairs("joint", state=-1)
     pd.testing.assert_frame_equal(f, s)
+
+
+def test_thrust_equals_thrust_csv(beam, wall):
+    for run in (beam, wall):
+        df = run.thrust()
+        table = pd.read_csv(run.folder / "thrust.csv", keep_default_na=False, na_values=[""])
+        units = run.units
+        # The CSV's header carries the units; the frame's attrs do.
+        assert list(table.columns)[3] == f"N [{units['force']}]"
+        table.columns = [c.split(" [")[0] for c in table.columns]
+        assert list(df.columns) == list(table.columns)
+        assert list(df["joint"]) == run.interfaces        # run order
+        for col in ("joint", "body_a", "body_b"):
+            assert list(df[col]) == list(table[col])
+        for col in ("N", "T", "x", "y", "s", "e", "e_over_half_length"):
+            np.testing.assert_array_equal(df[col].to_numpy(), table[col].to_numpy(float),
+                                          err_msg=col)
+        assert df.attrs["units"]["N"] == units["force"] and df.attrs["units"]["e"] == units["length"]
+        # N is the summary's normal resultant (summed element by element there: the same
+        # integral to round-off), compression positive.
+        for name, n in zip(df["joint"], df["N"]):
+            r = run.summary["interfaces"][name]["normal_resultant"]
+            assert n == pytest.approx(-r, rel=1e-12, abs=1e-12 * abs(df["N"]).max())
+    # Example 2: the joint open over 33.85 cm, the resultant within its closed part.
+    t = beam.thrust().iloc[0]
+    assert t["N"] > 0 and t["inside"] and t["in_closed_part"]
+    assert 0.5 < abs(t["e_over_half_length"]) < 1.0

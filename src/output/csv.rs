@@ -1,8 +1,10 @@
-//! CSV tables: one row per interface pair (final state), one row per section point.
+//! CSV tables: one row per interface pair (final state), one row per section point, one row
+//! per joint (`thrust.csv`, final state).
 
 use std::fmt::Write;
 
 use crate::input::model::{Body, Interface};
+use crate::post::thrust::Thrust;
 use crate::solution::{InterfaceResult, PairStatus};
 
 /// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:
@@ -82,4 +84,57 @@ pub(crate) fn section_table(rows: &[SectionRow]) -> String {
         }
     }
     o
+}
+
+/// One joint of `thrust.csv`: its name, the names of its two bodies and its resultant.
+pub type ThrustRow<'a> = (&'a str, &'a str, &'a str, &'a Thrust);
+
+/// `thrust.csv`: per joint `joint,body_a,body_b,N,T,x,y,s,e,e_over_half_length,inside,
+/// in_closed_part` (post/thrust.rs), the units of the scene in brackets (`force` and
+/// `length` where it gives none); N compression positive. A fully open joint has N = 0 and
+/// empty fields from `x` on (it has no point of application).
+pub fn thrust_table(rows: &[ThrustRow], force: &str, length: &str) -> String {
+    let f = if force.is_empty() { "force" } else { force };
+    let l = if length.is_empty() { "length" } else { length };
+    let mut o = format!(
+        "joint,body_a,body_b,N [{f}],T [{f}],x [{l}],y [{l}],s [{l}],e [{l}],\
+         e_over_half_length,inside,in_closed_part\n"
+    );
+    for (name, a, b, t) in rows {
+        let _ = write!(
+            o,
+            "{},{},{},{:e},{:e}",
+            quoted(name),
+            quoted(a),
+            quoted(b),
+            t.normal + 0.0,
+            t.tangential + 0.0
+        );
+        match &t.point {
+            Some(p) => {
+                let _ = writeln!(
+                    o,
+                    ",{:e},{:e},{:e},{:e},{:e},{},{}",
+                    p.x[0] + 0.0,
+                    p.x[1] + 0.0,
+                    p.s + 0.0,
+                    p.e + 0.0,
+                    p.e_over_half_length + 0.0,
+                    p.inside,
+                    p.in_closed_part
+                );
+            }
+            None => o.push_str(",,,,,,,\n"),
+        }
+    }
+    o
+}
+
+/// A CSV field, quoted where it holds a comma, a quote or a line break.
+fn quoted(s: &str) -> String {
+    if s.contains([',', '"', '\n', '\r']) {
+        format!("\"{}\"", s.replace('"', "\"\""))
+    } else {
+        s.to_string()
+    }
 }

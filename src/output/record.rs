@@ -375,6 +375,23 @@ impl InterfaceRecord {
         }
     }
 
+    /// The tributary length of each pair, as [`Interface::weights`] gives it.
+    pub fn weights(&self) -> Vec<f64> {
+        match &self.pairing {
+            Some(p) => p.weight.clone(),
+            None => crate::input::model::tributary_lengths(&self.x, self.elements.iter().copied()),
+        }
+    }
+
+    /// The pairs of the joint as the thrust line reads them.
+    pub fn joint(&self) -> crate::post::thrust::Joint {
+        crate::post::thrust::Joint {
+            x: self.x.clone(),
+            s: self.s.clone(),
+            weights: self.weights(),
+        }
+    }
+
     /// Normal opening of pair `j` in `r`: the current normal distance `gap + [u]·n` where
     /// open, 0 where closed (as in the interface CSV table).
     pub fn opening(&self, r: &InterfaceResult, j: usize) -> f64 {

@@ -19,9 +19,12 @@
 //!   of XML, and about 0.5 kB of multiblock and PVD entries; the final state's field file
 //!   where `field = true` (188 B per triangle node and 17 B per triangle with every array).
 //!   `vtk = "compressed"`: the binary part taken as 0.3 of its size (measured 0.24 on the
-//!   105-brick wall, 0.32 on the clamped beam; it depends on the numbers).
+//!   105-brick wall, 0.32 on the clamped beam; it depends on the numbers). With interfaces,
+//!   per kept state a thrust file: about 2.75 kB and 270 B per interface (measured 3.0 kB
+//!   for 1 joint, 8.4 kB for the arch's 21).
 //! * **CSV**: `interfaces/*.csv` about 105 B per pair, sections 115 B per point and, with
-//!   a history, 145 B per point and kept state (`sections/NAME_path.csv`).
+//!   a history, 145 B per point and kept state (`sections/NAME_path.csv`); `thrust.csv`
+//!   about 120 B and 215 B per interface.
 //! * **mesh/**: the mesh file, where the scene meshes a `.geo`.
 //! * **summary.json** and **timings.json**: about 2.5 kB, 1.3 kB per interface and 1.5 kB per
 //!   further load step of a contact run.
@@ -169,6 +172,9 @@ pub fn output_size(
     let zip = if style.compressed { 0.3 } else { 1.0 };
     let boundary = 4.0 / 3.0 * zip * ((24.0 + per(&boundary_arrays)) * nodes + 13.0 * elements);
     let mut vtk = s * (boundary + 3000.0);
+    if ni > 0.0 {
+        vtk += s * (2750.0 + 270.0 * ni);
+    }
     if scene.output.field {
         let field_arrays = [
             ("displacement", 24.0),
@@ -195,6 +201,9 @@ pub fn output_size(
     }
     // CSV.
     let mut csv = 105.0 * pairs + 100.0 * ni;
+    if ni > 0.0 {
+        csv += 120.0 + 215.0 * ni;
+    }
     for sec in &scene.output.sections {
         let p = sec.points as f64;
         csv += 115.0 * p;

@@ -15,6 +15,7 @@ use serde_json::Value;
 use crate::contact::driver::QpCheck;
 use crate::input::model::Interface;
 use crate::post::equilibrium::{BodyBalance, Wrench};
+use crate::post::thrust::Thrust;
 use crate::solution::{InterfaceResult, PairStatus, RunStatus};
 
 /// The whole of `summary.json`.
@@ -48,6 +49,10 @@ pub struct Summary {
     pub quadrature: &'static str,
     pub status: RunStatus,
     pub thickness: f64,
+    /// Per interface (joint) of the final state: its resultant and point of application
+    /// (post/thrust.rs); left out without interfaces.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub thrust: Option<BTreeMap<String, ThrustFigures>>,
     /// With `[solve] time`: the pseudo-time of the final state.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub time: Option<f64>,
@@ -152,6 +157,49 @@ pub struct CurveFigures {
     #[serde(skip_serializing_if = "Option::is_none")]
     pub stick_length: Option<f64>,
     pub tangential_resultant: Option<f64>,
+}
+
+/// One joint's resultant in the `thrust` block (post/thrust.rs): the normal force, compression
+/// positive, and the tangential force times the thickness; the point of application, its
+/// eccentricity and where it lies: `null` where the joint is fully open (no normal force).
+#[derive(Debug, Clone, Serialize)]
+pub struct ThrustFigures {
+    pub e: Option<f64>,
+    pub e_over_half_length: Option<f64>,
+    pub in_closed_part: Option<bool>,
+    pub inside: Option<bool>,
+    pub normal_force: f64,
+    pub s: Option<f64>,
+    pub tangential_force: f64,
+    pub x: Option<f64>,
+    pub y: Option<f64>,
+}
+
+impl From<&Thrust> for ThrustFigures {
+    fn from(t: &Thrust) -> ThrustFigures {
+        let p = t.point.as_ref();
+        ThrustFigures {
+            e: p.map(|p| p.e),
+            e_over_half_length: p.map(|p| p.e_over_half_length),
+            in_closed_part: p.map(|p| p.in_closed_part),
+            inside: p.map(|p| p.inside),
+            normal_force: t.normal,
+            s: p.map(|p| p.s),
+            tangential_force: t.tangential,
+            x: p.map(|p| p.x[0]),
+            y: p.map(|p| p.x[1]),
+        }
+    }
+}
+
+/// The `thrust` block: each interface's resultant by name; `None` without interfaces.
+pub fn thrust(its: &[Interface], thrusts: &[Thrust]) -> Option<BTreeMap<String, ThrustFigures>> {
+    let m: BTreeMap<String, ThrustFigures> = its
+        .iter()
+        .zip(thrusts)
+        .map(|(it, t)| (it.spec.name.clone(), ThrustFigures::from(t)))
+        .collect();
+    (!m.is_empty()).then_some(m)
 }
 
 /// The summary's `qp` block.
@@ -498,6 +546,34 @@ mod tests {
             quadrature: "standard",
             status: RunStatus::Converged,
             thickness: 1.0,
+            thrust: Some(BTreeMap::from([
+                (
+                    "a".to_string(),
+                    ThrustFigures {
+                        e: Some(0.1),
+                        e_over_half_length: Some(0.2),
+                        in_closed_part: Some(true),
+                        inside: Some(true),
+                        normal_force: 3.0,
+                        s: Some(0.6),
+                        tangential_force: 0.5,
+                        x: Some(0.6),
+                        y: Some(0.0),
+                    },
+                ),
+                (
+                    "b".to_string(),
+                    ThrustFigures::from(&crate::post::thrust::thrust(
+                        &crate::post::thrust::Joint {
+                            x: vec![[0.0, 0.0], [1.0, 0.0]],
+                            s: vec![0.0, 1.0],
+                            weights: vec![0.5, 0.5],
+                        },
+                        &InterfaceResult { pairs: vec![] },
+                        1.0,
+                    )),
+                ),
+            ])),
             time: Some(1.0),
             title: "t".into(),
             units: Units {

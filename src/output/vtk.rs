@@ -84,6 +84,11 @@ pub(crate) fn field_name(k: usize) -> String {
     format!("field_{k:04}.vtu")
 }
 
+/// File name of the thrust line of state `k`.
+pub(crate) fn thrust_name(k: usize) -> String {
+    format!("thrust_{k:04}.vtu")
+}
+
 /// File name of the multiblock of state `k` (`states.pvd`'s entry).
 pub(crate) fn state_name(k: usize) -> String {
     format!("state_{k:04}.vtm")
@@ -124,8 +129,10 @@ pub(crate) fn write_vtk_staged(dir: &Path, rec: &RunRecord) -> Result<Vec<PathBu
 enum File {
     Boundary(usize),
     Field(usize),
-    /// The multiblock of a state: its boundary file and, where it has one, its field file.
-    State(usize, bool),
+    Thrust(usize),
+    /// The multiblock of a state: its boundary file, where it has one its field file, and
+    /// where the run has interfaces its thrust line.
+    State(usize, bool, bool),
     StatesPvd,
     Pvd,
 }
@@ -140,13 +147,17 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
     let times = state_times(rec);
     let mut files = Vec::new();
     let mut field_of = Vec::with_capacity(rec.states.len());
+    let thrust = !rec.interfaces.is_empty();
     for (k, st) in rec.states.iter().enumerate() {
         files.push(File::Boundary(k));
         let field = !st.interior.is_empty();
         if field {
             files.push(File::Field(k));
         }
-        files.push(File::State(k, field));
+        if thrust {
+            files.push(File::Thrust(k));
+        }
+        files.push(File::State(k, field, thrust));
         field_of.push(field.then_some(k));
     }
     files.push(File::StatesPvd);
@@ -156,7 +167,8 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
         .map(|f| match *f {
             File::Boundary(k) => dir.join(boundary_name(k)),
             File::Field(k) => dir.join(field_name(k)),
-            File::State(k, _) => dir.join(state_name(k)),
+            File::Thrust(k) => dir.join(thrust_name(k)),
+            File::State(k, _, _) => dir.join(state_name(k)),
             File::StatesPvd => dir.join("states.pvd"),
             File::Pvd => dir.join("history.pvd"),
         })
@@ -170,7 +182,18 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
                 &rec.vtk,
             ),
             File::Field(k) => grid_xml(field_grid(rec, k), &state_meta(rec, k, times[k]), &rec.vtk),
-            File::State(k, field) => state_vtm(k, field).into_bytes(),
+            File::Thrust(k) => {
+                let (grid, names) = thrust_grid(rec, k);
+                let mut meta = state_meta(rec, k, times[k]);
+                meta.push(("joint_names", FieldValue::Text(names)));
+                // Every array of the thrust line: `vtk_fields` selects the others' arrays.
+                let style = VtkStyle {
+                    compressed: rec.vtk.compressed,
+                    fields: None,
+                };
+                grid_xml(grid, &meta, &style)
+            }
+            File::State(k, field, thrust) => state_vtm(k, field, thrust).into_bytes(),
             File::StatesPvd => states_pvd(&times).into_bytes(),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
         })
@@ -178,9 +201,10 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
     Ok(paths)
 }
 
-/// `state_NNNN.vtm`: the state as one multiblock with named blocks, `boundary` and, where
-/// the state has its interior field, `field` (nowhere else).
-fn state_vtm(k: usize, field: bool) -> String {
+/// `state_NNNN.vtm`: the state as one multiblock with named blocks, `boundary`, where the
+/// state has its interior field `field` (nowhere else), and where the run has interfaces
+/// `thrust`.
+fn state_vtm(k: usize, field: bool, thrust: bool) -> String {
     let mut o = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" \
          byte_order=\"LittleEndian\">\n  <vtkMultiBlockDataSet>\n",
@@ -195,6 +219,14 @@ fn state_vtm(k: usize, field: bool) -> String {
             o,
             "    <DataSet index=\"1\" name=\"field\" file=\"{}\"/>",
             field_name(k)
+        );
+    }
+    if thrust {
+        let _ = writeln!(
+            o,
+            "    <DataSet index=\"{}\" name=\"thrust\" file=\"{}\"/>",
+            1 + usize::from(field),
+            thrust_name(k)
         );
     }
     o.push_str("  </vtkMultiBlockDataSet>\n</VTKFile>\n");
@@ -353,8 +385,9 @@ enum FieldValue {
 struct Grid {
     points: Vec<f64>,
     connectivity: Vec<u64>,
-    per_cell: usize,
-    cell_type: u8,
+    /// The VTK type of every cell, in order; a cell's points follow the previous cell's in
+    /// `connectivity` ([`cell_size`]).
+    cell_types: Vec<u8>,
     point_data: Vec<DataArray>,
     /// Attribute names for `<PointData>`: scalars, vectors, tensors.
     active: [&'static str; 3],
@@ -487,7 +520,7 @@ fn grid_xml(mut g: Grid, meta: &[(&'static str, FieldValue)], style: &VtkStyle) 
     }
     let z = style.compressed;
     let n_points = g.points.len() / 3;
-    let n_cells = g.connectivity.len().checked_div(g.per_cell).unwrap_or(0);
+    let n_cells = g.cell_types.len();
     // The file's size, at most: its base64 payloads and some text (one allocation).
     let payload: usize = g.point_data.iter().map(|a| a.values.size()).sum::<usize>()
         + 8 * (g.points.len() + 2 * g.connectivity.len())
@@ -546,7 +579,15 @@ fn grid_xml(mut g: Grid, meta: &[(&'static str, FieldValue)], style: &VtkStyle) 
     write_data_array(&mut o, &array("Points", 3, Values::F64(g.points)), z);
     o.push_str("</Points>\n<Cells>\n");
     // Point indices as Int32 where they fit (a third of a boundary file's bytes otherwise).
-    let last_offset = n_cells * g.per_cell;
+    let ends: Vec<usize> = g
+        .cell_types
+        .iter()
+        .scan(0, |end, &c| {
+            *end += cell_size(c);
+            Some(*end)
+        })
+        .collect();
+    let last_offset = ends.last().copied().unwrap_or(0);
     let (connectivity, offsets) = match (
         g.connectivity
             .iter()
@@ -556,26 +597,32 @@ fn grid_xml(mut g: Grid, meta: &[(&'static str, FieldValue)], style: &VtkStyle) 
     ) {
         (Ok(c), Ok(_)) => (
             Values::I32(c),
-            Values::I32((1..=n_cells).map(|i| (i * g.per_cell) as i32).collect()),
+            Values::I32(ends.iter().map(|&e| e as i32).collect()),
         ),
         _ => (
             Values::U64(g.connectivity),
-            Values::U64((1..=n_cells).map(|i| (i * g.per_cell) as u64).collect()),
+            Values::U64(ends.iter().map(|&e| e as u64).collect()),
         ),
     };
     write_data_array(&mut o, &array("connectivity", 1, connectivity), z);
     write_data_array(&mut o, &array("offsets", 1, offsets), z);
-    write_data_array(
-        &mut o,
-        &array("types", 1, Values::U8(vec![g.cell_type; n_cells])),
-        z,
-    );
+    write_data_array(&mut o, &array("types", 1, Values::U8(g.cell_types)), z);
     o.push_str("</Cells>\n</Piece>\n</UnstructuredGrid>\n</VTKFile>\n");
     o.into_bytes()
 }
 
+const VTK_VERTEX: u8 = 1;
 const VTK_LINE: u8 = 3;
 const VTK_TRIANGLE: u8 = 5;
+
+/// The number of points of a cell of VTK type `c` (of those written here).
+fn cell_size(c: u8) -> usize {
+    match c {
+        VTK_VERTEX => 1,
+        VTK_LINE => 2,
+        _ => 3,
+    }
+}
 
 fn vec3(v: &[[f64; 2]]) -> Vec<f64> {
     v.iter().flat_map(|a| [a[0], a[1], 0.0]).collect()
@@ -688,9 +735,8 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
     }
     Grid {
         points: pts,
+        cell_types: vec![VTK_LINE; conn.len() / 2],
         connectivity: conn,
-        per_cell: 2,
-        cell_type: VTK_LINE,
         point_data,
         active: ["contact_status", "displacement", ""],
     }
@@ -739,9 +785,8 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
     }
     Grid {
         points: pts,
+        cell_types: vec![VTK_TRIANGLE; conn.len() / 3],
         connectivity: conn,
-        per_cell: 3,
-        cell_type: VTK_TRIANGLE,
         point_data: vec![
             array("displacement", 3, Values::F64(disp)),
             DataArray {
@@ -766,6 +811,73 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
         ],
         active: ["von_mises", "displacement", "stress"],
     }
+}
+
+/// The thrust line of state `k` (post/thrust.rs): a point per joint that carries a normal
+/// force, at its point of application, a vertex each, and a line through every body between
+/// its two joints; point data `N`, `T`, `e`, `e_over_half_length`, `inside` and
+/// `in_closed_part` (1 yes, 0 no), `joint` (the interface's index in the run) and
+/// `displacement` (the first body's, weighted as the point is). Also the joints' names, one
+/// a line, for the field data `joint_names`.
+fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
+    use crate::post::thrust::{segments, thrust};
+    let st = &rec.states[k];
+    let (mut pts, mut disp, mut joint) = (Vec::new(), Vec::new(), Vec::new());
+    let (mut n, mut t, mut e, mut ratio) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let (mut inside, mut closed) = (Vec::new(), Vec::new());
+    let mut point_of = vec![None; rec.interfaces.len()];
+    for (j, (it, r)) in rec.interfaces.iter().zip(st.interfaces.iter()).enumerate() {
+        let th = thrust(&it.joint(), r, rec.thickness);
+        let Some(p) = th.point else { continue };
+        let u: Vec<[f64; 2]> = it
+            .node_a
+            .iter()
+            .map(|&a| st.fields[it.body_a].u[a])
+            .collect();
+        let ua = th.at_point(&u).unwrap_or_default();
+        point_of[j] = Some(joint.len() as u64);
+        pts.extend([p.x[0], p.x[1], 0.0]);
+        disp.extend([ua[0], ua[1], 0.0]);
+        joint.push(j as i32);
+        n.push(th.normal);
+        t.push(th.tangential);
+        e.push(p.e);
+        ratio.push(p.e_over_half_length);
+        inside.push(i32::from(p.inside));
+        closed.push(i32::from(p.in_closed_part));
+    }
+    let mut conn: Vec<u64> = (0..joint.len() as u64).collect();
+    let mut cell_types = vec![VTK_VERTEX; joint.len()];
+    let bodies: Vec<(usize, usize)> = rec
+        .interfaces
+        .iter()
+        .map(|i| (i.body_a, i.body_b))
+        .collect();
+    let has_point: Vec<bool> = point_of.iter().map(Option::is_some).collect();
+    for [a, b] in segments(&bodies, &has_point, rec.bodies.len()) {
+        if let (Some(pa), Some(pb)) = (point_of[a], point_of[b]) {
+            conn.extend([pa, pb]);
+            cell_types.push(VTK_LINE);
+        }
+    }
+    let names: Vec<&str> = rec.interfaces.iter().map(|i| i.name.as_str()).collect();
+    let grid = Grid {
+        points: pts,
+        connectivity: conn,
+        cell_types,
+        point_data: vec![
+            array("N", 1, Values::F64(n)),
+            array("T", 1, Values::F64(t)),
+            array("e", 1, Values::F64(e)),
+            array("e_over_half_length", 1, Values::F64(ratio)),
+            array("inside", 1, Values::I32(inside)),
+            array("in_closed_part", 1, Values::I32(closed)),
+            array("joint", 1, Values::I32(joint)),
+            array("displacement", 3, Values::F64(disp)),
+        ],
+        active: ["N", "displacement", ""],
+    };
+    (grid, names.join("\n"))
 }
 
 /// The pair that each of body B's interface nodes shows (pair index, node): its pair's node

@@ -44,6 +44,7 @@
 
 pub mod equilibrium;
 pub mod plausibility;
+pub mod thrust;
 
 use std::collections::HashMap;
 

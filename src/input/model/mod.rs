@@ -188,6 +188,18 @@ pub struct Part {
     pub length: f64,
 }
 
+/// The tributary length of each of the points `x`: half of each segment `[j, k]` of
+/// `elements` that joins it to another (∫ψ_j ds of the P1 hats).
+pub fn tributary_lengths(x: &[[f64; 2]], elements: impl Iterator<Item = [usize; 2]>) -> Vec<f64> {
+    let mut w = vec![0.0; x.len()];
+    for [j, k] in elements {
+        let l = (x[k][0] - x[j][0]).hypot(x[k][1] - x[j][1]);
+        w[j] += 0.5 * l;
+        w[k] += 0.5 * l;
+    }
+    w
+}
+
 /// A matched interface node pair.
 #[derive(Debug, Clone)]
 pub struct Pair {
@@ -302,14 +314,8 @@ impl Interface {
         if self.independent() {
             return self.pairs.iter().map(|p| p.weight).collect();
         }
-        let mut w = vec![0.0; self.pairs.len()];
-        for e in &self.elements {
-            let (a, b) = (self.pairs[e.pairs[0]].x, self.pairs[e.pairs[1]].x);
-            let l = (b[0] - a[0]).hypot(b[1] - a[1]);
-            w[e.pairs[0]] += 0.5 * l;
-            w[e.pairs[1]] += 0.5 * l;
-        }
-        w
+        let x: Vec<[f64; 2]> = self.pairs.iter().map(|p| p.x).collect();
+        tributary_lengths(&x, self.elements.iter().map(|e| e.pairs))
     }
 
     /// Where B meets the rows of pair j: B's node (node pairs) or the point `Σ c_k x_k` of
