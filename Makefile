@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 .DELETE_ON_ERROR:
 .DEFAULT_GOAL := help
-.PHONY: help setup build mesh test lint demo examples accuracy bench report clean view
+.PHONY: help setup build mesh test lint demo examples accuracy bench report clean view man
 
 CARGO   ?= cargo
 GMSH    ?= gmsh
@@ -35,6 +35,7 @@ help:
 	@echo "  make accuracy  refinement studies: error and time"
 	@echo "  make bench     per-stage benchmarks"
 	@echo "  make report    refresh the committed pictures (docs/img) and docs/results.md"
+	@echo "  make man       the manual page, target/sgbem.1 (man -l target/sgbem.1)"
 	@echo "  make view NAME=clamped_beam_joint   render a run in ParaView (off-screen)"
 	@echo "  make clean     remove out/ (meshes and results; not the build: cargo clean)"
 
@@ -175,6 +176,10 @@ accuracy: build mesh
 # interfaces per iteration, sections, the paper's Figs. 5 and 6; thrust_arch.png and
 # thrust_wall.png: the thrust lines of out/arch and out/wall) and docs/results.md (headline
 # figures beside the paper's Tables 1-4). A run folder missing under out/ is skipped.
+man: build
+	./target/release/sgbem man > target/sgbem.1
+	@echo "man: wrote target/sgbem.1 (read it with: man -l target/sgbem.1)"
+
 report: setup
 	@$(MAKE) --no-print-directory -k examples || \
 	  echo "report: some runs failed (see above): their folders are skipped or show the previous run"

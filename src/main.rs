@@ -143,6 +143,9 @@ enum Command {
         #[arg(value_enum)]
         shell: clap_complete::Shell,
     },
+    /// Print the manual page (roff), e.g. `sgbem man > sgbem.1; man -l sgbem.1` (`make man`
+    /// writes target/sgbem.1).
+    Man,
     /// Print the JSON Schema of a scene file, for editors that check TOML against one, e.g.
     /// `sgbem schema > sgbem-scene.schema.json` and `#:schema ./sgbem-scene.schema.json` as
     /// the scene's first line (Taplo, Even Better TOML).
@@ -356,6 +359,7 @@ fn main() -> ExitCode {
             clap_complete::generate(shell, &mut Cli::command(), "sgbem", &mut script);
             out(&String::from_utf8_lossy(&script))
         }
+        Command::Man => out(&man_page(Cli::command())),
         Command::Schema => {
             let schema = sgbem::input::scene::schema::schema();
             out(&format!("{:#}\n", schema))
@@ -523,4 +527,77 @@ fn sweep_command(
     } else {
         Ok(())
     }
+}
+
+/// Text for roff: backslashes and hyphens escaped, a leading `.` or `'` made literal.
+fn roff(text: &str) -> String {
+    let t = text.replace('\\', "\\e").replace('-', "\\-");
+    t.lines()
+        .map(|l| {
+            if l.starts_with('.') || l.starts_with('\'') {
+                format!("\\&{l}")
+            } else {
+                l.to_string()
+            }
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The manual page of `cmd` (the command line's own help, as roff for `man`).
+fn man_page(mut cmd: clap::Command) -> String {
+    // Built, so that every argument knows how many values it takes.
+    cmd.build();
+    let about = |c: &clap::Command| {
+        c.get_long_about()
+            .or(c.get_about())
+            .map(|a| roff(&a.to_string()))
+            .unwrap_or_default()
+    };
+    let mut m = format!(
+        ".TH SGBEM 1 \"\" \"sgbem {}\" \"User Commands\"\n.SH NAME\nsgbem \\- {}\n\
+         .SH SYNOPSIS\n.B sgbem\n\\fICOMMAND\\fR [\\fIOPTIONS\\fR]\n.SH DESCRIPTION\n{}\n\
+         .SH COMMANDS\n",
+        env!("CARGO_PKG_VERSION"),
+        roff(&cmd.get_about().map(|a| a.to_string()).unwrap_or_default()),
+        about(&cmd)
+    );
+    for sub in cmd.get_subcommands().filter(|c| c.get_name() != "help") {
+        m += &format!(".SS \"sgbem {}\"\n{}\n", sub.get_name(), about(sub));
+        for arg in sub.get_arguments() {
+            let id = arg.get_id().as_str();
+            if id == "help" || id == "version" {
+                continue;
+            }
+            let value = arg
+                .get_value_names()
+                .map(|v| {
+                    v.iter()
+                        .map(|n| n.to_string())
+                        .collect::<Vec<_>>()
+                        .join(" ")
+                })
+                .unwrap_or_else(|| id.to_uppercase());
+            let head = match (arg.get_long(), arg.is_positional()) {
+                (_, true) => format!("\\fI{}\\fR", roff(&value)),
+                (Some(l), false) if arg.get_num_args().is_some_and(|n| n.takes_values()) => {
+                    format!("\\fB\\-\\-{}\\fR \\fI{}\\fR", roff(l), roff(&value))
+                }
+                (Some(l), false) => format!("\\fB\\-\\-{}\\fR", roff(l)),
+                (None, false) => continue,
+            };
+            let help = arg
+                .get_long_help()
+                .or(arg.get_help())
+                .map(|h| roff(&h.to_string()))
+                .unwrap_or_default();
+            m += &format!(".TP\n{head}\n{help}\n");
+        }
+    }
+    m += ".SH EXIT STATUS\n0 success; 2 invalid input (the message names the file, key, group or \
+          element and the fix); 3 numerical failure (no equilibrium, not converged: every output \
+          is written); 130 interrupted; 1 anything else (I/O).\n\
+          .SH SEE ALSO\nThe README and docs/scene.md (every key of a scene) in the sources; \
+          \\fBsgbem schema\\fR for editors.\n";
+    m
 }

@@ -706,3 +706,60 @@ fn progress_moves_on_a_terminal() {
     });
     assert!(outer.len() >= 2, "outer iterations drawn: {outer:?}");
 }
+
+/// `sgbem man`: a manual page that groff formats without a warning, with every subcommand
+/// and every long option of the command line in it.
+#[test]
+fn man_page_lists_every_command_and_option() {
+    let (code, page, err) = support::sgbem(&["man"]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        page.starts_with(".TH SGBEM 1 "),
+        "{}",
+        &page[..80.min(page.len())]
+    );
+    for sub in [
+        "run",
+        "check",
+        "sweep",
+        "inspect",
+        "export",
+        "completions",
+        "man",
+        "schema",
+    ] {
+        assert!(page.contains(&format!(".SS \"sgbem {sub}\"")), "no {sub}");
+    }
+    for opt in [
+        "set", "out", "mesh", "method", "quiet", "jobs", "list", "point", "columns",
+    ] {
+        assert!(page.contains(&format!("\\fB\\-\\-{opt}\\fR")), "no --{opt}");
+    }
+    // groff, where installed (man-db's formatter), reads it without a warning.
+    let dir = support::tmpdir("man_page");
+    let path = support::write(&dir, "sgbem.1", &page);
+    match std::process::Command::new("groff")
+        .args(["-man", "-Tutf8", "-ww", path.to_str().unwrap()])
+        .output()
+    {
+        Ok(o) => {
+            assert!(o.status.success());
+            assert!(
+                o.stderr.is_empty(),
+                "{}",
+                String::from_utf8_lossy(&o.stderr)
+            );
+            // Bold is overstruck (X, backspace, X): keep the last of each.
+            let raw: Vec<char> = String::from_utf8_lossy(&o.stdout).chars().collect();
+            let text: String = (0..raw.len())
+                .filter(|&i| raw[i] != '\u{8}' && raw.get(i + 1) != Some(&'\u{8}'))
+                .map(|i| raw[i])
+                .collect();
+            assert!(
+                text.contains("EXIT STATUS") && text.contains("--columns"),
+                "{text}"
+            );
+        }
+        Err(_) => eprintln!("groff not installed: the page was not formatted (skipped)"),
+    }
+}
