@@ -360,10 +360,7 @@ fn main() -> ExitCode {
             out(&String::from_utf8_lossy(&script))
         }
         Command::Man => out(&man_page(Cli::command())),
-        Command::Schema => {
-            let schema = sgbem::input::scene::schema::schema();
-            out(&format!("{:#}\n", schema))
-        }
+        Command::Schema => out(&format!("{:#}\n", sgbem::input::scene::schema::schema())),
         Command::Check {
             scene,
             mesh,

@@ -252,6 +252,25 @@ impl<'a> Inner<'a> {
         self.problem.rows[r].kind == RowKind::Normal
     }
 
+    /// The inner problem on `problem` and `base` with its free and tie-on-close rows
+    /// (`rows`), slip bounds and tolerance.
+    pub fn new(
+        problem: &'a Problem,
+        base: &'a Base,
+        (free, tie_on_close): (Vec<bool>, Vec<bool>),
+        bound: Vec<f64>,
+        tol: f64,
+    ) -> Inner<'a> {
+        Inner {
+            problem,
+            base,
+            free,
+            tie_on_close,
+            bound,
+            tol,
+        }
+    }
+
     /// The open rows of a start status: a friction row that slips without a direction (a
     /// row that was free) starts sticking.
     pub fn start_open(&self, open: &[bool], sign: &[f64]) -> Vec<bool> {

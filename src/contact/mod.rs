@@ -527,6 +527,27 @@ impl<'a> Session<'a> {
         next
     }
 
+    /// The contact bar's message after an outer iteration: switches so far, rows open or
+    /// slipping, the change of the slip bounds (with friction).
+    fn show_outer(
+        &self,
+        load_step: usize,
+        (outer, iterations): (usize, usize),
+        state: &InnerState,
+        change: Option<f64>,
+    ) {
+        if let Some(stage) = &self.stage {
+            let open = state.open.iter().filter(|&&o| o).count();
+            stage.set_message(format!(
+                "step {}, outer iteration {outer}: {iterations} switches, {open} of {} rows \
+                 open or slipping{}",
+                load_step + 1,
+                state.open.len(),
+                change.map_or(String::new(), |c| format!(", bound change {c:.1e}"))
+            ));
+        }
+    }
+
     /// Solves one load step from `start` with `method`.
     #[allow(clippy::too_many_arguments)]
     pub fn solve_step(
@@ -568,15 +589,8 @@ impl<'a> Session<'a> {
             if bound.len() != n {
                 bound = self.first_bounds();
             }
-            let (free, tie_on_close) = self.inner_rows(&st, &bound, &edge_slip);
-            let inner = Inner {
-                problem: &self.problem,
-                base: &base,
-                free,
-                tie_on_close,
-                bound: bound.clone(),
-                tol,
-            };
+            let rows = self.inner_rows(&st, &bound, &edge_slip);
+            let inner = Inner::new(&self.problem, &base, rows, bound.clone(), tol);
             let it0 = iterations;
             lp.iterations_recorded = it0;
             let budget = max_iterations.saturating_sub(it0);
@@ -616,19 +630,12 @@ impl<'a> Session<'a> {
             let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
             let change = bound_change(&bound, &new_bound);
             let settled = !friction || change <= 1e-10;
-            if let Some(stage) = &self.stage {
-                let open = state.open.iter().filter(|&&o| o).count();
-                stage.set_message(format!(
-                    "step {}, outer iteration {outer}: {iterations} switches, {open} of {n} rows \
-                     open or slipping{}",
-                    load_step + 1,
-                    if friction {
-                        format!(", bound change {change:.1e}")
-                    } else {
-                        String::new()
-                    }
-                ));
-            }
+            self.show_outer(
+                load_step,
+                (outer, iterations),
+                &state,
+                friction.then_some(change),
+            );
             bound_changes.extend(friction.then_some(change));
             relax.update(outer, change);
             bound = relax.next(outer, status_key(&state), &bound, new_bound);
