@@ -139,14 +139,13 @@ pub(crate) fn prepare_bodies(
     } = loaded;
     // One step per body, counted as each is assembled and condensed (in parallel).
     let stage = progress.bar("assemble", model.bodies.len() as u64);
-    let messages = std::sync::atomic::AtomicU64::new(0);
-    let ops = prepare(model, scene.plane, settings, 1.0, &scene.path, &|m| {
-        if messages.fetch_add(1, std::sync::atomic::Ordering::Relaxed) == 0 {
-            stage.set_message(m.to_string());
-        } else {
-            stage.inc(1);
-            stage.set_message(format!("last done: {m}"));
-        }
+    stage.set_message(format!(
+        "assembling and condensing {} bodies",
+        model.bodies.len()
+    ));
+    let ops = prepare(model, scene.plane, settings, 1.0, &scene.path, &|body| {
+        stage.inc(1);
+        stage.set_message(format!("last done: {body}"));
     })
     .map_err(|e| plan.explain(e))?;
     stage.finish();

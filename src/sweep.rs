@@ -205,6 +205,15 @@ pub fn sweep(
             crate::input::gmsh::check_commands(mesh)?;
         }
     }
+    // The table is written after every finished point, so that whatever ends the sweep
+    // (even SIGKILL) leaves the results of the points that finished.
+    let write = |codes: &[Option<i32>]| -> Result<(PathBuf, usize)> {
+        let (csv, md, failed) = table(&axes, &pts, codes, out, columns);
+        super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
+        let path = out.join("sweep.csv");
+        super::output::write_atomic(&path, csv.as_bytes())?;
+        Ok((path, failed))
+    };
     match mode {
         Mode::List => return Ok(list(&pts, out)),
         Mode::Point(k) => return one_point(scene_path, &pts, k, out, allow_geo_shell),
@@ -215,13 +224,9 @@ pub fn sweep(
                     "no sweep folder here to tabulate: run its points first (--point K)",
                 ));
             }
-            let codes = finished(&pts, out);
-            let (csv, md, failed) = table(&axes, &pts, &codes, out, columns);
-            super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
-            let path = out.join("sweep.csv");
-            super::output::write_atomic(&path, csv.as_bytes())?;
+            let (table, failed) = write(&finished(&pts, out))?;
             return Ok(Swept {
-                table: path,
+                table,
                 failed,
                 interrupted: false,
             });
@@ -239,15 +244,6 @@ pub fn sweep(
     super::output::write_atomic(&out.join(SWEEP_MARKER), format!("{marker:#}\n").as_bytes())?;
     let exe = std::env::current_exe()
         .map_err(|e| Error::io(scene_path, format!("cannot find the sgbem program: {e}")))?;
-    // The table is written after every finished point, so that whatever ends the sweep
-    // (even SIGKILL) leaves the results of the points that finished.
-    let write = |codes: &[Option<i32>]| -> Result<(PathBuf, usize)> {
-        let (csv, md, failed) = table(&axes, &pts, codes, out, columns);
-        super::output::write_atomic(&out.join("sweep.md"), md.as_bytes())?;
-        let path = out.join("sweep.csv");
-        super::output::write_atomic(&path, csv.as_bytes())?;
-        Ok((path, failed))
-    };
     let codes = run_points(&exe, scene_path, &pts, jobs, out, allow_geo_shell, &write)?;
     let (table, failed) = write(&codes)?;
     Ok(Swept {

@@ -765,12 +765,6 @@ operators = false
     )
 }
 
-/// The summary of the run `name` of `large_friction_converges_and_tends_to_stick`.
-fn r_summary(dir: &Path, name: &str) -> Value {
-    let text = std::fs::read_to_string(dir.join(format!("out_{name}")).join("summary.json"));
-    serde_json::from_str(&text.expect("summary.json")).expect("JSON")
-}
-
 /// Every interface table of a run, in file order.
 fn all_rows(out: &Path) -> Vec<InterfaceRow> {
     let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("interfaces"))
@@ -789,18 +783,18 @@ fn all_rows(out: &Path) -> Vec<InterfaceRow> {
 #[test]
 fn large_friction_converges_and_tends_to_stick() {
     let dir = support::tmpdir("large_friction");
-    let solve = |name: &str, tangential: &str| -> Vec<InterfaceRow> {
+    let solve = |name: &str, tangential: &str| -> (Vec<InterfaceRow>, Value) {
         // All interfaces are read below (`run` reads one).
         let r = run(&dir, name, &large_friction_scene(tangential, 12.5), "");
         assert_eq!(r.code, 0, "{name}: {}", r.stderr);
         assert_eq!(r.summary["contact"]["converged"], true, "{name}");
-        all_rows(&dir.join(format!("out_{name}")))
+        (all_rows(&dir.join(format!("out_{name}"))), r.summary)
     };
-    let stick = solve("stick", "tangential = \"stick\"");
+    let (stick, _) = solve("stick", "tangential = \"stick\"");
     let st = stick.iter().fold(0.0f64, |a, r| a.max(r.tt.abs()));
     let mut last = (f64::INFINITY, f64::INFINITY);
     for mu in [3.0, 10.0, 100.0, 1000.0] {
-        let rows = solve(
+        let (rows, summary) = solve(
             &format!("mu{mu}"),
             &format!("tangential = \"friction\"\nfriction = {mu}"),
         );
@@ -808,8 +802,7 @@ fn large_friction_converges_and_tends_to_stick() {
         let mut slipping = 0;
         // Tangential components implied at a junction carry no friction law of their own
         // (issue: junctions exact); they are listed in the summary and left out here.
-        let implied: Vec<(f64, f64)> = r_summary(&dir, &format!("mu{mu}"))["contact"]["junctions"]
-            ["implied"]
+        let implied: Vec<(f64, f64)> = summary["contact"]["junctions"]["implied"]
             .as_object()
             .map(|m| {
                 m.values()

@@ -26,8 +26,7 @@ pub struct Operators {
 }
 
 /// Assembles and condenses every body for the loads scaled by `load_factor`. `progress`
-/// hears the stage's start (a sentence) and then each body's name as it is done (from the
-/// worker threads, in any order).
+/// hears each body's name as it is done (from the worker threads, in any order).
 pub fn prepare(
     model: &Model,
     plane: Plane,
@@ -40,10 +39,6 @@ pub fn prepare(
     use rayon::prelude::*;
     // Bodies are independent: assembled and condensed in parallel (a wall of many small
     // bricks keeps both cores busy; a large body's assembly is parallel inside too).
-    progress(&format!(
-        "assembling and condensing {} bodies",
-        model.bodies.len()
-    ));
     let done: Vec<Result<(BodySystem, Condensed, f64, f64)>> = (0..model.bodies.len())
         .into_par_iter()
         .map(|bi| {
