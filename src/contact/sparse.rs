@@ -15,7 +15,10 @@
 //! only through their rows). A status is solved by one sparse Cholesky factorisation of H
 //! over the glued displacements and the openings of its open rows, the closed rows' openings
 //! fixed at their offsets and left out of the factor (on a wall most rows are closed, and
-//! their couplings would only add fill).
+//! their couplings would only add fill). H is stored once in a fill-reducing order of its
+//! whole pattern (approximate minimum degree, every row open); a status's matrix is a
+//! principal submatrix in that order, so each factorisation skips the ordering, and the
+//! factor's storage and work space are reused from one factorisation to the next.
 //!
 //! The statuses are found by the primal–dual active set iteration (semismooth Newton,
 //! Hintermüller–Ito–Kunisch): every violated row switches at once. A status met on the way
@@ -32,10 +35,10 @@
 
 use std::collections::HashSet;
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::linalg::solvers::{Llt, SymbolicLlt};
-use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMat, Triplet};
-use faer::{Mat, Side};
+use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::sparse::linalg::cholesky;
+use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
+use faer::{Conj, Mat, Par, Side};
 
 use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState, Violation};
 use crate::contact::problem::Problem;
@@ -45,13 +48,18 @@ pub struct SparseSystem {
     n_glued: usize,
     /// Rows that can open.
     n: usize,
-    h: SparseColMat<usize, f64>,
+    /// H in its elimination order.
+    ordered: Ordered,
     /// The diagonal of H.
     diag: Vec<f64>,
     /// The factorisation of the last status solved, with that status (`None` where it
     /// left a body free): the outer loop's next iterate often keeps the status and changes
     /// only the loads (slip bounds, cohesion), which then costs two triangular solves.
     last: Option<Factored>,
+    scratch: Scratch,
+    work: Work,
+    /// The storage of the last factor that failed, for the next.
+    spare: Vec<f64>,
 }
 
 /// A status (open rows, regularisation) and its factorisation, if positive definite.
@@ -61,8 +69,91 @@ type Factored = (Vec<bool>, f64, Option<Reduced>);
 /// openings of its open rows (`kept`, in order); the closed rows' openings are fixed.
 struct Reduced {
     kept: Vec<usize>,
-    llt: Llt<usize, f64>,
+    symbolic: cholesky::SymbolicCholesky<usize>,
+    /// The values of the factor L.
+    l: Vec<f64>,
 }
+
+/// Work space of the factorisations and solves, kept between them (a fresh one per
+/// factorisation would map and clear its pages again every time).
+#[derive(Default)]
+struct Scratch {
+    req: Option<StackReq>,
+    buffer: Option<MemBuffer>,
+}
+
+impl Scratch {
+    /// A stack of at least `req`; None where the memory cannot be had.
+    fn stack(&mut self, req: StackReq) -> Option<&mut MemStack> {
+        let need = match self.req {
+            Some(have) => have.or(req) != have,
+            None => true,
+        };
+        if need {
+            let req = self.req.map_or(req, |have| have.or(req));
+            self.buffer = None;
+            self.buffer = Some(MemBuffer::try_new(req).ok()?);
+            self.req = Some(req);
+        }
+        self.buffer.as_mut().map(|b| MemStack::new(b))
+    }
+}
+
+/// H with its unknowns in a fill-reducing elimination order (approximate minimum degree of
+/// the whole pattern, every row open), upper triangle: a status's matrix is a principal
+/// submatrix, factored in this order without another analysis of the order (faer reads
+/// a matrix in its own order as an upper triangle).
+struct Ordered {
+    h: SparseColMat<usize, f64>,
+    /// The unknown at each place of the order.
+    unknown: Vec<usize>,
+}
+
+impl Ordered {
+    /// H (lower triangle) in its elimination order; None where the analysis fails (memory).
+    fn new(h: &SparseColMat<usize, f64>) -> Option<Ordered> {
+        let symbolic = cholesky::factorize_symbolic_cholesky(
+            h.symbolic(),
+            Side::Lower,
+            cholesky::SymmetricOrdering::Amd,
+            Default::default(),
+        )
+        .ok()?;
+        let unknown: Vec<usize> = match symbolic.perm() {
+            Some(p) => p.arrays().0.to_vec(),
+            None => (0..h.nrows()).collect(),
+        };
+        drop(symbolic);
+        let mut place = vec![0usize; unknown.len()];
+        for (p, &k) in unknown.iter().enumerate() {
+            place[k] = p;
+        }
+        let sym = h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), h.val());
+        let mut trip = Vec::with_capacity(val.len());
+        for c in 0..h.ncols() {
+            for q in cp[c]..cp[c + 1] {
+                let (a, b) = (place[ri[q]], place[c]);
+                trip.push(Triplet::new(a.min(b), a.max(b), val[q]));
+            }
+        }
+        let n = unknown.len();
+        let h = SparseColMat::try_new_from_triplets(n, n, &trip).ok()?;
+        Some(Ordered { h, unknown })
+    }
+}
+
+/// The storage of the matrix of a status, kept between factorisations.
+#[derive(Default)]
+struct Work {
+    col_ptr: Vec<usize>,
+    row_idx: Vec<usize>,
+    values: Vec<f64>,
+}
+
+/// The parallelism of the sparse factorisations: the factor's fronts on a wall are small,
+/// and the threads' waiting cost more than they gained (measured, docs/performance.md).
+const PAR: Par = Par::Seq;
 
 impl SparseSystem {
     /// Assembles H of `problem` and analyses its pattern.
@@ -95,6 +186,9 @@ impl SparseSystem {
         trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
         let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
             .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
+        let ordered = Ordered::new(&h).ok_or_else(|| {
+            format!("analysing the sparse contact system of {size} unknowns: out of memory")
+        })?;
         let (cp, ri) = (h.symbolic().col_ptr(), h.symbolic().row_idx());
         let diag = (0..size)
             .map(|k| {
@@ -106,64 +200,112 @@ impl SparseSystem {
         Ok(SparseSystem {
             n_glued,
             n,
-            h,
+            ordered,
             diag,
             last: None,
+            scratch: Scratch::default(),
+            work: Work::default(),
+            spare: Vec::new(),
         })
     }
 
     /// The factorisation of H over the glued displacements and the `open` rows, with `reg`
     /// added to the diagonal of the open rows; None where it is not positive definite. The
     /// closed rows are left out (not pinned in place), so that their couplings add no fill:
-    /// on walls most rows are closed. The pattern is analysed for each status.
-    fn factor(&self, open: &[bool], reg: f64) -> Option<Reduced> {
+    /// on walls most rows are closed. The elimination order is the one of the whole pattern
+    /// (every row open), found once, restricted to the unknowns kept; the factor's storage
+    /// is the one of the factor it replaces.
+    fn factor(&mut self, open: &[bool], reg: f64) -> Option<Reduced> {
         let ng = self.n_glued;
-        let size = ng + self.n;
+        let ord = &self.ordered;
+        let size = ord.unknown.len();
         let keep = |k: usize| k < ng || open[k - ng];
-        let kept: Vec<usize> = (0..size).filter(|&k| keep(k)).collect();
         let mut index = vec![usize::MAX; size];
-        for (i, &k) in kept.iter().enumerate() {
-            index[k] = i;
+        let mut kept = Vec::new();
+        for p in 0..size {
+            if keep(ord.unknown[p]) {
+                index[p] = kept.len();
+                kept.push(ord.unknown[p]);
+            }
         }
-        let sym = self.h.symbolic();
-        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), self.h.val());
-        let (mut col_ptr, mut row_idx, mut values) = (vec![0usize], Vec::new(), Vec::new());
-        for &col in &kept {
-            for p in cp[col]..cp[col + 1] {
-                let row = ri[p];
+        let sym = ord.h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), ord.h.val());
+        let w = &mut self.work;
+        w.col_ptr.clear();
+        w.row_idx.clear();
+        w.values.clear();
+        w.col_ptr.push(0);
+        for p in (0..size).filter(|&p| index[p] != usize::MAX) {
+            for q in cp[p]..cp[p + 1] {
+                let row = ri[q];
                 if index[row] == usize::MAX {
                     continue;
                 }
-                let mut v = val[p];
-                if row == col && col >= ng && reg > 0.0 {
+                let mut v = val[q];
+                if row == p && ord.unknown[p] >= ng && reg > 0.0 {
                     v += reg * v.abs().max(f64::MIN_POSITIVE);
                 }
-                row_idx.push(index[row]);
-                values.push(v);
+                w.row_idx.push(index[row]);
+                w.values.push(v);
             }
-            col_ptr.push(row_idx.len());
+            w.col_ptr.push(w.row_idx.len());
         }
         let m = kept.len();
-        let pattern = SymbolicSparseColMat::new_checked(m, m, col_ptr, None, row_idx);
-        let symbolic = SymbolicLlt::try_new(pattern.as_ref(), Side::Lower).ok()?;
-        let mat = SparseColMatRef::new(pattern.as_ref(), &values);
-        let llt = Llt::try_new_with_symbolic(symbolic, mat, Side::Lower).ok()?;
-        Some(Reduced { kept, llt })
+        let pattern = SymbolicSparseColMatRef::new_checked(m, m, &w.col_ptr, None, &w.row_idx);
+        let symbolic = cholesky::factorize_symbolic_cholesky(
+            pattern,
+            Side::Upper,
+            cholesky::SymmetricOrdering::Identity,
+            Default::default(),
+        )
+        .ok()?;
+        let mut l = std::mem::take(&mut self.spare);
+        l.clear();
+        l.resize(symbolic.len_val(), 0.0);
+        let req = symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
+        let Some(stack) = self.scratch.stack(req) else {
+            self.spare = l;
+            return None;
+        };
+        let mat = SparseColMatRef::new(pattern, &w.values);
+        let ok = symbolic
+            .factorize_numeric_llt(
+                &mut l,
+                mat,
+                Side::Upper,
+                Default::default(),
+                PAR,
+                stack,
+                Default::default(),
+            )
+            .is_ok();
+        if ok {
+            Some(Reduced { kept, symbolic, l })
+        } else {
+            self.spare = l;
+            None
+        }
     }
 
-    /// `H x` with the full symmetric H from its lower triangle.
+    /// `H x` with the full symmetric H from its triangle in the elimination order.
     fn apply(&self, x: &[f64]) -> Vec<f64> {
-        let mut y = vec![0.0; x.len()];
-        let sym = self.h.symbolic();
-        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), self.h.val());
+        let ord = &self.ordered;
+        let xp: Vec<f64> = ord.unknown.iter().map(|&k| x[k]).collect();
+        let mut yp = vec![0.0; x.len()];
+        let sym = ord.h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), ord.h.val());
         for c in 0..x.len() {
             for p in cp[c]..cp[c + 1] {
                 let r = ri[p];
-                y[r] += val[p] * x[c];
+                yp[r] += val[p] * xp[c];
                 if r != c {
-                    y[c] += val[p] * x[r];
+                    yp[c] += val[p] * xp[r];
                 }
             }
+        }
+        let mut y = vec![0.0; x.len()];
+        for (p, &k) in ord.unknown.iter().enumerate() {
+            y[k] = yp[p];
         }
         y
     }
@@ -234,14 +376,23 @@ impl SparseSystem {
             .collect();
         let same = matches!(&self.last, Some((o, g, _)) if *o == open && *g == reg);
         if !same {
-            // The old factor goes first: two at once would double the peak memory.
-            self.last = None;
+            // The old factor's storage is reused: two at once would double the peak memory.
+            if let Some(f) = self.last.take().and_then(|(_, _, f)| f) {
+                self.spare = f.l;
+            }
             let llt = self.factor(&open, reg);
             self.last = Some((open.clone(), reg, llt));
         }
         let red = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
-        let b = Mat::<f64>::from_fn(red.kept.len(), 1, |i, _| rhs[red.kept[i]]);
-        let sol = red.llt.solve(&b);
+        let mut sol = Mat::<f64>::from_fn(red.kept.len(), 1, |i, _| rhs[red.kept[i]]);
+        let req = red.symbolic.solve_in_place_scratch::<f64>(1, PAR);
+        let stack = self.scratch.stack(req)?;
+        cholesky::LltRef::new(&red.symbolic, &red.l).solve_in_place_with_conj(
+            Conj::No,
+            sol.as_mut(),
+            PAR,
+            stack,
+        );
         let mut w = x;
         for (i, &k) in red.kept.iter().enumerate() {
             w[k] = sol[(i, 0)];
