@@ -1,5 +1,15 @@
 //! Result records: what a solve produces, in plain data that post-processing and the
 //! writers read. Nothing here computes.
+//!
+//! The contact stage's figures for `summary.json`'s `contact` and `qp.info` blocks are here
+//! too ([`ContactSummary`] and what it holds), as `#[derive(Serialize)]` records that
+//! `output::summary::Summary` writes; as every record of the summary, they declare their
+//! fields in alphabetical order (the order the file has always had; the test
+//! `output::summary::tests::keys_are_sorted` holds them to it).
+
+use std::collections::BTreeMap;
+
+use serde::Serialize;
 
 /// The boundary solution of one body, in global components.
 #[derive(Debug, Clone, Default)]
@@ -109,4 +119,174 @@ impl serde::Serialize for RunStatus {
     fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
         s.serialize_str(self.as_str())
     }
+}
+
+/// `summary.json`'s `contact` block: the contact stage's own figures.
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum ContactSummary {
+    /// Without unilateral interfaces: one linear solve.
+    Linear(LinearSummary),
+    /// The contact problem solved along the load path.
+    Contact(Box<ContactSolveSummary>),
+}
+
+/// The `contact` block of a run without unilateral interfaces.
+#[derive(Debug, Clone, Serialize)]
+pub struct LinearSummary {
+    /// Where three or more bodies meet at a point (without `implied_slipping`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub junctions: Option<Junctions>,
+    /// "linear (no unilateral interface)".
+    pub solver: &'static str,
+}
+
+/// The `contact` block of a contact run: the main solver's figures summed over the load
+/// steps and the cross-checks of every step.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactSolveSummary {
+    /// With `[solve] collapse`: the search for the largest multiplier with an equilibrium.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub collapse: Option<CollapseSummary>,
+    /// The largest relative complementarity violation left at a load step.
+    pub complementarity_residual: f64,
+    /// Whether every load step converged.
+    pub converged: bool,
+    /// Each cross-check solver at each load step, in the order they ran.
+    pub cross_checks: Vec<CrossCheck>,
+    /// The glued unknowns (the size of the sparse base system).
+    pub interface_system_size: usize,
+    /// Status switches of the main solver, summed over the load steps.
+    pub iterations: usize,
+    /// Where three or more bodies meet at a point.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub junctions: Option<Junctions>,
+    pub load_steps: usize,
+    /// The columns of the opening stiffness computed.
+    pub opening_stiffness_columns: usize,
+    /// What the contact problem is, in words.
+    pub problem: &'static str,
+    /// The main solver's name (`lcp`, `sparse`, `qp`, ...).
+    pub solver: &'static str,
+}
+
+/// One cross-check of one load step: another solver from the same state, its statuses
+/// compared with the main solver's pair by pair.
+#[derive(Debug, Clone, Serialize)]
+pub struct CrossCheck {
+    pub converged: bool,
+    /// Pairs whose statuses differ but both solve the step: closed without normal force in
+    /// one result, open without opening in the other.
+    pub degenerate_pairs: usize,
+    /// Pairs whose status differs from the main solver's, the degenerate ones left out.
+    pub differing_pairs: usize,
+    /// Why the solver failed (`null` where it did not).
+    pub failure: Option<String>,
+    pub info: SolverInfo,
+    pub iterations: usize,
+    /// The load step (from 0).
+    pub load_step: usize,
+    pub outer_iterations: usize,
+    pub solver: &'static str,
+}
+
+/// A solver's own figures at a load step (`info`): Lemke's pivots, the QP's iterations and
+/// problem size, and, for any solver, the QP's rescues of the pivoting path and the changes
+/// of the friction fixed point's slip bounds; a figure is left out where it does not apply.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct SolverInfo {
+    /// QP: the constraints of the last QP solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub constraints: Option<usize>,
+    /// Lemke and QP: pivots that finished the friction rows of their statuses.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_finishing_pivots: Option<usize>,
+    /// With friction: the change of the slip bounds at each outer iteration.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub friction_outer_changes: Option<Vec<f64>>,
+    /// QP: the interior point's iterations of the last QP solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub iterations: Option<u32>,
+    /// QP: the objective of the last QP solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub objective: Option<f64>,
+    /// Lemke: the pivots of the last inner problem solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub pivots: Option<usize>,
+    /// Inner solves whose pivoting path the QP completed (where there was one).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub qp_rescues: Option<usize>,
+    /// QP: the interior point solver's status.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub solver_status: Option<String>,
+    /// QP: the variables of the last QP solved.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub variables: Option<usize>,
+}
+
+/// The `contact.junctions` block: the points where three or more bodies meet and the pair
+/// components there that the kept rows imply (no row of their own).
+#[derive(Debug, Clone, Serialize)]
+pub struct Junctions {
+    /// The implied components by interface.
+    pub implied: BTreeMap<String, Vec<ImpliedComponent>>,
+    pub implied_components: usize,
+    /// Contact runs: the implied tangential components that slip in the final state.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub implied_slipping: Option<ImpliedSlipping>,
+    pub most_bodies_at_a_point: usize,
+    pub points: usize,
+    /// Which rows are kept, in words.
+    pub rule: &'static str,
+}
+
+/// One implied pair component: `normal` or `tangential`, at the pair's point.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImpliedComponent {
+    pub component: &'static str,
+    pub x: [f64; 2],
+}
+
+/// The `contact.junctions.implied_slipping` block: closed pairs with friction whose implied
+/// tangential component slips.
+#[derive(Debug, Clone, Serialize)]
+pub struct ImpliedSlipping {
+    pub at: Vec<SlippingPair>,
+    pub count: usize,
+    pub largest_slip: f64,
+    /// What the figures mean, in words.
+    pub meaning: &'static str,
+}
+
+/// One pair of [`ImpliedSlipping`]: its interface, point and tangential jump.
+#[derive(Debug, Clone, Serialize)]
+pub struct SlippingPair {
+    pub interface: String,
+    pub slip: f64,
+    pub x: [f64; 2],
+}
+
+/// The `contact.collapse` block: the bisection for the largest load multiplier with an
+/// equilibrium.
+#[derive(Debug, Clone, Serialize)]
+pub struct CollapseSummary {
+    /// The smallest multiplier found without an equilibrium (`null` where `max` stands).
+    pub collapses_at: Option<f64>,
+    pub max: f64,
+    /// Why the smallest multiplier without an equilibrium has none (`null` if none).
+    pub mechanism: Option<String>,
+    /// The largest multiplier with an equilibrium: the run's.
+    pub multiplier: f64,
+    /// Which state the results are, in words.
+    pub state: &'static str,
+    pub tolerance: f64,
+    /// Every trial in the order made.
+    pub trials: Vec<CollapseTrial>,
+}
+
+/// One trial of the collapse search: the multiplier and whether an equilibrium exists.
+#[derive(Debug, Clone, Copy, Serialize)]
+pub struct CollapseTrial {
+    pub stands: bool,
+    pub t: f64,
 }

@@ -7,7 +7,7 @@ mod support;
 use sgbem::bem::quadrature::QuadratureSettings;
 use sgbem::contact::{Session, Solver};
 use sgbem::pipeline::{load, solve_loaded, Loaded};
-use sgbem::solution::PairStatus;
+use sgbem::solution::{ContactSummary, PairStatus};
 use sgbem::timings::Timings;
 use support::*;
 
@@ -201,14 +201,17 @@ fn example_2_detachment() {
         "{lengths:?}"
     );
     // Every solver on the same problem: active set, QP and Lemke reach the same statuses.
-    let checks = r.contact["cross_checks"].as_array().unwrap();
+    let ContactSummary::Contact(contact) = &r.contact else {
+        panic!("a contact run's block: {:?}", r.contact)
+    };
+    let checks = &contact.cross_checks;
     assert_eq!(checks.len(), 3, "{checks:?}");
     for c in checks {
-        assert_eq!(c["differing_pairs"], 0, "{c}");
-        assert_eq!(c["converged"], true, "{c}");
+        assert_eq!(c.differing_pairs, 0, "{c:?}");
+        assert!(c.converged, "{c:?}");
     }
     assert_eq!(r.qp.as_ref().unwrap().differing_pairs, Some(0));
-    assert!(r.contact["complementarity_residual"].as_f64().unwrap() <= 1e-10);
+    assert!(contact.complementarity_residual <= 1e-10);
 }
 
 /// Along the evolutive path of example 2, σx at the bottom fibre of section a-a (x = 100)

@@ -15,19 +15,20 @@ use crate::contact::Session;
 use crate::error::{Error, Result};
 use crate::input::model::fmt_num;
 use crate::input::scene::Collapse;
+use crate::solution::{CollapseSummary, CollapseTrial};
 use crate::timings::Timings;
 
 /// What the search found: the multiplier and the summary's `contact.collapse` block.
 pub(super) struct Found {
     pub(super) multiplier: f64,
-    pub(super) info: serde_json::Value,
+    pub(super) info: CollapseSummary,
 }
 
 /// The trials of one search.
 struct Search<'a, 'b> {
     stepper: &'a Stepper<'b>,
     ctx: &'a StepContext<'b>,
-    trials: Vec<serde_json::Value>,
+    trials: Vec<CollapseTrial>,
 }
 
 impl Search<'_, '_> {
@@ -68,9 +69,10 @@ impl Search<'_, '_> {
                 )))
             }
         };
-        self.trials.push(serde_json::json!({
-            "t": t, "stands": outcome.is_none(),
-        }));
+        self.trials.push(CollapseTrial {
+            stands: outcome.is_none(),
+            t,
+        });
         Ok(outcome)
     }
 }
@@ -115,14 +117,14 @@ pub(super) fn search(
     let collapses = mechanism.is_some();
     Ok(Found {
         multiplier: lo,
-        info: serde_json::json!({
-            "multiplier": lo,
-            "collapses_at": if collapses { serde_json::json!(hi) } else { serde_json::Value::Null },
-            "tolerance": c.tolerance,
-            "max": c.max,
-            "mechanism": mechanism.map(|e| e.message().to_string()),
-            "trials": s.trials,
-            "state": "the results are those of the largest multiplier with an equilibrium",
-        }),
+        info: CollapseSummary {
+            collapses_at: collapses.then_some(hi),
+            max: c.max,
+            mechanism: mechanism.map(|e| e.message().to_string()),
+            multiplier: lo,
+            state: "the results are those of the largest multiplier with an equilibrium",
+            tolerance: c.tolerance,
+            trials: s.trials,
+        },
     })
 }

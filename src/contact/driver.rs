@@ -20,7 +20,11 @@ use crate::input::model::{fmt_num, Model};
 use crate::input::scene::{HistoryLevel, Method, Scene};
 use crate::output::progress::{ContactTick, Progress, Stage};
 use crate::plan::{ContactProblem, Plan};
-use crate::solution::{BodyField, History, InterfaceResult, PairStatus, RunStatus};
+use crate::solution::{
+    BodyField, CollapseSummary, ContactSolveSummary, ContactSummary, CrossCheck, History,
+    ImpliedComponent, ImpliedSlipping, InterfaceResult, Junctions, LinearSummary, PairStatus,
+    RunStatus, SlippingPair, SolverInfo,
+};
 use crate::timings::Timings;
 
 /// What the contact stage works on.
@@ -47,7 +51,8 @@ pub struct ContactRun {
     pub nodal_force: Vec<Vec<f64>>,
     pub history: History,
     pub states: Vec<Iterate>,
-    pub contact: serde_json::Value,
+    /// The summary's `contact` block.
+    pub contact: ContactSummary,
     /// The QP's solution at the last load step, where it ran.
     pub qp: Option<QpCheck>,
     pub notes: Vec<String>,
@@ -65,7 +70,7 @@ pub struct QpCheck {
     /// Pairs whose status differs from the main solver's, as a cross-check.
     pub differing_pairs: Option<usize>,
     /// The solver's figures (iterations, status).
-    pub info: serde_json::Value,
+    pub info: SolverInfo,
 }
 
 /// Solves the contact problem of `case` (or, without unilateral interfaces, the one linear
@@ -135,10 +140,7 @@ pub fn solve(
         &mut reassembled,
     )?;
     stage.finish();
-    let mut run = finish(&session, main, steps.len(), acc)?;
-    if let Some(c) = collapse {
-        run.contact["collapse"] = c;
-    }
+    let mut run = finish(&session, main, steps.len(), acc, collapse)?;
     run.operators = reassembled;
     Ok(run)
 }
@@ -213,11 +215,12 @@ fn solve_linear(
     let start = session.initial();
     let (fields, interfaces, nodal_force) = problem.state(m, p, f, &vec![0.0; n], &start.open);
     timings.add("solve", t.elapsed().as_secs_f64());
-    let mut contact = serde_json::json!({"solver": "linear (no unilateral interface)"});
     let junctions = m.junctions();
-    if !junctions.is_empty() {
-        contact["junctions"] = junctions_json(m, &junctions, &problem.implied);
-    }
+    let contact = ContactSummary::Linear(LinearSummary {
+        junctions: (!junctions.is_empty())
+            .then(|| junctions_summary(m, &junctions, &problem.implied)),
+        solver: "linear (no unilateral interface)",
+    });
     let body_force = m.bodies.iter().map(|b| b.body_force).collect();
     drop(other);
     Ok(ContactRun {
@@ -274,8 +277,15 @@ fn load_path(
     Ok(acc)
 }
 
-/// The run's result from what the load steps accumulated.
-fn finish(session: &Session, main: Solver, steps: usize, acc: StepAcc) -> Result<ContactRun> {
+/// The run's result from what the load steps accumulated (and the collapse search that
+/// chose the load multiplier, where there was one).
+fn finish(
+    session: &Session,
+    main: Solver,
+    steps: usize,
+    acc: StepAcc,
+    collapse: Option<CollapseSummary>,
+) -> Result<ContactRun> {
     let StepAcc {
         iterations,
         residual,
@@ -289,27 +299,31 @@ fn finish(session: &Session, main: Solver, steps: usize, acc: StepAcc) -> Result
         ..
     } = acc;
     let converged = failure.is_none();
-    let mut contact = serde_json::json!({
-        "solver": main.name(),
-        "problem": "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare stiffness (one LCP; Tresca fixed point for friction)",
-        "iterations": iterations,
-        "converged": converged,
-        "complementarity_residual": residual,
-        "load_steps": steps,
-        "opening_stiffness_columns": session.cols.computed(),
-        "interface_system_size": session.problem.base_size(),
-        "cross_checks": cross,
-    });
     let Some(sol) = final_sol else {
         return Err(Error::numerical("the contact stage produced no state"));
     };
     let junctions = session.model.junctions();
-    if !junctions.is_empty() {
+    let junctions = (!junctions.is_empty()).then(|| {
         let implied = &session.problem.implied;
-        contact["junctions"] = junctions_json(session.model, &junctions, implied);
-        contact["junctions"]["implied_slipping"] =
-            implied_slipping(session.model, implied, &sol.interfaces);
-    }
+        Junctions {
+            implied_slipping: Some(implied_slipping(session.model, implied, &sol.interfaces)),
+            ..junctions_summary(session.model, &junctions, implied)
+        }
+    });
+    let contact = ContactSummary::Contact(Box::new(ContactSolveSummary {
+        collapse,
+        complementarity_residual: residual,
+        converged,
+        cross_checks: cross,
+        interface_system_size: session.problem.base_size(),
+        iterations,
+        junctions,
+        load_steps: steps,
+        opening_stiffness_columns: session.cols.computed(),
+        problem: "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare \
+                  stiffness (one LCP; Tresca fixed point for friction)",
+        solver: main.name(),
+    }));
     Ok(ContactRun {
         status: if converged {
             RunStatus::Converged
@@ -348,31 +362,35 @@ pub(super) struct StepContext<'a> {
 /// The `contact.junctions` block: how many points join three or more bodies, and the pair
 /// components there that the kept rows imply (no row of their own; see
 /// `contact::problem::Problem::new`), by interface.
-fn junctions_json(
+fn junctions_summary(
     model: &Model,
     junctions: &[([f64; 2], Vec<usize>)],
     implied: &[crate::contact::problem::Implied],
-) -> serde_json::Value {
-    let mut by_iface: std::collections::BTreeMap<String, Vec<serde_json::Value>> =
+) -> Junctions {
+    let mut by_iface: std::collections::BTreeMap<String, Vec<ImpliedComponent>> =
         std::collections::BTreeMap::new();
     for i in implied {
         let it = &model.interfaces[i.iface];
         by_iface
             .entry(it.spec.name.clone())
             .or_default()
-            .push(serde_json::json!({
-                "x": it.pairs[i.pair].x,
-                "component": if i.comp == 1 { "normal" } else { "tangential" },
-            }));
+            .push(ImpliedComponent {
+                component: if i.comp == 1 { "normal" } else { "tangential" },
+                x: it.pairs[i.pair].x,
+            });
     }
     let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
-    serde_json::json!({
-        "points": junctions.len(),
-        "most_bodies_at_a_point": most,
-        "rule": "at a point where bodies meet in a cycle of pairs, rows are kept bonded first (normal components first), then unilateral normal, then tangential, while independent; the others are implied by the kept rows while these are closed, and carry no force of their own",
-        "implied_components": implied.len(),
-        "implied": by_iface,
-    })
+    Junctions {
+        implied: by_iface,
+        implied_components: implied.len(),
+        implied_slipping: None,
+        most_bodies_at_a_point: most,
+        points: junctions.len(),
+        rule: "at a point where bodies meet in a cycle of pairs, rows are kept bonded first \
+               (normal components first), then unilateral normal, then tangential, while \
+               independent; the others are implied by the kept rows while these are closed, \
+               and carry no force of their own",
+    }
 }
 
 /// The implied tangential components of closed pairs with friction (`friction` or `stick`)
@@ -385,7 +403,7 @@ fn implied_slipping(
     model: &Model,
     implied: &[crate::contact::problem::Implied],
     interfaces: &[InterfaceResult],
-) -> serde_json::Value {
+) -> ImpliedSlipping {
     use crate::input::scene::Tangential;
     let tol = 1e-9 * model.scale;
     let mut at = Vec::new();
@@ -401,19 +419,20 @@ fn implied_slipping(
         let slip = p.jump[0].abs();
         if p.status == PairStatus::Closed && slip > tol {
             largest = largest.max(slip);
-            at.push(serde_json::json!({
-                "interface": it.spec.name,
-                "x": it.pairs[i.pair].x,
-                "slip": p.jump[0],
-            }));
+            at.push(SlippingPair {
+                interface: it.spec.name.clone(),
+                slip: p.jump[0],
+                x: it.pairs[i.pair].x,
+            });
         }
     }
-    serde_json::json!({
-        "count": at.len(),
-        "largest_slip": largest,
-        "meaning": "closed pairs whose tangential component is implied at a junction and slips there: at that node the pair slides without a friction force of its own",
-        "at": at,
-    })
+    ImpliedSlipping {
+        count: at.len(),
+        at,
+        largest_slip: largest,
+        meaning: "closed pairs whose tangential component is implied at a junction and slips \
+                  there: at that node the pair slides without a friction force of its own",
+    }
 }
 
 /// The final boundary solution of a step.
@@ -629,7 +648,7 @@ pub(super) struct StepAcc {
     iterations: usize,
     residual: f64,
     final_sol: Option<FinalState>,
-    cross: Vec<serde_json::Value>,
+    cross: Vec<CrossCheck>,
     qp_block: Option<QpCheck>,
     notes: Vec<String>,
     history: History,
@@ -771,12 +790,17 @@ fn cross_check(
     timings.add(c.timing_key(), t.elapsed().as_secs_f64());
     let (all, degenerate) = status_differences(&x.interfaces, main, ctx.model.scale);
     let differing = all - degenerate;
-    acc.cross.push(serde_json::json!({
-        "solver": c.name(), "load_step": step, "iterations": x.iterations,
-        "outer_iterations": x.outer_iterations, "converged": x.converged,
-        "differing_pairs": differing, "degenerate_pairs": degenerate, "info": x.info,
-        "failure": x.failure.as_ref().map(|e| e.message()),
-    }));
+    acc.cross.push(CrossCheck {
+        converged: x.converged,
+        degenerate_pairs: degenerate,
+        differing_pairs: differing,
+        failure: x.failure.as_ref().map(|e| e.message().to_string()),
+        info: x.info.clone(),
+        iterations: x.iterations,
+        load_step: step,
+        outer_iterations: x.outer_iterations,
+        solver: c.name(),
+    });
     if c == Solver::Qp && step == ctx.last {
         acc.qp_block = Some(QpCheck {
             interfaces: x.interfaces,

@@ -104,20 +104,26 @@ pub(super) fn inner_solve(
             let (statuses, pivots) = lemke::solve(inner, cols)?;
             let (out, finish) = exact_state(inner, cols, &statuses);
             lp.finishing += finish;
-            lp.info = serde_json::json!({
-                "pivots": pivots, "friction_finishing_pivots": lp.finishing,
-            });
+            lp.info = SolverInfo {
+                friction_finishing_pivots: Some(lp.finishing),
+                pivots: Some(pivots),
+                ..SolverInfo::default()
+            };
             Ok(out)
         }
         Solver::Qp => {
             let q = qp::solve(inner, cols, inner.tol)?;
             let (out, finish) = exact_state(inner, cols, &q.statuses);
             lp.finishing += finish;
-            lp.info = serde_json::json!({
-                "iterations": q.iterations, "solver_status": q.solver_status,
-                "objective": q.objective, "variables": q.variables,
-                "constraints": q.constraints, "friction_finishing_pivots": lp.finishing,
-            });
+            lp.info = SolverInfo {
+                constraints: Some(q.constraints),
+                friction_finishing_pivots: Some(lp.finishing),
+                iterations: Some(q.iterations),
+                objective: Some(q.objective),
+                solver_status: Some(q.solver_status),
+                variables: Some(q.variables),
+                ..SolverInfo::default()
+            };
             Ok(out)
         }
     }

@@ -46,7 +46,7 @@ use crate::bem::Operators;
 use crate::error::Error;
 use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
-use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus};
+use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
 use inner::*;
 use lcp::{status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
 pub use problem::{solve_all_closed, StatusSolution};
@@ -145,7 +145,7 @@ pub struct ContactResult {
     /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
     pub mechanism: bool,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
-    pub info: serde_json::Value,
+    pub info: SolverInfo,
     /// The states of the evolutive path in compact form (iteration, open rows, openings),
     /// expanded into `rows` and `states` by [`Session::expand`].
     pub recorded: Vec<(usize, Vec<bool>, Vec<f64>)>,
@@ -167,7 +167,7 @@ struct StepLoop {
     finishing: usize,
     /// Inner solves whose pivoting path the QP completed.
     rescues: usize,
-    info: serde_json::Value,
+    info: SolverInfo,
 }
 
 impl StepLoop {
@@ -178,7 +178,7 @@ impl StepLoop {
             finishing: 0,
             rescues: 0,
             iterations_recorded: 0,
-            info: serde_json::json!({}),
+            info: SolverInfo::default(),
         }
     }
 }
@@ -751,7 +751,7 @@ impl<'a> Session<'a> {
                  the same problem found it (checked exactly) and the iteration went on from it",
                 lp.rescues
             ));
-            lp.info["qp_rescues"] = serde_json::json!(lp.rescues);
+            lp.info.qp_rescues = Some(lp.rescues);
         }
         if slipping > 0 {
             notes.push(format!(
@@ -769,7 +769,7 @@ impl<'a> Session<'a> {
         );
         let path = self.mark_slip(&mut interfaces, &final_state.s, &final_state.open, start);
         if friction {
-            lp.info["friction_outer_changes"] = serde_json::json!(bound_changes);
+            lp.info.friction_outer_changes = Some(bound_changes);
         }
         let mut rows = Vec::new();
         let mut states = Vec::new();

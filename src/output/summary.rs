@@ -5,24 +5,24 @@
 //! value sorted, and `summary.json` has always been written so; a struct is written in the
 //! order of its fields, so every record here declares its fields in alphabetical order (the
 //! test `keys_are_sorted` holds them to it). A figure that is not finite is written as
-//! `null`.
+//! `null`. The contact stage's blocks (`contact`, `qp.info`) are records of
+//! `crate::solution`, which the contact stage fills.
 
 use std::collections::BTreeMap;
 
 use serde::Serialize;
-use serde_json::Value;
 
 use crate::contact::driver::QpCheck;
 use crate::input::model::Interface;
 use crate::post::equilibrium::{BodyBalance, Wrench};
 use crate::post::thrust::Thrust;
-use crate::solution::{InterfaceResult, PairStatus, RunStatus};
+use crate::solution::{ContactSummary, InterfaceResult, PairStatus, RunStatus, SolverInfo};
 
 /// The whole of `summary.json`.
 #[derive(Debug, Clone, Serialize)]
 pub struct Summary {
     /// The contact stage's own block (solver, iterations, cross-checks, ...).
-    pub contact: Value,
+    pub contact: ContactSummary,
     pub counts: Counts,
     pub diagnostics: Diagnostics,
     pub effects: Vec<&'static str>,
@@ -211,7 +211,7 @@ pub struct QpSummary {
     pub differing_pairs_from_lcp: Option<usize>,
     pub form: &'static str,
     /// The solver's figures (iterations, status).
-    pub info: Value,
+    pub info: SolverInfo,
     pub interfaces: BTreeMap<String, InterfaceFigures>,
 }
 
@@ -449,12 +449,123 @@ pub fn equilibrium(balances: &[BodyBalance]) -> BTreeMap<String, BodyEquilibrium
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::solution::{
+        CollapseSummary, CollapseTrial, ContactSolveSummary, CrossCheck, ImpliedComponent,
+        ImpliedSlipping, Junctions, LinearSummary, SlippingPair,
+    };
+    use serde_json::Value;
 
     /// Whether every object in `v`, at every depth, is written with its keys sorted.
     fn sorted_everywhere(text: &str) -> bool {
         let ordered = |v: &Value| serde_json::to_string_pretty(v).unwrap_or_default();
         let v: Value = serde_json::from_str(text).unwrap_or(Value::Null);
         text == ordered(&v)
+    }
+
+    /// Every figure a solver's `info` can hold.
+    fn full_info() -> SolverInfo {
+        SolverInfo {
+            constraints: Some(4),
+            friction_finishing_pivots: Some(1),
+            friction_outer_changes: Some(vec![0.5, 0.0]),
+            iterations: Some(9),
+            objective: Some(-1.5),
+            pivots: Some(3),
+            qp_rescues: Some(1),
+            solver_status: Some("Solved".into()),
+            variables: Some(4),
+        }
+    }
+
+    /// A `junctions` block with every key, `implied_slipping` where `slipping`.
+    fn junctions(slipping: bool) -> Junctions {
+        Junctions {
+            implied: BTreeMap::from([(
+                "bed".to_string(),
+                vec![ImpliedComponent {
+                    component: "tangential",
+                    x: [1.0, 0.0],
+                }],
+            )]),
+            implied_components: 1,
+            implied_slipping: slipping.then(|| ImpliedSlipping {
+                at: vec![SlippingPair {
+                    interface: "bed".into(),
+                    slip: 1e-6,
+                    x: [1.0, 0.0],
+                }],
+                count: 1,
+                largest_slip: 1e-6,
+                meaning: "slips",
+            }),
+            most_bodies_at_a_point: 3,
+            points: 1,
+            rule: "kept rows",
+        }
+    }
+
+    /// A contact block with every key (collapse search, cross-checks, junctions).
+    fn contact_block() -> ContactSummary {
+        ContactSummary::Contact(Box::new(ContactSolveSummary {
+            collapse: Some(CollapseSummary {
+                collapses_at: Some(0.75),
+                max: 1.0,
+                mechanism: Some("a mechanism".into()),
+                multiplier: 0.5,
+                state: "largest",
+                tolerance: 0.25,
+                trials: vec![CollapseTrial {
+                    stands: true,
+                    t: 0.0,
+                }],
+            }),
+            complementarity_residual: 0.0,
+            converged: true,
+            cross_checks: vec![CrossCheck {
+                converged: true,
+                degenerate_pairs: 0,
+                differing_pairs: 0,
+                failure: Some("why".into()),
+                info: full_info(),
+                iterations: 2,
+                load_step: 0,
+                outer_iterations: 1,
+                solver: "qp",
+            }],
+            interface_system_size: 12,
+            iterations: 3,
+            junctions: Some(junctions(true)),
+            load_steps: 1,
+            opening_stiffness_columns: 4,
+            problem: "nodal contact forces",
+            solver: "lcp",
+        }))
+    }
+
+    /// The contact block's records are written with sorted keys, with every optional key
+    /// and without them (an empty `info` as `{}`), and a linear run's block too.
+    #[test]
+    fn contact_block_keys_are_sorted() {
+        let linear = ContactSummary::Linear(LinearSummary {
+            junctions: Some(junctions(false)),
+            solver: "linear (no unilateral interface)",
+        });
+        let bare = ContactSummary::Linear(LinearSummary {
+            junctions: None,
+            solver: "linear (no unilateral interface)",
+        });
+        for block in [contact_block(), linear, bare] {
+            let text = serde_json::to_string_pretty(&block).unwrap_or_default();
+            assert!(sorted_everywhere(&text), "{text}");
+        }
+        let empty = serde_json::to_string_pretty(&SolverInfo::default()).unwrap_or_default();
+        assert_eq!(empty, "{}");
+        let bare = ContactSummary::Linear(LinearSummary {
+            junctions: None,
+            solver: "linear",
+        });
+        let text = serde_json::to_string(&bare).unwrap_or_default();
+        assert_eq!(text, r#"{"solver":"linear"}"#);
     }
 
     fn figures(friction: bool) -> InterfaceFigures {
@@ -483,7 +594,7 @@ mod tests {
             m: 3.0,
         };
         let summary = Summary {
-            contact: serde_json::json!({"solver": "lcp", "iterations": 3}),
+            contact: contact_block(),
             counts: Counts {
                 bodies: 2,
                 boundary_elements: 10,
@@ -540,7 +651,7 @@ mod tests {
                 converged: true,
                 differing_pairs_from_lcp: Some(0),
                 form: "primal",
-                info: serde_json::json!({"iterations": 9}),
+                info: full_info(),
                 interfaces: BTreeMap::from([("a".to_string(), figures(false))]),
             }),
             quadrature: "standard",
