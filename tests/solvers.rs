@@ -6,31 +6,6 @@ mod support;
 
 use support::*;
 
-/// Runs a scene through the command line with `--method`; returns the exit code, stderr and
-/// the summary (if written).
-fn run_scene(
-    scene: &std::path::Path,
-    msh: &std::path::Path,
-    out: &std::path::Path,
-    method: &str,
-) -> (i32, String, Option<serde_json::Value>) {
-    let (code, _, err) = sgbem(&[
-        "run",
-        scene.to_str().unwrap(),
-        "--mesh",
-        msh.to_str().unwrap(),
-        "--out",
-        out.to_str().unwrap(),
-        "--method",
-        method,
-        "--quiet",
-    ]);
-    let summary = std::fs::read_to_string(out.join("summary.json"))
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok());
-    (code, err, summary)
-}
-
 fn assert_agree(name: &str, s: &serde_json::Value) {
     let checks = s["contact"]["cross_checks"].as_array().unwrap();
     let solvers: Vec<&str> = checks
@@ -63,7 +38,7 @@ fn every_solver_reaches_the_same_statuses() {
             false,
             &[],
         );
-        let (code, err, s) = run_scene(
+        let (code, err, s) = run_method(
             &root().join(format!("pipelines/{scene}.toml")),
             &msh,
             &dir.join("out"),
@@ -101,7 +76,7 @@ fn a_body_held_only_by_contact_is_solved_by_every_method() {
     let scene = write(&dir, "floating.toml", &text);
     let mut lengths = Vec::new();
     for method in ["lcp", "qp", "both"] {
-        let (code, err, s) = run_scene(&scene, &msh, &dir.join(method), method);
+        let (code, err, s) = run_method(&scene, &msh, &dir.join(method), method);
         assert_eq!(code, 0, "{method}: {err}");
         let s = s.unwrap();
         assert_eq!(s["status"], "converged", "{method}");
@@ -152,7 +127,7 @@ fn a_body_pulled_off_its_support_is_a_named_mechanism() {
     let scene = write(&dir, "pulled.toml", &text);
     for method in ["lcp", "qp"] {
         let out = dir.join(method);
-        let (code, err, s) = run_scene(&scene, &msh, &out, method);
+        let (code, err, s) = run_method(&scene, &msh, &out, method);
         assert_eq!(code, 3, "{method}: {err}");
         assert!(err.contains("body \"upper\""), "{method}: {err}");
         assert!(
@@ -193,7 +168,7 @@ fn example_2_detached_length_converges_under_refinement() {
             .replace("operators = true", "operators = false")
             .replace("vtk = true", "vtk = false");
         let scene = write(&dir, &format!("s{n}.toml"), &text);
-        let (code, err, s) = run_scene(&scene, &msh, &dir.join(format!("o{n}")), "lcp");
+        let (code, err, s) = run_method(&scene, &msh, &dir.join(format!("o{n}")), "lcp");
         assert_eq!(code, 0, "{n}: {err}");
         d.push(
             s.unwrap()["interfaces"]["joint"]["detached_length"]

@@ -680,10 +680,16 @@ fn contact_step(
     let full = scene.output.history != HistoryLevel::Final;
     let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
     timings.add(main.timing_key(), t.elapsed().as_secs_f64());
-    if r.mechanism && main == Solver::Evolutive {
-        // The pivoting path can stop at a row that cannot open without leaving a body free
-        // although an equilibrium exists (a stick pair that starts open and must tie as it
-        // closes): the sparse solver decides it from the same state.
+    if r.mechanism && matches!(main, Solver::Evolutive | Solver::Qp) {
+        // The pivoting path, or the QP's statuses checked exactly, can stop at a row that
+        // cannot open without leaving a body free although an equilibrium exists (a stick
+        // pair that starts open and must tie as it closes): the sparse solver decides it
+        // from the same state.
+        let who = if main == Solver::Qp {
+            "the QP"
+        } else {
+            "the evolutive path"
+        };
         let t = Instant::now();
         let x = session.solve_step(state, Solver::Sparse, ctx.tol, ctx.maxit, step, f, full);
         timings.add(Solver::Sparse.timing_key(), t.elapsed().as_secs_f64());
@@ -691,8 +697,8 @@ fn contact_step(
             let why = r.failure.as_ref().map(|e| e.message().to_string());
             r = x;
             r.notes.push(format!(
-                "load step {}: the evolutive path found no equilibrium ({}); the sparse solver \
-                 found one from the same state, which is the step's result",
+                "load step {}: {who} found no equilibrium ({}); the sparse solver found one \
+                 from the same state, which is the step's result",
                 step + 1,
                 why.unwrap_or_default()
             ));
@@ -722,7 +728,8 @@ fn contact_step(
         });
     }
     acc.states.extend(r.states);
-    if main == Solver::Qp && step == ctx.last {
+    // The QP's own zones, unless the sparse solver gave the step's result.
+    if main == Solver::Qp && r.solver == Solver::Qp.name() && step == ctx.last {
         acc.qp_block = Some(QpCheck {
             interfaces: r.interfaces.clone(),
             converged: r.converged,

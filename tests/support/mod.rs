@@ -330,6 +330,25 @@ pub fn run_quiet(scene: &Path, mesh: &Path, out: &Path) -> (i32, String, String)
     sgbem(&["run", &scene, "--mesh", &mesh, "--out", &out, "--quiet"])
 }
 
+/// `sgbem run SCENE --mesh MESH --out OUT --method METHOD --quiet`; returns the exit code,
+/// stderr and the summary (where written: a failed contact solve writes it too).
+pub fn run_method(
+    scene: &Path,
+    mesh: &Path,
+    out: &Path,
+    method: &str,
+) -> (i32, String, Option<serde_json::Value>) {
+    let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let (scene, mesh, out_s) = (s(scene), s(mesh), s(out));
+    let (code, _, err) = sgbem(&[
+        "run", &scene, "--mesh", &mesh, "--out", &out_s, "--method", method, "--quiet",
+    ]);
+    let summary = std::fs::read_to_string(out.join("summary.json"))
+        .ok()
+        .map(|t| serde_json::from_str(&t).expect("summary.json is JSON"));
+    (code, err, summary)
+}
+
 /// Asserts an exit status, no panic, and (on failure) a message on stderr that starts
 /// with `sgbem: ` and names every word.
 pub fn expect_exit(out: &(i32, String, String), code: i32, words: &[&str]) {
