@@ -14,7 +14,7 @@ SGBEM   := target/release/sgbem
 MESH_OPTS ?=
 SUDO    := $(shell [ "$$(id -u)" -eq 0 ] || echo sudo)
 APT_PACKAGES := libhdf5-dev pkg-config gmsh libosmesa6
-PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest jsonschema
+PY_PACKAGES  := meshio pyvista h5py matplotlib pandas pytest jsonschema snakemake
 
 GEO    := $(wildcard geo/*.geo)
 MESHES := $(patsubst geo/%.geo,out/mesh/%.msh,$(GEO))
@@ -31,6 +31,7 @@ help:
 	@echo "  make mesh      mesh geo/*.geo into out/mesh/*.msh (MESH_OPTS=\"-setnumber h 2\")"
 	@echo "  make examples  run every pipeline"
 	@echo "  make vault     the paper's vault (example 3) for five cohesions, tables in out/vault/"
+	@echo "  make sweep     a sweep file in Snakemake, a job per point (SWEEP=pipelines/sweeps/wall_friction.toml)"
 	@echo "  make arch-min  the minimum thickness of a semicircular arch by bisection (out/arch_min/)"
 	@echo "  make accuracy  refinement studies: error and time"
 	@echo "  make bench     per-stage benchmarks"
@@ -48,7 +49,7 @@ setup:
 	  DEBIAN_FRONTEND=noninteractive $(SUDO) apt-get install -y -qq $$missing >/dev/null; \
 	fi
 	@test -x $(PY) || python3 -m venv $(VENV)
-	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest, jsonschema" 2>/dev/null || \
+	@$(PY) -c "import meshio, pyvista, h5py, matplotlib, pandas, pytest, jsonschema, snakemake" 2>/dev/null || \
 	  { echo "setup: installing $(PY_PACKAGES) into $(VENV)"; \
 	    $(PY) -m pip install -q --disable-pip-version-check $(PY_PACKAGES); }
 	@# The Python package sgbem (python/), editable: the venv follows the working tree.
@@ -153,6 +154,13 @@ vault: build out/mesh/vault.msh
 	$(SGBEM) sweep pipelines/vault_c0.toml --set 'interface.*.cohesion=$(VAULT_COHESION)' \
 	  --jobs $(JOBS) --out out/vault/sweep
 	python3 pipelines/vault_table.py out
+
+# A sweep file (pipelines/sweeps/*.toml: scene, --set values, folder) through the generic
+# Snakemake workflow pipelines/Snakefile: one job per point (JOBS at a time), then the table.
+.PHONY: sweep
+SWEEP ?= pipelines/sweeps/wall_friction.toml
+sweep: setup build
+	$(VENV)/bin/snakemake -s pipelines/Snakefile --cores $(JOBS) --config sweep=$(SWEEP) sgbem=$(SGBEM)
 
 # The minimum thickness of a semicircular arch (40 voussoirs, friction mu = 1) by bisection
 # on t/R between a ring that stands and one that collapses: out/arch_min/result.md.

@@ -658,3 +658,116 @@ fn a_locked_folder_refuses_the_run_before_meshing() {
     assert_eq!(code, 0, "{err}");
     assert!(out.join("mesh").join("two_blocks.msh").is_file());
 }
+
+/// Snakemake where `make setup` installed it (`.venv`), else on the PATH.
+fn snakemake() -> Option<PathBuf> {
+    let venv = root().join(".venv/bin/snakemake");
+    if venv.is_file() {
+        return Some(venv);
+    }
+    let o = std::process::Command::new("snakemake")
+        .arg("--version")
+        .output()
+        .ok()?;
+    o.status.success().then(|| PathBuf::from("snakemake"))
+}
+
+/// The generic Snakefile (`pipelines/Snakefile`) on the shipped sweep file
+/// `pipelines/sweeps/wall_friction.toml`, two jobs at a time: a job per point (`--point K`;
+/// the point that slides ends with exit 3 and is a result, as in the whole sweep), then
+/// `--table`, whose sweep.csv and sweep.md are byte for byte those of `sgbem sweep` run
+/// whole. A rerun does nothing; a value added in the middle of the sweep (K shifts for the
+/// points after it) runs that point alone. Skipped where Snakemake is not installed.
+#[test]
+fn snakefile_runs_a_sweep_file_point_by_point_as_the_whole_sweep() {
+    let Some(snakemake) = snakemake() else {
+        eprintln!("skipped: no snakemake (make setup installs it into .venv)");
+        return;
+    };
+    let dir = tmpdir("workflow-snakefile");
+    let file = root().join("pipelines/sweeps/wall_friction.toml");
+    let spec: toml::Table = std::fs::read_to_string(&file).unwrap().parse().unwrap();
+    let scene = file.parent().unwrap().join(spec["scene"].as_str().unwrap());
+    let strings = |key: &str| -> Vec<String> {
+        let list = spec[key].as_array().unwrap();
+        list.iter()
+            .map(|v| v.as_str().unwrap().to_string())
+            .collect()
+    };
+    let (sets, columns) = (strings("set"), strings("columns").join(","));
+    let whole = |sets: &[String], out: &Path| {
+        let sets: Vec<&str> = sets.iter().map(String::as_str).collect();
+        let s = scene.to_str().unwrap();
+        let (code, _, err) = sweep_into(s, &sets, out, &["--columns", &columns]);
+        assert_eq!(code, 3, "the point at mu = 0.05 slides: {err}");
+    };
+    let snake = |sweep: &Path, out: &Path| -> String {
+        let o = std::process::Command::new(&snakemake)
+            .arg("-s")
+            .arg(root().join("pipelines/Snakefile"))
+            .arg("--directory")
+            .arg(&dir)
+            .args(["--cores", "2", "--config"])
+            .arg(format!("sweep={}", sweep.display()))
+            .arg(format!("sgbem={}", env!("CARGO_BIN_EXE_sgbem")))
+            .arg(format!("out={}", out.display()))
+            .output()
+            .expect("run snakemake");
+        let text =
+            String::from_utf8_lossy(&o.stdout).into_owned() + &String::from_utf8_lossy(&o.stderr);
+        assert!(o.status.success(), "{text}");
+        text
+    };
+    let same_tables = |a: &Path, b: &Path| {
+        for f in ["sweep.csv", "sweep.md"] {
+            let (x, y) = (std::fs::read(a.join(f)).unwrap(), std::fs::read(b.join(f)));
+            let y = y.unwrap();
+            assert!(
+                x == y,
+                "{f} differs:\n{}\n{}",
+                String::from_utf8_lossy(&x),
+                String::from_utf8_lossy(&y)
+            );
+        }
+    };
+    // The summaries the jobs wrote and when.
+    let written = |out: &Path| -> BTreeMap<String, std::time::SystemTime> {
+        let mut m = BTreeMap::new();
+        for e in std::fs::read_dir(out).unwrap() {
+            let p = e.unwrap().path().join("summary.json");
+            if let Ok(meta) = std::fs::metadata(&p) {
+                let name = p.parent().unwrap().file_name().unwrap();
+                m.insert(name.to_string_lossy().into(), meta.modified().unwrap());
+            }
+        }
+        m
+    };
+    let snaked = dir.join("snake");
+    whole(&sets, &dir.join("whole"));
+    snake(&file, &snaked);
+    same_tables(&dir.join("whole"), &snaked);
+    let csv = std::fs::read_to_string(snaked.join("sweep.csv")).unwrap();
+    assert!(csv.contains(",0.05,3,not converged,"), "{csv}");
+    let first = written(&snaked);
+    assert_eq!(first.len(), 3, "{first:?}");
+    let again = snake(&file, &snaked);
+    assert!(again.contains("Nothing to be done"), "{again}");
+    assert_eq!(written(&snaked), first, "a rerun redoes no point");
+    // mu = 0.5 between 0.3 and 0.7: one new job; the others keep their results.
+    let more: Vec<String> = sets
+        .iter()
+        .map(|s| s.replace("=0.05,0.3,0.7", "=0.05,0.3,0.5,0.7"))
+        .collect();
+    let mut extended = spec.clone();
+    extended.insert("scene".into(), scene.to_str().unwrap().into());
+    extended.insert("set".into(), more.clone().into());
+    let ext = write(&dir, "extended.toml", &extended.to_string());
+    snake(&ext, &snaked);
+    let second = written(&snaked);
+    assert_eq!(second.len(), 4, "{second:?}");
+    for (name, t) in &first {
+        assert_eq!(second[name], *t, "{name} ran again");
+    }
+    whole(&more, &dir.join("whole_more"));
+    same_tables(&dir.join("whole_more"), &snaked);
+}
