@@ -601,6 +601,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
 
     // --- Bodies: nodes, loops, orientation -------------------------------------------------
     let mut bodies: Vec<Body> = Vec::new();
+    let mut triangles = body_triangles(mesh, &body_surfaces);
     for (bi, spec) in scene.bodies.iter().enumerate() {
         let mut body = build_body(
             spec.name.as_str(),
@@ -616,12 +617,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.body_force = spec.body_force_at(t0);
         body.body_force_spec = spec.body_force.clone();
         body.surfaces = body_surfaces[bi].clone();
-        body.triangles = mesh
-            .triangles
-            .iter()
-            .filter(|t| body.surfaces.contains(&t.surface))
-            .map(|t| t.nodes)
-            .collect();
+        body.triangles = std::mem::take(&mut triangles[bi]);
         bodies.push(body);
     }
     // Interfaces found from the drawing ([contact]) follow the declared ones.
@@ -852,4 +848,22 @@ fn size_stats(bodies: &[Body]) -> SizeStats {
         }
     }
     s
+}
+
+/// The mesh triangles of each body (those of its surfaces), in the mesh's order: one pass
+/// over the triangles (a pass per body cost 4 128 × 130 000 tests on a 64 × 64 wall).
+fn body_triangles(mesh: &Mesh, body_surfaces: &[Vec<i32>]) -> Vec<Vec<[usize; 3]>> {
+    let mut owners: HashMap<i32, Vec<usize>> = HashMap::new();
+    for (bi, surfaces) in body_surfaces.iter().enumerate() {
+        for &s in surfaces {
+            owners.entry(s).or_default().push(bi);
+        }
+    }
+    let mut out = vec![Vec::new(); body_surfaces.len()];
+    for t in &mesh.triangles {
+        for &bi in owners.get(&t.surface).map_or(&[][..], |v| v.as_slice()) {
+            out[bi].push(t.nodes);
+        }
+    }
+    out
 }

@@ -197,8 +197,33 @@ pub(super) fn overlap_depth(a: &Body, b: &Body) -> f64 {
         .fold(0.0, f64::max)
 }
 
-/// A body entirely inside another: probe a point just inside each body.
+/// A body entirely inside another: probe a point just inside each body. Only the bodies
+/// whose bounding box holds the probe are asked for their winding number (4 000 bricks:
+/// 16 million winding numbers otherwise).
 fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
+    let boxes: Vec<[f64; 4]> = bodies
+        .iter()
+        .map(|b| {
+            b.nodes.iter().fold(
+                [
+                    f64::INFINITY,
+                    f64::INFINITY,
+                    f64::NEG_INFINITY,
+                    f64::NEG_INFINITY,
+                ],
+                |a, p| {
+                    [
+                        a[0].min(p[0]),
+                        a[1].min(p[1]),
+                        a[2].max(p[0]),
+                        a[3].max(p[1]),
+                    ]
+                },
+            )
+        })
+        .collect();
+    let holds =
+        |b: &[f64; 4], p: [f64; 2]| p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3];
     for (bi, body) in bodies.iter().enumerate() {
         let outer = match body.loops.iter().find(|l| !l.is_hole) {
             Some(l) => l,
@@ -214,7 +239,7 @@ fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
             mid[1] - 1e-3 * e.length * e.normal[1],
         ];
         for (oi, other) in bodies.iter().enumerate() {
-            if oi == bi {
+            if oi == bi || !holds(&boxes[oi], probe) {
                 continue;
             }
             let w = other.winding_number(probe);
