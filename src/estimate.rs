@@ -146,12 +146,13 @@ const C_RECORD: f64 = 9e-10;
 const C_ACTIVE: f64 = 2.5e-9;
 const C_QP: f64 = 3.0e-8;
 const C_LEMKE: f64 = 9.0e-9;
-/// Seconds per iteration of the sparse solver per `(Σ n_u²)^1.18` (one sparse Cholesky
-/// factorisation of the system of displacements and openings each; running-bond walls: 0.41 s
-/// at 410 bricks, 0.90 s at 798 bricks, 2 cores), and unilateral pairs per iteration of its
-/// load step (10 iterations at 8 050 pairs, 42 at 15 974: an upper bound of one per 400
-/// pairs, at least 10).
-const C_SPARSE: f64 = 1.7e-8;
+/// Seconds per iteration of the sparse solver per `(Σ n_u²)^1.18` (one or two sparse
+/// Cholesky factorisations of the system of displacements and openings each; running-bond
+/// walls, history "final": 0.15 s at 410 and 798 bricks, 0.96 s at 2 048, 3.1 s at 4 128),
+/// and unilateral pairs per iteration of its load step (10 iterations at 8 050 pairs, 31 at
+/// 15 974, 42 at 41 734, 116 at 84 896: an upper bound of one per 400 pairs, at least 10).
+/// The estimate of the contact stage is then 1.4–2.7 times the time measured.
+const C_SPARSE: f64 = 5.7e-9;
 const SPARSE_PAIRS_PER_ITERATION: f64 = 400.0;
 
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a

@@ -424,6 +424,8 @@ impl SparseSystem {
 /// lightest it is made while the statuses hold and the free bodies still drift.
 const REGULARISATION: f64 = 1e-2;
 const REGULARISATION_MIN: f64 = 1e-10;
+/// Switches after a proximal iterate up to which its weight is kept.
+const FEW_SWITCHES: usize = 16;
 
 /// Iterations of one inner solve, and halvings of the step after repeated statuses, before
 /// the evolutive path takes over (the active set ends in a few where it converges).
@@ -513,7 +515,13 @@ pub fn solve(
             (v.len() >> damping.min(31)).max(1)
         };
         (open, sign) = switched(&st, &v[..take]);
-        reg = REGULARISATION;
+        // The proximal weight is a trust region: a proximal iterate that switched a few rows
+        // keeps its weight (the free bodies go on towards what stops them at the same
+        // pace); one that switched many, which a free body thrown too far does, and an
+        // exact one start again from the heaviest.
+        if !regularised || take > FEW_SWITCHES {
+            reg = REGULARISATION;
+        }
         last = Some(st);
         iterations += 1;
     }
