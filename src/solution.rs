@@ -219,6 +219,10 @@ pub struct SolverInfo {
     /// QP: the interior point solver's status.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub solver_status: Option<String>,
+    /// Lemke and QP: dense solves repeated because stick rows of pairs that closed had to
+    /// be tied (a stick row ties as its pair closes); left out where none was.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub stick_tie_resolves: Option<usize>,
     /// QP: the variables of the last QP solved.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub variables: Option<usize>,

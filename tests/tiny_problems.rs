@@ -594,10 +594,9 @@ fn section(out: &Path, name: &str) -> Vec<(f64, f64, f64)> {
 /// with t_n = −1, t_t = 0, N = 1 at x = 0.5; along the axis x = 0.5, u_x = 0 and u_y = −y/E
 /// in the lower block (y < 0.5), u_y = −h − 0.5/E − (y − 0.5)/E in the upper one: at
 /// y = 0.125, 0.375, 0.625, 0.875: −1.25e-4, −3.75e-4, −1.625e-3, −1.875e-3. (With stick,
-/// `--method qp` ended here with exit 3, "no equilibrium exists", before the QP handed such
-/// a step to the sparse solver as the evolutive path does: the first outer iteration leaves
-/// the stick rows of the open pairs untied, and the exact state of the QP's statuses cannot
-/// free them all.)
+/// `--method qp` and `lcp` once ended here with exit 3, "no equilibrium exists": the first
+/// outer iteration left the stick rows of the open pairs untied as the pairs closed, which
+/// leaves the block free; every solver now ties a stick row as its pair closes.)
 #[test]
 fn free_at_the_start_a_block_with_a_gap_comes_down_and_rests() {
     for (k, law) in [FRICTION, STICK].iter().enumerate() {
@@ -645,15 +644,15 @@ fn gap_runs(name: &str, law: &str) -> Vec<Run> {
 }
 
 /// The cross-checks of the stick case of the test above. Each solves the step from the same
-/// state as the main solver, without the hand-over to the sparse solver, and each stops at
-/// the false mechanism of the untied stick rows: active set ("cycled", then the evolutive
-/// iteration's "no equilibrium exists"), QP and Lemke ("1 pair(s) found open would leave a
-/// body free; no equilibrium exists"), and the evolutive path under `sparse` (7 differing
-/// pairs), while the main solver converges to the exact answer.
+/// state as the main solver, without the hand-over to the sparse solver. They once stopped
+/// at the false mechanism of the untied stick rows — active set ("cycled", then the
+/// evolutive iteration's "no equilibrium exists"), QP and Lemke ("1 pair(s) found open would
+/// leave a body free; no equilibrium exists"), the evolutive path under `sparse` (7
+/// differing pairs) — while the main solver converged to the exact answer. Now each follows
+/// the stick law from the moment a pair closes (docs/formulation.md §6.4): the pivoting
+/// solvers switch a pair's two rows together, Lemke and the QP tie the rows of the pairs
+/// they close and solve again.
 #[test]
-#[ignore = "bug: with a stick joint that starts open, every cross-check (active set, QP, \
-            Lemke; the evolutive path under sparse) reports no equilibrium where one exists; \
-            only the sparse solver ties stick rows as their pairs close"]
 fn free_at_the_start_every_cross_check_finds_the_stick_equilibrium() {
     for r in &gap_runs("tiny-gap-checks", STICK) {
         r.assert_converged();

@@ -680,11 +680,11 @@ fn contact_step(
     let full = scene.output.history != HistoryLevel::Final;
     let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
     timings.add(main.timing_key(), t.elapsed().as_secs_f64());
-    if r.mechanism && matches!(main, Solver::Evolutive | Solver::Qp) {
+    if (r.mechanism || r.undecided) && matches!(main, Solver::Evolutive | Solver::Qp) {
         // The pivoting path, or the QP's statuses checked exactly, can stop at a row that
-        // cannot open without leaving a body free although an equilibrium exists (a stick
-        // pair that starts open and must tie as it closes): the sparse solver decides it
-        // from the same state.
+        // cannot open without leaving a body free although an equilibrium exists, and the
+        // QP may find no statuses that keep the stick law at closure (it poses each row
+        // tied or free before it solves): the sparse solver decides it from the same state.
         let who = if main == Solver::Qp {
             "the QP"
         } else {
@@ -695,9 +695,14 @@ fn contact_step(
         timings.add(Solver::Sparse.timing_key(), t.elapsed().as_secs_f64());
         if x.converged && x.failure.is_none() {
             let why = r.failure.as_ref().map(|e| e.message().to_string());
+            let what = if r.mechanism {
+                "found no equilibrium"
+            } else {
+                "could not decide the step"
+            };
             r = x;
             r.notes.push(format!(
-                "load step {}: {who} found no equilibrium ({}); the sparse solver found one \
+                "load step {}: {who} {what} ({}); the sparse solver found an equilibrium \
                  from the same state, which is the step's result",
                 step + 1,
                 why.unwrap_or_default()

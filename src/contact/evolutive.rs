@@ -5,10 +5,11 @@
 //! From a start status, the most violated normal row switches (a closed row in tension beyond
 //! its cohesion opens, an open row that interpenetrates closes), the status is re-solved by
 //! updating the Cholesky factor of A_OO (O(|O|²), no refactorisation), and the state is
-//! recorded. Each switch is a principal pivot of the LCP; the most-violated rule follows the
-//! detachment front but can cycle (Ben Gharbia–Gilbert), so a repeated status turns the rule
-//! into Murty's least-index rule, which terminates on the unique solution of an LCP with a
-//! P-matrix (A positive definite).
+//! recorded. A stick row that ties as its pair closes (`Inner::tie_on_close`) switches with
+//! its pair's normal row (a block pivot of the two). Each switch is a principal pivot of the
+//! LCP; the most-violated rule follows the detachment front but can cycle (Ben
+//! Gharbia–Gilbert), so a repeated status turns the rule into Murty's least-index rule,
+//! which terminates on the unique solution of an LCP with a P-matrix (A positive definite).
 
 use std::collections::HashSet;
 
@@ -69,7 +70,7 @@ pub fn solve(
         for (i, x) in candidates.iter().enumerate() {
             let r = x.row;
             if st.open[r] {
-                o.remove(r);
+                inner.close_row(&mut o, r);
                 sign[r] = 0.0;
                 switched = true;
                 break;
@@ -95,8 +96,7 @@ pub fn solve(
                     .collect();
                 cols.ensure(inner.problem, &ahead);
             }
-            let col = cols.get(inner.problem, r);
-            if o.append(r, col) {
+            if inner.open_row(cols, &mut o, r) {
                 sign[r] = x.sign;
                 switched = true;
                 break;

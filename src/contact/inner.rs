@@ -37,11 +37,10 @@ pub(super) fn inner_solve(
             let first = lp.compact.is_empty();
             let record = lp.record;
             let compact = &mut lp.compact;
-            let out = evolutive::solve(
+            let out = pivoting(
                 inner,
                 cols,
-                &st.open,
-                &st.sign,
+                (&st.open, &st.sign),
                 budget,
                 &mut |s: &InnerState| {
                     // Later outer iterations start where the last one ended.
@@ -54,7 +53,9 @@ pub(super) fn inner_solve(
             Ok(out)
         }
         Solver::ActiveSet => {
-            let out = active_set::solve(inner, cols, &st.open, &st.sign, budget);
+            // With the stick rows of open pairs free until the outer loop ties them, as the
+            // evolutive path's first try (`pivoting`), to which a stall hands over.
+            let out = active_set::solve(&inner.relaxed(), cols, &st.open, &st.sign, budget);
             Ok(if out.stalled {
                 hand_over(inner, cols, out, budget, "active-set iteration cycled")
             } else {
@@ -101,32 +102,127 @@ pub(super) fn inner_solve(
             })
         }
         Solver::Lemke => {
-            let (statuses, pivots) = lemke::solve(inner, cols)?;
-            let (out, finish) = exact_state(inner, cols, &statuses);
+            let ((_, pivots), out, finish, resolves) =
+                dense_outcome(inner, cols, lemke::solve, |(s, _)| s)?;
             lp.finishing += finish;
+            lp.tie_resolves += resolves;
             lp.info = SolverInfo {
                 friction_finishing_pivots: Some(lp.finishing),
                 pivots: Some(pivots),
+                stick_tie_resolves: (lp.tie_resolves > 0).then_some(lp.tie_resolves),
                 ..SolverInfo::default()
             };
             Ok(out)
         }
         Solver::Qp => {
-            let q = qp::solve(inner, cols, inner.tol)?;
-            let (out, finish) = exact_state(inner, cols, &q.statuses);
+            let (q, out, finish, resolves) = qp_outcome(inner, cols)?;
             lp.finishing += finish;
+            lp.tie_resolves += resolves;
             lp.info = SolverInfo {
                 constraints: Some(q.constraints),
                 friction_finishing_pivots: Some(lp.finishing),
                 iterations: Some(q.iterations),
                 objective: Some(q.objective),
                 solver_status: Some(q.solver_status),
+                stick_tie_resolves: (lp.tie_resolves > 0).then_some(lp.tie_resolves),
                 variables: Some(q.variables),
                 ..SolverInfo::default()
             };
             Ok(out)
         }
     }
+}
+
+/// Lemke's or the QP's outcome (`solve` on a dense form, `statuses` of its result): the
+/// statuses of the inner problem with the stick rows of open pairs free until the outer loop
+/// ties them (the LCP of §6.2, as these solvers always posed it), their state computed
+/// exactly. Where that fails — no solution, or statuses whose state is not one (a pair that
+/// closes with its stick row free can leave a body free: a block that starts above a stick
+/// joint) — and stick rows tie on closing, the stick law from the moment a pair closes by
+/// the fixed point on the ties (`Inner::dense_with_ties`). Returns the solver's result, the
+/// outcome, the pivots that finished its friction rows and the dense solves made for the
+/// ties.
+fn dense_outcome<T>(
+    inner: &Inner,
+    cols: &mut Columns,
+    solve: impl Fn(&Inner, &mut Columns) -> Result<T, InnerFailure>,
+    statuses: impl Fn(&T) -> &Statuses,
+) -> Result<(T, InnerOutcome, usize, usize), InnerFailure> {
+    let relaxed = inner.relaxed();
+    let first = match solve(&relaxed, cols) {
+        Ok(t) => {
+            let (out, finish) = exact_state(&relaxed, cols, statuses(&t));
+            if out.converged || !inner.has_ties() {
+                return Ok((t, out, finish, 0));
+            }
+            Ok(t)
+        }
+        Err(e) if !inner.has_ties() => return Err(e),
+        Err(e) => Err(e.to_string()),
+    };
+    let first = first.as_ref().map(&statuses).map_err(String::as_str);
+    let (t, solves) = inner.dense_with_ties(cols, &solve, &statuses, first)?;
+    let (out, finish) = exact_state(inner, cols, statuses(&t));
+    Ok((t, out, finish, solves))
+}
+
+/// The QP's outcome of the inner problem (`dense_outcome`).
+fn qp_outcome(
+    inner: &Inner,
+    cols: &mut Columns,
+) -> Result<(qp::QpOutcome, InnerOutcome, usize, usize), InnerFailure> {
+    dense_outcome(
+        inner,
+        cols,
+        |p, c| qp::solve(p, c, inner.tol),
+        |q| &q.statuses,
+    )
+}
+
+/// The evolutive path on the inner problem (the pivoting solvers' path, and every hand-over
+/// to it): first with the stick rows of open pairs free until the outer loop ties them (the
+/// LCP of §6.2, whose least-index rule terminates where A is positive definite; a stick pair
+/// at the contact edge that neither stays open untied nor closed tied is left to the outer
+/// loop's edge rule). Where that path stops at a row that cannot switch without leaving a
+/// body free and stick rows tie on closing, it runs again from the same statuses with each
+/// such row tied as its pair closes (the stick law from the moment a pair closes: a block
+/// that starts above a stick joint comes down and is held), and its equilibrium is taken
+/// if it finds one. `record` sees the states of both paths.
+pub(super) fn pivoting(
+    inner: &Inner,
+    cols: &mut Columns,
+    (open, sign): (&[bool], &[f64]),
+    budget: usize,
+    record: &mut dyn FnMut(&InnerState),
+) -> InnerOutcome {
+    let relaxed = inner.relaxed();
+    let out = evolutive::solve(&relaxed, cols, open, sign, budget, record);
+    if out.converged || out.blocked.is_empty() || !inner.has_ties() {
+        return out;
+    }
+    let rest = budget.saturating_sub(out.iterations);
+    let mut tied = evolutive::solve(inner, cols, open, sign, rest, record);
+    if !tied.converged {
+        return out;
+    }
+    let why = if out.notes.is_empty() {
+        String::new()
+    } else {
+        format!(" ({})", out.notes.join("; "))
+    };
+    let mut notes = vec![format!(
+        "with the stick rows of the pairs that closed left free, the evolutive path stopped \
+         after {} iterations at {} row(s) that could not switch without leaving a body \
+         free{why}; from the same statuses, with each stick row tied as its pair closes, it \
+         found an equilibrium",
+        out.iterations,
+        out.blocked.len(),
+    )];
+    notes.append(&mut tied.notes);
+    tied.notes = notes;
+    // The return to the start statuses counts as one iteration (the history numbers it).
+    tied.iterations += out.iterations + 1;
+    tied
 }
 
 /// The active set stalled (a cycle or its iteration limit): the evolutive iteration goes
@@ -144,11 +240,10 @@ pub(super) fn hand_over(
         stalled.iterations
     ));
     let st = &stalled.state;
-    let mut out = evolutive::solve(
+    let mut out = pivoting(
         inner,
         cols,
-        &st.open,
-        &st.sign,
+        (&st.open, &st.sign),
         budget.saturating_sub(stalled.iterations),
         &mut |_| {},
     );
@@ -172,8 +267,7 @@ pub(super) fn qp_rescue(
     it0: usize,
     lp: &mut StepLoop,
 ) -> InnerOutcome {
-    let rescued =
-        qp::solve(inner, cols, inner.tol).map(|q| exact_state(inner, cols, &q.statuses).0);
+    let rescued = qp_outcome(inner, cols).map(|(_, out, _, _)| out);
     match rescued {
         Ok(rescued) if rescued.converged => {
             let k = it0 + outcome.iterations + 1;
@@ -221,8 +315,13 @@ pub(super) fn solve_inner(
         }
         Ok(outcome) => Ok(outcome),
         Err(e) => {
-            let probe =
-                evolutive::solve(inner, cols, &st.open, &st.sign, max_iterations, &mut |_| {});
+            let probe = pivoting(
+                inner,
+                cols,
+                (&st.open, &st.sign),
+                max_iterations,
+                &mut |_| {},
+            );
             Err((e, Box::new(probe)))
         }
     }

@@ -22,6 +22,13 @@
 //! i.e. the optimality system of `min ½ΔsᵀAΔs + λ⁰ᵀΔs + Σ g_r |Δs_r|` (s ≥ 0 on normal rows):
 //! unique for positive definite A. A friction row whose bound is zero (its pair open or
 //! without compression) is free. Slipping rows are "open" rows with a target force −σ g_r.
+//!
+//! **Stick from the moment a pair closes.** The free stick row of an open pair may tie as
+//! its pair closes within the inner problem (`tie_on_close`: free while the pair's normal
+//! row is open, tied once it closes), which a body that starts open above a stick joint
+//! needs (with its stick rows free it is left free as it comes down). That is no LCP over
+//! fixed variables: the pivoting solvers switch the pair's two rows together, and Lemke and
+//! the QP iterate on which rows they tie (`Inner::dense_with_ties`).
 
 use std::collections::HashMap;
 
@@ -104,6 +111,11 @@ pub enum InnerFailure {
     Unbounded,
     /// The QP could not be set up or ended with another status.
     Qp { message: String },
+    /// Lemke or the QP found no statuses whose closed pairs are those whose stick rows it
+    /// tied (`Inner::dense_with_ties`): `tried` says what each start gave. A dense LCP
+    /// poses each row tied or free before it solves, so this alone proves nothing about the
+    /// equilibrium.
+    StickClosure { tried: String },
     /// The state of the statuses found could not be computed.
     State { message: String },
 }
@@ -134,6 +146,13 @@ impl std::fmt::Display for InnerFailure {
             InnerFailure::Qp { message } | InnerFailure::State { message } => {
                 write!(f, "{message}")
             }
+            InnerFailure::StickClosure { tried } => write!(
+                f,
+                "not applicable to this step: the dense LCP found no statuses whose closed \
+                 pairs are those whose stick rows it tied ({tried}); a dense LCP poses every \
+                 row tied or free before it solves and cannot tie a stick row as its pair \
+                 closes, so this alone proves nothing about the equilibrium"
+            ),
         }
     }
 }
@@ -196,8 +215,10 @@ pub struct Inner<'a> {
     /// Rows that are open whatever happens (untied stick rows, friction rows without a
     /// slip bound).
     pub free: Vec<bool>,
-    /// Free stick rows whose pair is open: tied once the pair's normal row closes (the
-    /// sparse solver applies this within the inner problem).
+    /// Free stick rows whose pair is open: tied once the pair's normal row closes, within
+    /// the inner problem. The sparse solver poses it so; the pivoting solvers switch the
+    /// pair's two rows together and Lemke and the QP tie the rows of the pairs they close
+    /// and solve again, each where the problem without it ([`Inner::relaxed`]) fails.
     pub tie_on_close: Vec<bool>,
     /// Slip bound g_r = μ_r λ_n of each friction row (0 on other rows).
     pub bound: Vec<f64>,
@@ -271,6 +292,79 @@ impl<'a> Inner<'a> {
         }
     }
 
+    /// Whether a stick row ties as its pair closes in this problem.
+    pub fn has_ties(&self) -> bool {
+        self.tie_on_close.iter().any(|&t| t)
+    }
+
+    /// The same problem with the stick rows of open pairs free until the outer loop ties
+    /// them (no row ties within it): the LCP of `problem`, whose solution the pivoting
+    /// solvers reach wherever A is positive definite.
+    pub fn relaxed(&self) -> Inner<'a> {
+        Inner::new(
+            self.problem,
+            self.base,
+            (self.free.clone(), vec![false; self.n()]),
+            self.bound.clone(),
+            self.tol,
+        )
+    }
+
+    /// The normal row of the pair whose stick row `r` ties as that pair closes
+    /// (`tie_on_close`); None for every other row.
+    pub fn tied_to(&self, r: usize) -> Option<usize> {
+        if !self.tie_on_close[r] {
+            return None;
+        }
+        let row = &self.problem.rows[r];
+        self.problem.row_of[row.iface][row.pair][1].filter(|&q| q < self.n())
+    }
+
+    /// The stick row that ties as the normal row `q` closes, if any.
+    pub fn tie_of(&self, q: usize) -> Option<usize> {
+        let row = &self.problem.rows[q];
+        if row.kind != RowKind::Normal {
+            return None;
+        }
+        self.problem.row_of[row.iface][row.pair][0]
+            .filter(|&r| r < self.n() && self.tied_to(r) == Some(q))
+    }
+
+    /// The open rows of the status whose normal rows are `open`: free rows open, and a stick
+    /// row that ties on closing open exactly where its pair's normal row is.
+    pub fn follow(&self, open: &[bool]) -> Vec<bool> {
+        (0..self.n())
+            .map(|r| match self.tied_to(r) {
+                Some(q) => open[q],
+                None => open[r] || self.free[r],
+            })
+            .collect()
+    }
+
+    /// Opens row `r` in `o`, and with it the stick row that ties as `r`'s pair closes (the
+    /// pair's two rows switch together). False, with `o` unchanged, where either would
+    /// leave a body free.
+    pub fn open_row(&self, cols: &mut Columns, o: &mut Opening, r: usize) -> bool {
+        if !o.append(r, cols.get(self.problem, r)) {
+            return false;
+        }
+        if let Some(t) = self.tie_of(r) {
+            if !o.append(t, cols.get(self.problem, t)) {
+                o.remove(r);
+                return false;
+            }
+        }
+        true
+    }
+
+    /// Closes row `r` in `o`, and with it the stick row that ties as `r`'s pair closes.
+    pub fn close_row(&self, o: &mut Opening, r: usize) {
+        o.remove(r);
+        if let Some(t) = self.tie_of(r) {
+            o.remove(t);
+        }
+    }
+
     /// The open rows of a start status: a friction row that slips without a direction (a
     /// row that was free) starts sticking.
     pub fn start_open(&self, open: &[bool], sign: &[f64]) -> Vec<bool> {
@@ -295,11 +389,16 @@ impl<'a> Inner<'a> {
 
     /// Builds the factor of A_OO for the free rows and the normal rows `open` (in order of
     /// decreasing initial gap, so that a row whose opening would leave a body free — the
-    /// smallest gaps come last — stays closed). Returns the factor and the rows refused.
+    /// smallest gaps come last — stays closed). A stick row that ties as its pair closes is
+    /// free where its pair's normal row is in `open` (appended with the free rows) and tied
+    /// elsewhere; a pair whose two rows cannot both open stays closed, its stick row tied.
+    /// Returns the factor and the rows refused (normal rows for such pairs).
     pub fn factor(&self, cols: &mut Columns, open: &[bool]) -> (Opening, Vec<usize>) {
         let mut o = Opening::default();
         let mut refused = Vec::new();
-        let mut order: Vec<usize> = (0..self.n()).filter(|&r| self.free[r]).collect();
+        let mut order: Vec<usize> = (0..self.n())
+            .filter(|&r| self.free[r] && self.tied_to(r).is_none_or(|q| open[q]))
+            .collect();
         let mut normal: Vec<usize> = (0..self.n())
             .filter(|&r| !self.free[r] && open[r])
             .collect();
@@ -346,10 +445,27 @@ impl<'a> Inner<'a> {
             }
         }
         cols.ensure(self.problem, &order);
+        // Normal rows whose pair stays closed because its stick row cannot be free.
+        let mut closed = vec![false; self.n()];
         for r in order {
+            if closed[r] {
+                continue;
+            }
             let col = cols.get(self.problem, r);
-            if !o.append(r, col) {
-                refused.push(r);
+            if o.append(r, col) {
+                continue;
+            }
+            match self.tied_to(r) {
+                Some(q) => {
+                    closed[q] = true;
+                    refused.push(q);
+                }
+                None => {
+                    refused.push(r);
+                    if let Some(t) = self.tie_of(r) {
+                        o.remove(t);
+                    }
+                }
             }
         }
         cols.keep(&o);
@@ -582,6 +698,82 @@ impl<'a> Inner<'a> {
         })
     }
 
+    /// Lemke's or the QP's statuses (`solve` on a dense form, `statuses` of its outcome)
+    /// where stick rows tie as their pairs close (`tie_on_close`). A dense LCP poses each
+    /// row tied or free before it solves, so the stick rows that tie on closing are tied
+    /// where the last solution closed their pair and free elsewhere, and the problem is
+    /// solved again until the pairs closed are those tied: then the statuses solve the
+    /// inner problem with the stick law from the moment a pair closes, as the pivoting
+    /// solvers do. `relaxed` is the solution of the problem with every such row free (the
+    /// first start ties the rows of the pairs it closed), or why there is none; where that
+    /// start fails or does not settle, a second start ties them all. Returns the outcome and
+    /// the solves made.
+    pub fn dense_with_ties<T>(
+        &self,
+        cols: &mut Columns,
+        solve: impl Fn(&Inner, &mut Columns) -> Result<T, InnerFailure>,
+        statuses: impl Fn(&T) -> &Statuses,
+        relaxed: Result<&Statuses, &str>,
+    ) -> Result<(T, usize), InnerFailure> {
+        let n = self.n();
+        let closing = |open: &[bool]| -> Vec<bool> {
+            (0..n)
+                .map(|r| self.tied_to(r).is_some_and(|q| !open[q]))
+                .collect()
+        };
+        let all: Vec<bool> = (0..n).map(|r| self.tied_to(r).is_some()).collect();
+        let pairs = all.iter().filter(|&&t| t).count();
+        let mut tried = Vec::new();
+        let mut starts = Vec::new();
+        match relaxed {
+            Ok(st) => starts.push((
+                "the stick rows of the pairs it closed tied",
+                closing(&st.open),
+            )),
+            Err(why) => tried.push(format!(
+                "with the stick rows of the {pairs} open pair(s) free: {why}"
+            )),
+        }
+        if starts.first().is_none_or(|(_, t)| *t != all) {
+            starts.push(("every such stick row tied", all));
+        }
+        let mut solves = 0;
+        for (start, mut tied) in starts {
+            let mut seen = std::collections::HashSet::new();
+            let why = loop {
+                seen.insert(tied.clone());
+                let free = (0..n).map(|r| self.free[r] && !tied[r]).collect();
+                let posed = Inner::new(
+                    self.problem,
+                    self.base,
+                    (free, vec![false; n]),
+                    self.bound.clone(),
+                    self.tol,
+                );
+                solves += 1;
+                let out = match solve(&posed, cols) {
+                    Ok(out) => out,
+                    Err(e) => break e.to_string(),
+                };
+                let closed = closing(&statuses(&out).open);
+                if closed == tied {
+                    return Ok((out, solves));
+                }
+                if seen.contains(&closed) || seen.len() >= TIE_SOLVES {
+                    break format!(
+                        "the pairs closed and the stick rows tied did not settle in {} solves",
+                        seen.len()
+                    );
+                }
+                tied = closed;
+            };
+            tried.push(format!("from {start}: {why}"));
+        }
+        Err(InnerFailure::StickClosure {
+            tried: tried.join("; "),
+        })
+    }
+
     /// The statuses of a solution of the dense LCP: `active[i]` says that variable i is the
     /// positive one of its complementary pair. Returns the open rows and slip directions.
     pub fn statuses(&self, dense: &Dense, active: &[bool]) -> (Vec<bool>, Vec<f64>) {
@@ -607,6 +799,9 @@ impl<'a> Inner<'a> {
         (open, sign)
     }
 }
+
+/// Solves of the dense LCP from one start of `Inner::dense_with_ties` before it gives up.
+const TIE_SOLVES: usize = 20;
 
 /// The dense LCP of an inner problem: variables (row, sign) and M (row-major), q.
 pub struct Dense {

@@ -144,6 +144,9 @@ pub struct ContactResult {
     pub failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
     pub mechanism: bool,
+    /// The failure is Lemke's or the QP's that could not pose the stick law from the moment
+    /// a pair closes (`InnerFailure::StickClosure`): no verdict on the equilibrium.
+    pub undecided: bool,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
     pub info: SolverInfo,
     /// The states of the evolutive path in compact form (iteration, open rows, openings),
@@ -165,8 +168,13 @@ struct StepLoop {
     iterations_recorded: usize,
     /// Pivots that finished the friction rows of Lemke's and the QP's statuses.
     finishing: usize,
+    /// Dense solves that Lemke and the QP repeated with the stick rows of the pairs they
+    /// closed tied (`Inner::dense_with_ties`).
+    tie_resolves: usize,
     /// Inner solves whose pivoting path the QP completed.
     rescues: usize,
+    /// The step failed where Lemke or the QP could not pose the stick law at closure.
+    undecided: bool,
     info: SolverInfo,
 }
 
@@ -176,7 +184,9 @@ impl StepLoop {
             compact: Vec::new(),
             record,
             finishing: 0,
+            tie_resolves: 0,
             rescues: 0,
+            undecided: false,
             iterations_recorded: 0,
             info: SolverInfo::default(),
         }
@@ -605,6 +615,7 @@ impl<'a> Session<'a> {
             let outcome = match solved {
                 Ok(o) => o,
                 Err((e, probe)) => {
+                    lp.undecided = matches!(e, InnerFailure::StickClosure { .. });
                     let (err, blocked) = self.explain(&e, &probe, &inner);
                     mechanism = blocked;
                     failure = Some(failed(method, load_step, &err));
@@ -825,6 +836,7 @@ impl<'a> Session<'a> {
             notes,
             failure,
             mechanism,
+            undecided: lp.undecided,
             info: lp.info,
             recorded: lp.compact,
             start: start.clone(),

@@ -326,18 +326,8 @@ impl SparseSystem {
     ) -> Option<InnerState> {
         let reg = prox.map_or(0.0, |p| p.0);
         let (ng, n) = (self.n_glued, self.n);
-        let rows = &inner.problem.rows;
-        let row_of = &inner.problem.row_of;
-        let open: Vec<bool> = (0..n)
-            .map(|r| {
-                let row = &rows[r];
-                match row_of[row.iface][row.pair][1].filter(|&q| q < n) {
-                    // A stick row of an open pair ties as its pair closes.
-                    Some(q) if inner.tie_on_close[r] => open[q],
-                    _ => open[r] || inner.free[r],
-                }
-            })
-            .collect();
+        // A stick row of an open pair ties as its pair closes.
+        let open = inner.follow(open);
         let mut sg = vec![0.0; n];
         // Fixed openings of the closed rows, the others zero.
         let mut x = vec![0.0; ng + n];

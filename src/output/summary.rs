@@ -473,6 +473,7 @@ mod tests {
             pivots: Some(3),
             qp_rescues: Some(1),
             solver_status: Some("Solved".into()),
+            stick_tie_resolves: Some(1),
             variables: Some(4),
         }
     }
