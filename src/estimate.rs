@@ -148,10 +148,10 @@ const C_QP: f64 = 3.0e-8;
 const C_LEMKE: f64 = 9.0e-9;
 /// Seconds per iteration of the sparse solver per `(Σ n_u²)^1.18` (one or two sparse
 /// Cholesky factorisations of the system of displacements and openings each; running-bond
-/// walls, history "final": 0.15 s at 410 and 798 bricks, 0.96 s at 2 048, 3.1 s at 4 128),
-/// and unilateral pairs per iteration of its load step (10 iterations at 8 050 pairs, 31 at
-/// 15 974, 42 at 41 734, 116 at 84 896: an upper bound of one per 400 pairs, at least 10).
-/// The estimate of the contact stage is then 1.4–2.7 times the time measured.
+/// walls, history "final": 0.15 s at 410 bricks, 0.29 s at 798, 0.87 s at 2 048, 1.96 s at
+/// 4 128), and unilateral pairs per iteration of its load step (10 iterations at 8 050 pairs,
+/// 18 at 15 974, 42 at 41 734, 79 at 84 896: an upper bound of one per 400 pairs, at least
+/// 10). The estimate of the contact stage is then 2.5–3.5 times the time measured.
 const C_SPARSE: f64 = 5.7e-9;
 const SPARSE_PAIRS_PER_ITERATION: f64 = 400.0;
 
