@@ -320,7 +320,9 @@ def check_thrust(c, run, h5, summary, ifaces):
     last = sorted((run / "vtk").glob("thrust_*.vtu"))
     if last:
         m = meshio.read(last[-1])
-        c.close(m.points[:, :2], np.array(points).reshape(-1, 2), f"{last[-1]}: points vs thrust.csv",
+        # The joints' points (a body's hub, joint -1, is no joint's: docs/thrust.md).
+        joints = m.points[np.asarray(m.point_data["joint"]).ravel() >= 0]
+        c.close(joints[:, :2], np.array(points).reshape(-1, 2), f"{last[-1]}: points vs thrust.csv",
                 float(np.abs(m.points).max(initial=1.0)))
 
 

@@ -218,3 +218,232 @@ fn arch_thrust_line_stays_in_the_ring() {
     let marker = std::fs::read_to_string(out.join(".sgbem-run.json")).unwrap();
     assert!(marker.contains("\"thrust.csv\"") && marker.contains("\"vtk/thrust_0000.vtu\""));
 }
+
+/// A running-bond wall (geo/wall.geo: 3 courses of 2 bricks, 0.4 × 0.2 m, the middle
+/// course a half, a whole and a half brick) on a clamped base under its weight, the joints
+/// unilateral and sticking.
+fn bond_scene() -> String {
+    format!(
+        r#"
+plane = "strain"
+units = {{ length = "m", force = "kN" }}
+[mesh]
+file = "{}"
+courses = 3
+bricks = 2
+nj = 4
+[defaults.body]
+young = 5.0e6
+poisson = 0.2
+body_force = [0.0, -20.0]
+[defaults.interface]
+model = "unilateral"
+tangential = "stick"
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[output]
+directory = "out"
+field = false
+history = "final"
+"#,
+        root().join("geo/wall.geo").display()
+    )
+}
+
+/// The bricks of the bond wall by name: [x0, x1, y0, y1] (numbered course by course, left
+/// to right, as geo/wall.geo does).
+fn bond_brick(name: &str) -> [f64; 4] {
+    let k: usize = name.trim_start_matches("brick_").parse().unwrap_or(0);
+    let xs: [&[f64]; 3] = [&[0.0, 0.4, 0.8], &[0.0, 0.2, 0.6, 0.8], &[0.0, 0.4, 0.8]];
+    let (mut first, mut course) = (1, 0);
+    while k >= first + xs[course].len() - 1 {
+        first += xs[course].len() - 1;
+        course += 1;
+    }
+    let i = k - first;
+    let y = 0.2 * course as f64;
+    [xs[course][i], xs[course][i + 1], y, y + 0.2]
+}
+
+/// The outward normal of brick `a` on its joint with brick `b`.
+fn outward(a: [f64; 4], b: [f64; 4]) -> [f64; 2] {
+    let near = |u: f64, v: f64| (u - v).abs() < 1e-9;
+    if near(a[2], b[3]) {
+        [0.0, -1.0]
+    } else if near(a[3], b[2]) {
+        [0.0, 1.0]
+    } else if near(a[1], b[0]) {
+        [1.0, 0.0]
+    } else {
+        [-1.0, 0.0]
+    }
+}
+
+fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
+    a[0] * b[1] - a[1] * b[0]
+}
+
+/// The thrust block of a VTK file: points, cells (connectivity by cell) and `joint`.
+fn thrust_block(vtu: &str) -> (Vec<[f64; 2]>, Vec<Vec<usize>>, Vec<i32>) {
+    let arrays = binary_arrays(vtu, false);
+    let get = |n: &str| &arrays.iter().find(|(k, _)| k == n).expect(n).1;
+    let f64s: Vec<f64> = get("Points")
+        .chunks(8)
+        .map(|c| f64::from_le_bytes(c.try_into().unwrap_or_default()))
+        .collect();
+    let points = f64s.chunks(3).map(|p| [p[0], p[1]]).collect();
+    let u64s = |n: &str| -> Vec<usize> {
+        get(n)
+            .chunks(4)
+            .map(|c| i32::from_le_bytes(c.try_into().unwrap_or_default()) as usize)
+            .collect()
+    };
+    let (conn, offsets) = (u64s("connectivity"), u64s("offsets"));
+    let mut cells = Vec::new();
+    let mut at = 0;
+    for o in offsets {
+        cells.push(conn[at..o].to_vec());
+        at = o;
+    }
+    let joint = get("joint")
+        .chunks(4)
+        .map(|c| i32::from_le_bytes(c.try_into().unwrap_or_default()))
+        .collect();
+    (points, cells, joint)
+}
+
+/// A running-bond wall: every brick with more than two loaded joints gets a hub (a point with
+/// `joint` −1) and a line from each of its joints' points of application to it; the line
+/// ends are the joints' points (summary.json) to 1e-12; the hub lies on the line of action
+/// of the resultant of the brick's bed joints below (above for the first course), whose
+/// moment about it vanishes, and the brick balances about it: its joints' forces (N, T at
+/// their points) and its weight at its centroid, to 1e-10 of the moments' scale.
+#[test]
+fn running_bond_bricks_get_their_force_paths() {
+    let dir = tmpdir("thrust-bond");
+    let scene = write(&dir, "bond.toml", &bond_scene());
+    let out = dir.join("out");
+    let s = run(&scene, &out);
+    assert_eq!(s["status"], "converged");
+    let (_, rows) = thrust_csv(&out);
+    let f = |t: &Value, k: &str| t[k].as_f64().unwrap_or(f64::NAN);
+    // Per joint: bodies, point, N, T (None without a point).
+    let joints: Vec<_> = rows
+        .iter()
+        .map(|r| {
+            let t = &s["thrust"][&r[0]];
+            let p = t["x"].as_f64().map(|x| [x, f(t, "y")]);
+            (
+                r[1].clone(),
+                r[2].clone(),
+                p,
+                f(t, "normal_force"),
+                f(t, "tangential_force"),
+            )
+        })
+        .collect();
+    let mut loaded: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
+    for (k, j) in joints.iter().enumerate() {
+        if j.2.is_some() {
+            loaded.entry(j.0.clone()).or_default().push(k);
+            loaded.entry(j.1.clone()).or_default().push(k);
+        }
+    }
+    let many: Vec<&String> = loaded
+        .iter()
+        .filter(|(_, l)| l.len() > 2)
+        .map(|(b, _)| b)
+        .collect();
+    // The first two courses; the top course's head joint opens (two joints each).
+    assert_eq!(
+        many,
+        ["brick_1", "brick_2", "brick_3", "brick_4", "brick_5"]
+    );
+    let vtu = std::fs::read_to_string(out.join("vtk/thrust_0000.vtu")).expect("thrust_0000.vtu");
+    let (points, cells, joint) = thrust_block(&vtu);
+    let hubs: Vec<usize> = (0..points.len()).filter(|&i| joint[i] == -1).collect();
+    assert_eq!(hubs.len(), many.len());
+    let mut worst = (0.0f64, 0.0f64, 0.0f64);
+    for &h in &hubs {
+        // The lines ending at the hub: their other ends are the brick's joints' points.
+        let ends: Vec<usize> = cells
+            .iter()
+            .filter(|c| c.len() == 2 && c[1] == h)
+            .map(|c| c[0])
+            .collect();
+        let js: Vec<usize> = ends.iter().map(|&e| joint[e] as usize).collect();
+        let body = many
+            .iter()
+            .find(|b| {
+                js.iter()
+                    .all(|&k| joints[k].0 == ***b || joints[k].1 == ***b)
+            })
+            .expect("the hub's brick");
+        assert_eq!(&js, &loaded[*body], "{body}");
+        for (&e, &k) in ends.iter().zip(&js) {
+            let p = joints[k].2.unwrap_or_default();
+            worst.0 = worst
+                .0
+                .max((points[e][0] - p[0]).abs().max((points[e][1] - p[1]).abs()));
+        }
+        // Forces on the brick: −N n + T τ with n its outward normal, τ = (−n_y, n_x) of the
+        // first body's normal.
+        let rect = bond_brick(body);
+        let x = points[h];
+        let (mut below, mut rest, mut scale) = (0.0, 0.0, 0.0);
+        let has_below = js.iter().any(|&k| {
+            let other = if joints[k].0 == **body {
+                &joints[k].1
+            } else {
+                &joints[k].0
+            };
+            outward(rect, bond_brick(other))[1] < 0.0
+        });
+        for &k in &js {
+            let (a, b, p, n, t) = &joints[k];
+            let na = outward(bond_brick(a), bond_brick(b));
+            let fa = [-n * na[0] - t * na[1], -n * na[1] + t * na[0]];
+            let sign = if a == *body { 1.0 } else { -1.0 };
+            let fb = [sign * fa[0], sign * fa[1]];
+            let r = [
+                p.unwrap_or_default()[0] - x[0],
+                p.unwrap_or_default()[1] - x[1],
+            ];
+            let m = cross(r, fb);
+            let ny = sign * na[1];
+            if (has_below && ny < 0.0) || (!has_below && ny > 0.0) {
+                below += m;
+            } else {
+                rest += m;
+            }
+            scale += r[0].hypot(r[1]) * fb[0].hypot(fb[1]);
+        }
+        // The weight at the centroid.
+        let w = [0.0, -20.0 * (rect[1] - rect[0]) * (rect[3] - rect[2])];
+        let g = [
+            0.5 * (rect[0] + rect[1]) - x[0],
+            0.5 * (rect[2] + rect[3]) - x[1],
+        ];
+        rest += cross(g, w);
+        scale += g[0].hypot(g[1]) * w[1].abs();
+        worst.1 = worst.1.max(below.abs() / scale);
+        // The first course also rests on the clamped base, whose reaction is not a joint's.
+        if rect[2] > 0.0 {
+            worst.2 = worst.2.max((below + rest).abs() / scale);
+        }
+        // On a straight bed the hub lies on it.
+        assert!(
+            rect[2..].iter().any(|y| (x[1] - y).abs() < 1e-12),
+            "{body}: {x:?}"
+        );
+    }
+    println!(
+        "ends {:.1e}, group moment {:.1e}, balance {:.1e}",
+        worst.0, worst.1, worst.2
+    );
+    assert!(
+        worst.0 < 1e-12 && worst.1 < 1e-10 && worst.2 < 1e-10,
+        "{worst:?}"
+    );
+}

@@ -389,6 +389,7 @@ impl InterfaceRecord {
             x: self.x.clone(),
             s: self.s.clone(),
             weights: self.weights(),
+            normal: self.normal.clone(),
         }
     }
 

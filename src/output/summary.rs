@@ -680,6 +680,7 @@ mod tests {
                             x: vec![[0.0, 0.0], [1.0, 0.0]],
                             s: vec![0.0, 1.0],
                             weights: vec![0.5, 0.5],
+                            normal: vec![[0.0, 1.0]; 2],
                         },
                         &InterfaceResult { pairs: vec![] },
                         1.0,

@@ -814,40 +814,43 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
 }
 
 /// The thrust line of state `k` (post/thrust.rs): a point per joint that carries a normal
-/// force, at its point of application, a vertex each, and a line through every body between
-/// its two joints; point data `N`, `T`, `e`, `e_over_half_length`, `inside` and
-/// `in_closed_part` (1 yes, 0 no), `joint` (the interface's index in the run) and
-/// `displacement` (the first body's, weighted as the point is). Also the joints' names, one
-/// a line, for the field data `joint_names`.
+/// force, at its point of application, a vertex each, a line through every body between
+/// its two joints, and for a body with more joints a point at its hub and a line from each
+/// of its joints' points to it (docs/thrust.md); point data `N`, `T`, `e`,
+/// `e_over_half_length`, `inside` and `in_closed_part` (1 yes, 0 no), `joint` (the
+/// interface's index in the run) and `displacement` (the first body's, weighted as the point
+/// is). At a hub `joint` is −1, `N`, `T`, `e`, `e_over_half_length` NaN, `inside` and
+/// `in_closed_part` −1, `displacement` the mean of its joints' points'. Also the joints'
+/// names, one a line, for the field data `joint_names`.
 fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
-    use crate::post::thrust::{segments, thrust};
+    use crate::post::thrust::{hubs, segments, thrust};
     let st = &rec.states[k];
-    let (mut pts, mut disp, mut joint) = (Vec::new(), Vec::new(), Vec::new());
-    let (mut n, mut t, mut e, mut ratio) = (Vec::new(), Vec::new(), Vec::new(), Vec::new());
-    let (mut inside, mut closed) = (Vec::new(), Vec::new());
+    let mut g = ThrustColumns::default();
     let mut point_of = vec![None; rec.interfaces.len()];
+    let mut all = Vec::with_capacity(rec.interfaces.len());
     for (j, (it, r)) in rec.interfaces.iter().zip(st.interfaces.iter()).enumerate() {
         let th = thrust(&it.joint(), r, rec.thickness);
-        let Some(p) = th.point else { continue };
-        let u: Vec<[f64; 2]> = it
-            .node_a
-            .iter()
-            .map(|&a| st.fields[it.body_a].u[a])
-            .collect();
-        let ua = th.at_point(&u).unwrap_or_default();
-        point_of[j] = Some(joint.len() as u64);
-        pts.extend([p.x[0], p.x[1], 0.0]);
-        disp.extend([ua[0], ua[1], 0.0]);
-        joint.push(j as i32);
-        n.push(th.normal);
-        t.push(th.tangential);
-        e.push(p.e);
-        ratio.push(p.e_over_half_length);
-        inside.push(i32::from(p.inside));
-        closed.push(i32::from(p.in_closed_part));
+        if let Some(p) = th.point {
+            let u: Vec<[f64; 2]> = it
+                .node_a
+                .iter()
+                .map(|&a| st.fields[it.body_a].u[a])
+                .collect();
+            let ua = th.at_point(&u).unwrap_or_default();
+            point_of[j] = Some(g.joint.len() as u64);
+            g.push(
+                p.x,
+                ua,
+                j as i32,
+                [th.normal, th.tangential, p.e, p.e_over_half_length],
+            );
+            g.inside.push(i32::from(p.inside));
+            g.closed.push(i32::from(p.in_closed_part));
+        }
+        all.push(th);
     }
-    let mut conn: Vec<u64> = (0..joint.len() as u64).collect();
-    let mut cell_types = vec![VTK_VERTEX; joint.len()];
+    let mut conn: Vec<u64> = (0..g.joint.len() as u64).collect();
+    let mut cell_types = vec![VTK_VERTEX; g.joint.len()];
     let bodies: Vec<(usize, usize)> = rec
         .interfaces
         .iter()
@@ -860,24 +863,70 @@ fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
             cell_types.push(VTK_LINE);
         }
     }
+    for h in hubs(&bodies, &all, rec.bodies.len()) {
+        let ends: Vec<u64> = h.joints.iter().filter_map(|&j| point_of[j]).collect();
+        let mut u = [0.0; 2];
+        for &e in &ends {
+            let at = 3 * e as usize;
+            u = [u[0] + g.disp[at], u[1] + g.disp[at + 1]];
+        }
+        let m = ends.len().max(1) as f64;
+        let hub = g.joint.len() as u64;
+        g.push(h.x, [u[0] / m, u[1] / m], -1, [f64::NAN; 4]);
+        g.inside.push(-1);
+        g.closed.push(-1);
+        conn.push(hub);
+        cell_types.push(VTK_VERTEX);
+        for e in ends {
+            conn.extend([e, hub]);
+            cell_types.push(VTK_LINE);
+        }
+    }
     let names: Vec<&str> = rec.interfaces.iter().map(|i| i.name.as_str()).collect();
     let grid = Grid {
-        points: pts,
+        points: g.pts,
         connectivity: conn,
         cell_types,
         point_data: vec![
-            array("N", 1, Values::F64(n)),
-            array("T", 1, Values::F64(t)),
-            array("e", 1, Values::F64(e)),
-            array("e_over_half_length", 1, Values::F64(ratio)),
-            array("inside", 1, Values::I32(inside)),
-            array("in_closed_part", 1, Values::I32(closed)),
-            array("joint", 1, Values::I32(joint)),
-            array("displacement", 3, Values::F64(disp)),
+            array("N", 1, Values::F64(g.n)),
+            array("T", 1, Values::F64(g.t)),
+            array("e", 1, Values::F64(g.e)),
+            array("e_over_half_length", 1, Values::F64(g.ratio)),
+            array("inside", 1, Values::I32(g.inside)),
+            array("in_closed_part", 1, Values::I32(g.closed)),
+            array("joint", 1, Values::I32(g.joint)),
+            array("displacement", 3, Values::F64(g.disp)),
         ],
         active: ["N", "displacement", ""],
     };
     (grid, names.join("\n"))
+}
+
+/// The point arrays of the thrust block, filled point by point.
+#[derive(Default)]
+struct ThrustColumns {
+    pts: Vec<f64>,
+    disp: Vec<f64>,
+    joint: Vec<i32>,
+    n: Vec<f64>,
+    t: Vec<f64>,
+    e: Vec<f64>,
+    ratio: Vec<f64>,
+    inside: Vec<i32>,
+    closed: Vec<i32>,
+}
+
+impl ThrustColumns {
+    /// A point at `x` with displacement `u`, joint index and `[N, T, e, e/(L/2)]`.
+    fn push(&mut self, x: [f64; 2], u: [f64; 2], joint: i32, v: [f64; 4]) {
+        self.pts.extend([x[0], x[1], 0.0]);
+        self.disp.extend([u[0], u[1], 0.0]);
+        self.joint.push(joint);
+        self.n.push(v[0]);
+        self.t.push(v[1]);
+        self.e.push(v[2]);
+        self.ratio.push(v[3]);
+    }
 }
 
 /// The pair that each of body B's interface nodes shows (pair index, node): its pair's node

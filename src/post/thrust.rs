@@ -28,6 +28,10 @@
 //! The joint spans the pairs that carry a tributary length (all of them where the nodes pair
 //! up; where the sides were meshed on their own, those facing the other body). A fully open
 //! joint (no normal force, `Σ |t_n,j| w_j = 0`) has no point: its figures are `None`.
+//!
+//! The VTK line: [`segments`] joins the two joints of a body; a body with more ([`hubs`]) gets
+//! a line from each joint's point to its hub, the point where the resultant of its bed joints
+//! below crosses the bed, about which that resultant has no moment (docs/thrust.md).
 
 use crate::solution::{InterfaceResult, PairStatus};
 
@@ -36,12 +40,13 @@ use crate::solution::{InterfaceResult, PairStatus};
 const EDGE_TOLERANCE: f64 = 1e-9;
 
 /// The pairs of one joint: positions (of the first body's nodes), arc lengths from the
-/// curve's first node and tributary lengths.
+/// curve's first node, tributary lengths and the first body's outward unit normals.
 #[derive(Debug, Clone)]
 pub struct Joint {
     pub x: Vec<[f64; 2]>,
     pub s: Vec<f64>,
     pub weights: Vec<f64>,
+    pub normal: Vec<[f64; 2]>,
 }
 
 impl Joint {
@@ -51,6 +56,7 @@ impl Joint {
             x: it.pairs.iter().map(|p| p.x).collect(),
             s: it.pairs.iter().map(|p| p.s).collect(),
             weights: it.weights(),
+            normal: it.pairs.iter().map(|p| p.normal).collect(),
         }
     }
 }
@@ -69,6 +75,13 @@ pub struct Thrust {
     pub point: Option<Application>,
     /// The normal nodal forces `t_n,j w_j` (tension positive, per unit thickness).
     forces: Vec<f64>,
+    /// The resultant on the first body, `Σ (t_n,j n_j + t_s,j τ_j) w_j`, times the thickness.
+    pub force: [f64; 2],
+    /// Its moment about the origin, `Σ x_j × (t_n,j n_j + t_s,j τ_j) w_j`, times the
+    /// thickness (counter-clockwise positive).
+    pub moment: f64,
+    /// The first body's outward normal averaged over the pairs by their tributary lengths.
+    pub normal_mean: [f64; 2],
 }
 
 /// Where the resultant of a joint acts.
@@ -130,6 +143,7 @@ pub fn thrust(j: &Joint, r: &InterfaceResult, thickness: f64) -> Thrust {
         }
         lo_hi
     };
+    let (force, moment, normal_mean) = vectors(j, r);
     let (lo, hi) = span(false);
     let length = if hi >= lo { hi - lo } else { 0.0 };
     let point = (magnitude > 0.0 && total != 0.0 && length > 0.0).then(|| {
@@ -156,12 +170,36 @@ pub fn thrust(j: &Joint, r: &InterfaceResult, thickness: f64) -> Thrust {
         length,
         point,
         forces,
+        force: [force[0] * thickness, force[1] * thickness],
+        moment: moment * thickness,
+        normal_mean,
     }
+}
+
+/// The resultant on the first body of joint `j` in `r` and its moment about the origin (per
+/// unit thickness), and the first body's outward normal averaged by tributary length. The
+/// tangent at a pair is `(−n_y, n_x)`.
+fn vectors(j: &Joint, r: &InterfaceResult) -> ([f64; 2], f64, [f64; 2]) {
+    let (mut f, mut m, mut n) = ([0.0; 2], 0.0, [0.0; 2]);
+    for (((p, w), x), nj) in r.pairs.iter().zip(&j.weights).zip(&j.x).zip(&j.normal) {
+        let [ts, tn] = p.traction;
+        let fj = [(tn * nj[0] - ts * nj[1]) * w, (tn * nj[1] + ts * nj[0]) * w];
+        f = [f[0] + fj[0], f[1] + fj[1]];
+        m += x[0] * fj[1] - x[1] * fj[0];
+        n = [n[0] + nj[0] * w, n[1] + nj[1] * w];
+    }
+    let len = n[0].hypot(n[1]);
+    let n = if len > 0.0 {
+        [n[0] / len, n[1] / len]
+    } else {
+        n
+    };
+    (f, m, n)
 }
 
 /// The bodies whose joints' points of application the thrust line joins: each body with
 /// exactly two joints that carry a point, as (joint, joint) in run order. A body with more
-/// joints (a brick in a bond) is left out: its load paths branch.
+/// joints (a brick in a bond) is drawn by [`hubs`] instead.
 pub fn segments(bodies: &[(usize, usize)], has_point: &[bool], n_bodies: usize) -> Vec<[usize; 2]> {
     let mut per_body: Vec<Vec<usize>> = vec![Vec::new(); n_bodies];
     for (k, &(a, b)) in bodies.iter().enumerate() {
@@ -178,6 +216,100 @@ pub fn segments(bodies: &[(usize, usize)], has_point: &[bool], n_bodies: usize) 
         .filter(|l| l.len() == 2)
         .map(|l| [l[0], l[1]])
         .collect()
+}
+
+/// The force path through a body with more than two loaded joints: a segment from each
+/// joint's point of application to the hub.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Hub {
+    pub body: usize,
+    /// Where the resultant of the body's bed joints below (above where none is loaded)
+    /// crosses the bed: on its line of action, the point nearest to the centre of those
+    /// joints' normal forces.
+    pub x: [f64; 2],
+    /// The body's joints that carry a point, in run order.
+    pub joints: Vec<usize>,
+}
+
+/// A joint is a bed joint below the body where the body's outward normal points down by
+/// more than this (cos 60°), above where it points up by more.
+const BED: f64 = 0.5;
+
+/// The hubs of the bodies with more than two joints that carry a point (docs/thrust.md
+/// "Bodies with more joints"). `bodies[k]` is joint k's (first, second) body. Body `b`'s
+/// group G: its loaded joints whose outward normal (of `b`) points down (`n_y < −0.5`), or
+/// where there is none, up (`n_y > 0.5`). The hub lies on the line of action of G's resultant
+/// `R = Σ F_j`: with `M` the moment of G's forces about the centre `m = Σ N_j p_j / Σ N_j`
+/// of its points of application, `x = m + M (R_y, −R_x) / |R|²`, so that G's moment about
+/// the hub vanishes. On a straight bed M = 0 and the hub is `m`. By the body's equilibrium
+/// the rest of its loads (the other joints, its weight, loads on its sides) have the
+/// resultant `−R` on the same line. No hub where G is empty, carries no compression or no
+/// resultant.
+pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], n_bodies: usize) -> Vec<Hub> {
+    let mut per_body: Vec<Vec<usize>> = vec![Vec::new(); n_bodies];
+    for (k, (&(a, b), t)) in bodies.iter().zip(thrusts).enumerate() {
+        if t.point.is_some() {
+            for body in [a, b] {
+                if let Some(list) = per_body.get_mut(body) {
+                    list.push(k);
+                }
+            }
+        }
+    }
+    let mut out = Vec::new();
+    for (body, joints) in per_body.into_iter().enumerate() {
+        if joints.len() <= 2 {
+            continue;
+        }
+        // Force, moment and outward normal as body `body` sees joint k.
+        let seen = |k: usize| {
+            let t = &thrusts[k];
+            let sign = if bodies[k].0 == body { 1.0 } else { -1.0 };
+            let f = [sign * t.force[0], sign * t.force[1]];
+            (f, sign * t.moment, sign * t.normal_mean[1])
+        };
+        let group = |up: f64| -> Vec<usize> {
+            let g: Vec<usize> = joints
+                .iter()
+                .copied()
+                .filter(|&k| up * seen(k).2 > BED)
+                .collect();
+            g
+        };
+        let below = group(-1.0);
+        let g = if below.is_empty() { group(1.0) } else { below };
+        if let Some(x) = hub(&g, thrusts, &seen) {
+            out.push(Hub { body, x, joints });
+        }
+    }
+    out
+}
+
+/// The point on the line of action of the resultant of joints `g` nearest to the centre of
+/// their normal forces (see [`hubs`]); `seen(k)`: joint k's force and moment on the body.
+fn hub(
+    g: &[usize],
+    thrusts: &[Thrust],
+    seen: &dyn Fn(usize) -> ([f64; 2], f64, f64),
+) -> Option<[f64; 2]> {
+    let (mut r, mut m0, mut n, mut c) = ([0.0; 2], 0.0, 0.0, [0.0; 2]);
+    for &k in g {
+        let (f, mk, _) = seen(k);
+        let nk = thrusts[k].normal;
+        let p = thrusts[k].point?.x;
+        r = [r[0] + f[0], r[1] + f[1]];
+        m0 += mk;
+        n += nk;
+        c = [c[0] + nk * p[0], c[1] + nk * p[1]];
+    }
+    let r2 = r[0] * r[0] + r[1] * r[1];
+    if g.is_empty() || n <= 0.0 || r2 == 0.0 {
+        return None;
+    }
+    let m = [c[0] / n, c[1] / n];
+    // G's moment about m: M_O − m × R.
+    let mm = m0 - (m[0] * r[1] - m[1] * r[0]);
+    Some([m[0] + mm * r[1] / r2, m[1] - mm * r[0] / r2])
 }
 
 #[cfg(test)]
@@ -203,6 +335,7 @@ mod tests {
         let joint = Joint {
             s: x.iter().map(|p| p[0]).collect(),
             weights: crate::input::model::tributary_lengths(&x, (0..4).map(|i| [i, i + 1])),
+            normal: vec![[0.0, 1.0]; 5],
             x,
         };
         let closed = PairStatus::Closed;
@@ -246,5 +379,43 @@ mod tests {
         assert_eq!(segments(&joints[..3], &all, 5), vec![[0, 1], [1, 2]]);
         assert!(segments(&joints[..3], &[true, false, true], 5).is_empty());
         assert_eq!(segments(&joints, &all, 5), vec![[0, 3], [0, 1], [2, 5]]);
+    }
+
+    /// Body 0 on two bed joints (to bodies 1 and 2, its normal down) under a third (body 3
+    /// above, the first body there): the hub is the centre of the bed joints' normal forces,
+    /// where their resultant (0, 4) crosses the bed; bodies with two joints get none.
+    #[test]
+    fn hub_of_a_brick_on_two_bed_joints() {
+        let joint = |x0: f64, y: f64, n: [f64; 2]| Joint {
+            x: vec![[x0, y], [x0 + 1.0, y]],
+            s: vec![0.0, 1.0],
+            weights: vec![0.5, 0.5],
+            normal: vec![n; 2],
+        };
+        let load = |tn: f64, ts: f64| InterfaceResult {
+            pairs: vec![pair(PairStatus::Closed, tn, ts); 2],
+        };
+        let down = [0.0, -1.0];
+        let thrusts = [
+            thrust(&joint(0.0, 0.0, down), &load(-1.0, 0.0), 1.0),
+            thrust(&joint(1.0, 0.0, down), &load(-3.0, 0.5), 1.0),
+            thrust(&joint(0.5, 1.0, down), &load(-4.0, 0.0), 1.0),
+        ];
+        let bodies = [(0, 1), (0, 2), (3, 0)];
+        let h = hubs(&bodies, &thrusts, 4);
+        assert_eq!(h.len(), 1);
+        assert_eq!((h[0].body, h[0].joints.clone()), (0, vec![0, 1, 2]));
+        assert!(
+            (h[0].x[0] - 1.25).abs() < 1e-15 && h[0].x[1].abs() < 1e-15,
+            "{:?}",
+            h[0]
+        );
+        // The bed joints' moment about the hub vanishes (the tangential force on the bed
+        // has no arm).
+        let f = [thrusts[0].force, thrusts[1].force];
+        assert_eq!(f, [[0.0, 1.0], [0.5, 3.0]]);
+        let m = thrusts[0].moment + thrusts[1].moment;
+        let about = m - (h[0].x[0] * (f[0][1] + f[1][1]) - h[0].x[1] * (f[0][0] + f[1][0]));
+        assert!(about.abs() < 1e-15, "{about}");
     }
 }

@@ -362,3 +362,80 @@ pub fn expect_exit(out: &(i32, String, String), code: i32, words: &[&str]) {
         assert!(err.contains(w), "message should say {w:?}: {err}");
     }
 }
+
+/// Decodes base64 (RFC 4648, with padding).
+pub fn b64_decode(text: &str) -> Vec<u8> {
+    let val = |c: u8| -> u32 {
+        match c {
+            b'A'..=b'Z' => u32::from(c - b'A'),
+            b'a'..=b'z' => u32::from(c - b'a') + 26,
+            b'0'..=b'9' => u32::from(c - b'0') + 52,
+            b'+' => 62,
+            b'/' => 63,
+            _ => panic!("not base64: {c}"),
+        }
+    };
+    let mut out = Vec::new();
+    for chunk in text.as_bytes().chunks(4) {
+        let pad = chunk.iter().filter(|&&c| c == b'=').count();
+        let mut n = 0u32;
+        for (i, &c) in chunk.iter().enumerate() {
+            n |= if c == b'=' { 0 } else { val(c) } << (18 - 6 * i);
+        }
+        out.extend_from_slice(&n.to_be_bytes()[1..4 - pad]);
+    }
+    out
+}
+
+/// The values of every binary array of a VTK file by name (Points, connectivity, … too):
+/// plain (UInt64 size, then the bytes) or zlib-compressed (header in its own base64, then the
+/// blocks).
+pub fn binary_arrays(xml: &str, compressed: bool) -> Vec<(String, Vec<u8>)> {
+    use std::io::Read as _;
+    let mut out = Vec::new();
+    for piece in xml.split("<DataArray").skip(1) {
+        if !piece.contains("format=\"binary\"") {
+            continue;
+        }
+        let name = piece
+            .split("Name=\"")
+            .nth(1)
+            .unwrap()
+            .split('"')
+            .next()
+            .unwrap();
+        let text = piece.split('>').nth(1).unwrap().split('<').next().unwrap();
+        let bytes = if compressed {
+            // The header: 3 + blocks UInt64, 4/3 of it in base64 rounded up to 4 chars.
+            let first = b64_decode(&text[..12]);
+            let blocks = u64::from_le_bytes(first[..8].try_into().unwrap()) as usize;
+            let header_chars = (8 * (3 + blocks)).div_ceil(3) * 4;
+            let header = b64_decode(&text[..header_chars]);
+            let h: Vec<usize> = header
+                .chunks(8)
+                .take(3 + blocks)
+                .map(|c| u64::from_le_bytes(c.try_into().unwrap()) as usize)
+                .collect();
+            let data = b64_decode(&text[header_chars..]);
+            let (mut at, mut v) = (0, Vec::new());
+            for &size in &h[3..] {
+                let mut z = flate2::read::ZlibDecoder::new(&data[at..at + size]);
+                z.read_to_end(&mut v).unwrap();
+                at += size;
+            }
+            let expected = if h[2] == 0 {
+                h[0] * h[1]
+            } else {
+                (h[0] - 1) * h[1] + h[2]
+            };
+            assert_eq!(v.len(), expected, "{name}: block sizes");
+            v
+        } else {
+            let v = b64_decode(text);
+            let n = u64::from_le_bytes(v[..8].try_into().unwrap()) as usize;
+            v[8..8 + n].to_vec()
+        };
+        out.push((name.to_string(), bytes));
+    }
+    out
+}
