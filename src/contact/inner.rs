@@ -195,9 +195,11 @@ pub(super) fn pivoting(
     budget: usize,
     record: &mut dyn FnMut(&InnerState),
 ) -> InnerOutcome {
-    let relaxed = inner.relaxed();
-    let out = evolutive::solve(&relaxed, cols, open, sign, budget, record);
-    if out.converged || out.blocked.is_empty() || !inner.has_ties() {
+    if !inner.has_ties() {
+        return evolutive::solve(inner, cols, open, sign, budget, record);
+    }
+    let out = evolutive::solve(&inner.relaxed(), cols, open, sign, budget, record);
+    if out.converged || out.blocked.is_empty() {
         return out;
     }
     let rest = budget.saturating_sub(out.iterations);

@@ -301,10 +301,15 @@ impl<'a> Inner<'a> {
     /// them (no row ties within it): the LCP of `problem`, whose solution the pivoting
     /// solvers reach wherever A is positive definite.
     pub fn relaxed(&self) -> Inner<'a> {
+        self.with_free(self.free.clone())
+    }
+
+    /// The same problem with the rows `free` free and no row that ties within it.
+    fn with_free(&self, free: Vec<bool>) -> Inner<'a> {
         Inner::new(
             self.problem,
             self.base,
-            (self.free.clone(), vec![false; self.n()]),
+            (free, vec![false; self.n()]),
             self.bound.clone(),
             self.tol,
         )
@@ -742,14 +747,7 @@ impl<'a> Inner<'a> {
             let mut seen = std::collections::HashSet::new();
             let why = loop {
                 seen.insert(tied.clone());
-                let free = (0..n).map(|r| self.free[r] && !tied[r]).collect();
-                let posed = Inner::new(
-                    self.problem,
-                    self.base,
-                    (free, vec![false; n]),
-                    self.bound.clone(),
-                    self.tol,
-                );
+                let posed = self.with_free((0..n).map(|r| self.free[r] && !tied[r]).collect());
                 solves += 1;
                 let out = match solve(&posed, cols) {
                     Ok(out) => out,

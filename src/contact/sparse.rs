@@ -78,24 +78,24 @@ struct Reduced {
 /// factorisation would map and clear its pages again every time).
 #[derive(Default)]
 struct Scratch {
-    req: Option<StackReq>,
-    buffer: Option<MemBuffer>,
+    /// The buffer and the largest request it was made for.
+    buffer: Option<(StackReq, MemBuffer)>,
 }
 
 impl Scratch {
     /// A stack of at least `req`; None where the memory cannot be had.
     fn stack(&mut self, req: StackReq) -> Option<&mut MemStack> {
-        let need = match self.req {
-            Some(have) => have.or(req) != have,
-            None => true,
+        let want = match &self.buffer {
+            Some((have, _)) if have.or(req) == *have => None,
+            Some((have, _)) => Some(have.or(req)),
+            None => Some(req),
         };
-        if need {
-            let req = self.req.map_or(req, |have| have.or(req));
+        if let Some(want) = want {
+            // The old buffer goes first: two at once would add to the peak.
             self.buffer = None;
-            self.buffer = Some(MemBuffer::try_new(req).ok()?);
-            self.req = Some(req);
+            self.buffer = Some((want, MemBuffer::try_new(want).ok()?));
         }
-        self.buffer.as_mut().map(|b| MemStack::new(b))
+        self.buffer.as_mut().map(|(_, b)| MemStack::new(b))
     }
 }
 
@@ -110,7 +110,8 @@ struct Ordered {
 }
 
 impl Ordered {
-    /// H (lower triangle) in its elimination order; None where the analysis fails (memory).
+    /// The upper triangle, in its elimination order, of H given by its lower triangle; None
+    /// where the analysis fails (memory).
     fn new(h: &SparseColMat<usize, f64>) -> Option<Ordered> {
         let symbolic = cholesky::factorize_symbolic_cholesky(
             h.symbolic(),

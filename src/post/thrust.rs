@@ -201,6 +201,20 @@ fn vectors(j: &Joint, r: &InterfaceResult) -> ([f64; 2], f64, [f64; 2]) {
 /// exactly two joints that carry a point, as (joint, joint) in run order. A body with more
 /// joints (a brick in a bond) is drawn by [`hubs`] instead.
 pub fn segments(bodies: &[(usize, usize)], has_point: &[bool], n_bodies: usize) -> Vec<[usize; 2]> {
+    loaded_joints(bodies, has_point, n_bodies)
+        .into_iter()
+        .filter(|l| l.len() == 2)
+        .map(|l| [l[0], l[1]])
+        .collect()
+}
+
+/// Each body's joints that carry a point (`has_point`), in run order; `bodies[k]` is joint
+/// k's (first, second) body.
+fn loaded_joints(
+    bodies: &[(usize, usize)],
+    has_point: &[bool],
+    n_bodies: usize,
+) -> Vec<Vec<usize>> {
     let mut per_body: Vec<Vec<usize>> = vec![Vec::new(); n_bodies];
     for (k, &(a, b)) in bodies.iter().enumerate() {
         if has_point.get(k).copied().unwrap_or(false) {
@@ -212,10 +226,6 @@ pub fn segments(bodies: &[(usize, usize)], has_point: &[bool], n_bodies: usize) 
         }
     }
     per_body
-        .into_iter()
-        .filter(|l| l.len() == 2)
-        .map(|l| [l[0], l[1]])
-        .collect()
 }
 
 /// The force path through a body with more than two loaded joints: a segment from each
@@ -246,18 +256,12 @@ const BED: f64 = 0.5;
 /// resultant `−R` on the same line. No hub where G is empty, carries no compression or no
 /// resultant.
 pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], n_bodies: usize) -> Vec<Hub> {
-    let mut per_body: Vec<Vec<usize>> = vec![Vec::new(); n_bodies];
-    for (k, (&(a, b), t)) in bodies.iter().zip(thrusts).enumerate() {
-        if t.point.is_some() {
-            for body in [a, b] {
-                if let Some(list) = per_body.get_mut(body) {
-                    list.push(k);
-                }
-            }
-        }
-    }
+    let has_point: Vec<bool> = thrusts.iter().map(|t| t.point.is_some()).collect();
     let mut out = Vec::new();
-    for (body, joints) in per_body.into_iter().enumerate() {
+    for (body, joints) in loaded_joints(bodies, &has_point, n_bodies)
+        .into_iter()
+        .enumerate()
+    {
         if joints.len() <= 2 {
             continue;
         }
@@ -269,12 +273,11 @@ pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], n_bodies: usize) -> V
             (f, sign * t.moment, sign * t.normal_mean[1])
         };
         let group = |up: f64| -> Vec<usize> {
-            let g: Vec<usize> = joints
+            joints
                 .iter()
                 .copied()
                 .filter(|&k| up * seen(k).2 > BED)
-                .collect();
-            g
+                .collect()
         };
         let below = group(-1.0);
         let g = if below.is_empty() { group(1.0) } else { below };
