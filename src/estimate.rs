@@ -148,12 +148,16 @@ const C_QP: f64 = 3.0e-8;
 const C_LEMKE: f64 = 9.0e-9;
 /// Seconds per iteration of the sparse solver per `(Σ n_u²)^1.18` (one or two sparse
 /// Cholesky factorisations of the system of displacements and openings each; running-bond
-/// walls, history "final": 0.15 s at 410 bricks, 0.29 s at 798, 0.87 s at 2 048, 1.96 s at
-/// 4 128), and unilateral pairs per iteration of its load step (10 iterations at 8 050 pairs,
-/// 18 at 15 974, 42 at 41 734, 79 at 84 896: an upper bound of one per 400 pairs, at least
-/// 10). The estimate of the contact stage is then 2.5–3.5 times the time measured.
+/// walls, history "final", before friction followed Coulomb's law within the iteration:
+/// 0.15 s at 410 bricks, 0.29 s at 798, 0.87 s at 2 048, 1.96 s at 4 128; an iteration that
+/// only moves the slip bounds now costs two triangular solves), and unilateral pairs per
+/// iteration of its load step (14 iterations at 8 050 pairs, 15 at 15 974, 25 at 41 734, 32
+/// at 84 896: an upper bound of one per 1 600 pairs, at least 15). The estimate of the
+/// contact stage is then 1.8–2.4 times the time measured (5.1 s, 28 s and 2 min against
+/// 2.8, 14 and 51 s for the 798-, 2 048- and 4 128-brick walls).
 const C_SPARSE: f64 = 5.7e-9;
-const SPARSE_PAIRS_PER_ITERATION: f64 = 400.0;
+const SPARSE_PAIRS_PER_ITERATION: f64 = 1600.0;
+const SPARSE_MIN_ITERATIONS: f64 = 15.0;
 
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a
 /// unilateral interface.
@@ -218,7 +222,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         * match scene.solve.method {
             Method::Qp => C_QP * k * p * p * p,
             Method::Sparse => {
-                let iterations = (p / SPARSE_PAIRS_PER_ITERATION).max(10.0);
+                let iterations = (p / SPARSE_PAIRS_PER_ITERATION).max(SPARSE_MIN_ITERATIONS);
                 C_SPARSE * k * iterations * squares.powf(1.18)
             }
             _ => C_PATH * k * s * s * s,

@@ -454,12 +454,19 @@ impl Solve<'_> {
                 ));
             }
             if scene.solve.method == Method::Sparse {
+                let coulomb = if frictional {
+                    "; within the active set each iterate takes its slip bounds from the last \
+                     iterate's normal forces (Coulomb), the fixed point only where that does not \
+                     settle"
+                } else {
+                    ""
+                };
                 stages.push((
                     "contact_sparse",
                     format!(
                         "active set on the sparse system of displacements and openings \
                          ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
-                         {steps_note}"
+                         {coulomb}{steps_note}"
                     ),
                 ));
             }

@@ -91,6 +91,104 @@ fn assert_same_interfaces(scene: &str, a: &Path, b: &Path) {
     }
 }
 
+/// Coulomb's law on every closed row of a run with friction coefficient `mu`: a slipping row
+/// carries μ times its normal traction, a sticking one at most that (within 1e-8 of the
+/// largest traction); returns the slipping rows, so that a caller can ask for some.
+fn assert_coulomb(scene: &str, out: &Path, mu: f64) -> usize {
+    let rows: Vec<_> = std::fs::read_dir(out.join("interfaces"))
+        .expect("interfaces folder")
+        .flat_map(|e| read_interface_csv(&e.expect("entry").path()))
+        .collect();
+    let scale = rows
+        .iter()
+        .map(|r| r.tn.abs().max(r.tt.abs()))
+        .fold(0.0f64, f64::max);
+    let mut slipping = 0;
+    for r in rows.iter().filter(|r| r.closed) {
+        let limit = mu * (-r.tn).max(0.0);
+        match r.tangential_status.as_deref() {
+            Some("slip") => {
+                slipping += 1;
+                assert!(
+                    (r.tt.abs() - limit).abs() <= 1e-8 * scale,
+                    "{scene}: slipping at ({}, {}) with |t| = {} against mu·p = {limit}",
+                    r.x,
+                    r.y,
+                    r.tt.abs()
+                );
+            }
+            Some("stick") => assert!(
+                r.tt.abs() <= limit + 1e-8 * scale,
+                "{scene}: sticking at ({}, {}) with |t| = {} above mu·p = {limit}",
+                r.x,
+                r.y,
+                r.tt.abs()
+            ),
+            _ => {}
+        }
+    }
+    slipping
+}
+
+/// The sparse solver follows Coulomb's law within its own iteration (each iterate's slip
+/// bounds from the last one's normal forces): its results obey the law row by row, with
+/// rows slipping on the running-bond wall and the frictional beam on blocks.
+#[test]
+fn sparse_solver_obeys_coulomb_row_by_row() {
+    for (scene, geo, mu) in [
+        ("wall_running_bond", None, 0.7),
+        ("beam_on_blocks_friction", Some("beam_on_blocks"), 0.6),
+    ] {
+        let out = tmpdir(&format!("sparse-coulomb-{scene}")).join("out");
+        let (code, err) = run(scene, geo, &out, "sparse");
+        assert_eq!(code, 0, "{scene}: {err}");
+        let slipping = assert_coulomb(scene, &out, mu);
+        assert!(slipping > 0, "{scene}: no row slips");
+    }
+}
+
+/// `wall_collapse` (μ = 0.8, the default path): the evolutive path's Tresca fixed point finds
+/// no equilibrium from t = 0.498 on, but the sparse solver, following Coulomb's law within
+/// its iteration, finds one up to t = 0.5 (the bisection's point): the state reported at the
+/// multiplier obeys Coulomb's law row by row, and every brick balances.
+#[test]
+fn wall_collapse_stands_where_coulomb_has_an_equilibrium() {
+    let out = tmpdir("sparse-wall-collapse").join("out");
+    let scene = root().join("pipelines/wall_collapse.toml");
+    let (code, _, err) = sgbem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let s = summary(&out);
+    let c = &s["contact"]["collapse"];
+    let (t, at) = (
+        c["multiplier"].as_f64().expect("multiplier"),
+        c["collapses_at"].as_f64().expect("collapses_at"),
+    );
+    assert!(
+        t >= 0.5 && at - t <= 0.001 + 1e-12,
+        "multiplier {t}, collapses at {at}"
+    );
+    assert!(
+        assert_coulomb("wall_collapse", &out, 0.8) > 0,
+        "no row slips"
+    );
+    assert_balanced("wall_collapse", &s);
+}
+
+/// Every body of a run's summary `s` balances to round-off (1e-8 of its loads).
+fn assert_balanced(scene: &str, s: &serde_json::Value) {
+    for (body, b) in s["equilibrium"].as_object().expect("equilibrium") {
+        if let Some(r) = b["relative_imbalance"].as_f64() {
+            assert!(r <= 1e-8, "{scene}: body {body} imbalance {r}");
+        }
+    }
+}
+
 /// Frictionless contact (Hertz, the contact patch), stick joints from closed starts
 /// (example 2, beam on blocks), Coulomb friction (beam on blocks, incline, vault), cohesion
 /// and frictional junctions (the running-bond wall, the arch): the sparse solver and the
@@ -131,11 +229,7 @@ fn sparse_solver_agrees_with_the_evolutive_path() {
         assert!(n_rows > 0, "{scene}");
         assert_same_interfaces(scene, &sparse, &lcp);
         // Every body balances to round-off with the sparse solver too.
-        for (body, b) in s["equilibrium"].as_object().expect("equilibrium") {
-            if let Some(r) = b["relative_imbalance"].as_f64() {
-                assert!(r <= 1e-8, "{scene}: body {body} imbalance {r}");
-            }
-        }
+        assert_balanced(scene, &s);
     }
 }
 

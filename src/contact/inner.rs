@@ -287,6 +287,7 @@ pub(super) fn qp_rescue(
                 notes,
                 blocked: Vec::new(),
                 stalled: false,
+                bound: None,
             }
         }
         _ => outcome,
@@ -368,24 +369,6 @@ pub(super) fn not_converged(
             format!(": {}", notes.join("; "))
         },
     ))
-}
-
-/// The relative change of the slip bounds, over the largest finite bound (1 from the tied
-/// first iteration).
-pub(super) fn bound_change(old: &[f64], new: &[f64]) -> f64 {
-    let scale = old
-        .iter()
-        .chain(new)
-        .filter(|v| v.is_finite())
-        .fold(0.0f64, |a, v| a.max(v.abs()))
-        .max(f64::MIN_POSITIVE);
-    old.iter().zip(new).fold(0.0f64, |a, (x, y)| {
-        a.max(if x.is_finite() {
-            (x - y).abs() / scale
-        } else {
-            1.0
-        })
-    })
 }
 
 /// Rows above which the evolutive path does not take over where the sparse active set stops
@@ -598,6 +581,7 @@ pub(super) fn exact_state(
             notes,
             blocked: refused,
             stalled: false,
+            bound: None,
         },
         0,
     )

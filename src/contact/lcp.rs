@@ -46,6 +46,9 @@ pub struct InnerOutcome {
     /// The solver stopped without a verdict (the active set cycled or ran out of
     /// iterations): the driver goes on from `state` with the evolutive iteration.
     pub stalled: bool,
+    /// The slip bounds of `state` where the solver followed Coulomb's law
+    /// ([`Inner::coulomb`]) and so changed them.
+    pub bound: Option<Vec<f64>>,
 }
 
 impl InnerOutcome {
@@ -58,6 +61,7 @@ impl InnerOutcome {
             notes: Vec::new(),
             blocked: Vec::new(),
             stalled: false,
+            bound: None,
         }
     }
 
@@ -76,6 +80,7 @@ impl InnerOutcome {
             notes,
             blocked,
             stalled: false,
+            bound: None,
         }
     }
 
@@ -88,6 +93,7 @@ impl InnerOutcome {
             notes,
             blocked: Vec::new(),
             stalled: true,
+            bound: None,
         }
     }
 }
@@ -208,7 +214,30 @@ impl Columns {
     }
 }
 
+/// The change of the slip bounds below which they are settled (the Tresca fixed point and
+/// Coulomb's law within an inner problem).
+pub const BOUNDS_SETTLED: f64 = 1e-10;
+
+/// The relative change of the slip bounds, over the largest finite bound (1 from the tied
+/// first iteration).
+pub fn bound_change(old: &[f64], new: &[f64]) -> f64 {
+    let scale = old
+        .iter()
+        .chain(new)
+        .filter(|v| v.is_finite())
+        .fold(0.0f64, |a, v| a.max(v.abs()))
+        .max(f64::MIN_POSITIVE);
+    old.iter().zip(new).fold(0.0f64, |a, (x, y)| {
+        a.max(if x.is_finite() {
+            (x - y).abs() / scale
+        } else {
+            1.0
+        })
+    })
+}
+
 /// The inner problem.
+#[derive(Clone)]
 pub struct Inner<'a> {
     pub problem: &'a Problem,
     pub base: &'a Base,
@@ -224,6 +253,11 @@ pub struct Inner<'a> {
     pub bound: Vec<f64>,
     /// Relative tolerance of the violation checks.
     pub tol: f64,
+    /// Coulomb's law within the inner problem (empty: the bounds are fixed, Tresca): for
+    /// each friction row whose pair's normal row can open, that row and μ. A solver that
+    /// follows it takes each iterate's slip bounds from the normal forces of the last
+    /// ([`Inner::coulomb_bounds`]).
+    pub coulomb: Vec<Option<(usize, f64)>>,
 }
 
 /// A solution of the inner problem for one open set.
@@ -289,7 +323,48 @@ impl<'a> Inner<'a> {
             tie_on_close,
             bound,
             tol,
+            coulomb: Vec::new(),
         }
+    }
+
+    /// The same problem with its friction rows' normal rows and μ (`coulomb`), for a
+    /// solver that follows Coulomb's law within it ([`Inner::coulomb_form`]).
+    pub fn with_coulomb(mut self, coulomb: Vec<Option<(usize, f64)>>) -> Inner<'a> {
+        self.coulomb = coulomb;
+        self
+    }
+
+    /// The problem under Coulomb's law: its friction rows are no longer free where their
+    /// bound is zero (an open pair's row slips without force, as any row whose bound is
+    /// zero), and their bounds follow the normal forces ([`Inner::coulomb_bounds`]).
+    pub fn coulomb_form(&self) -> Inner<'a> {
+        let mut c = self.clone();
+        for (r, m) in self.coulomb.iter().enumerate() {
+            if m.is_some() {
+                c.free[r] = false;
+            }
+        }
+        c
+    }
+
+    /// The slip bounds μ·max(λ_n − c, 0) of the Coulomb rows from the normal forces of
+    /// `st` (zero where the pair's normal row is open), the other rows' as they are; None
+    /// without Coulomb rows.
+    pub fn coulomb_bounds(&self, st: &InnerState) -> Option<Vec<f64>> {
+        if self.coulomb.is_empty() {
+            return None;
+        }
+        let mut b = self.bound.clone();
+        for (r, c) in self.coulomb.iter().enumerate() {
+            if let Some((k, mu)) = *c {
+                b[r] = if st.open[k] {
+                    0.0
+                } else {
+                    mu * (st.lambda[k] - self.base.cohesion[k]).max(0.0)
+                };
+            }
+        }
+        Some(b)
     }
 
     /// Whether a stick row ties as its pair closes in this problem.

@@ -48,7 +48,10 @@ use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
 use inner::*;
-use lcp::{status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses};
+use lcp::{
+    bound_change, status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses,
+    BOUNDS_SETTLED,
+};
 pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
 
@@ -326,6 +329,27 @@ impl<'a> Session<'a> {
         self.model.bodies.iter().map(|b| b.body_force).collect()
     }
 
+    /// For a solver that follows Coulomb's law within the inner problem (the sparse one),
+    /// each friction row's normal row and μ where that row can open; empty for the others.
+    fn coulomb_rows(&self, method: Solver) -> Vec<Option<(usize, f64)>> {
+        if method != Solver::Sparse {
+            return Vec::new();
+        }
+        let n = self.problem.n_open_rows;
+        let rows = &self.problem.rows[..n];
+        if !rows.iter().any(|r| r.kind == RowKind::Friction) {
+            return Vec::new();
+        }
+        rows.iter()
+            .map(|row| match row.kind {
+                RowKind::Friction => self.problem.row_of[row.iface][row.pair][1]
+                    .filter(|&k| k < n)
+                    .map(|k| (k, self.model.interfaces[row.iface].pairs[row.pair].friction)),
+                _ => None,
+            })
+            .collect()
+    }
+
     /// Whether pair (k, j)'s normal row is open in `open`.
     fn pair_open(&self, open: &[bool], k: usize, j: usize) -> bool {
         match self.problem.row_of[k][j][1] {
@@ -501,6 +525,7 @@ impl<'a> Session<'a> {
             tie_on_close: vec![false; n],
             bound: vec![0.0; n],
             tol,
+            coulomb: Vec::new(),
         };
         let mu: Vec<f64> = self.problem.rows[..n]
             .iter()
@@ -593,6 +618,8 @@ impl<'a> Session<'a> {
         let mut bound_changes: Vec<f64> = Vec::new();
         let mut relax = Relaxation::new();
         let mut lp = StepLoop::new(record);
+        // Whether the inner solver may follow Coulomb's law within its iteration.
+        let mut coulomb = true;
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
@@ -600,7 +627,14 @@ impl<'a> Session<'a> {
                 bound = self.first_bounds();
             }
             let rows = self.inner_rows(&st, &bound, &edge_slip);
-            let inner = Inner::new(&self.problem, &base, rows, bound.clone(), tol);
+            let coulomb_rows = if coulomb {
+                self.coulomb_rows(method)
+            } else {
+                Vec::new()
+            };
+            let asked_coulomb = !coulomb_rows.is_empty();
+            let inner = Inner::new(&self.problem, &base, rows, bound.clone(), tol)
+                .with_coulomb(coulomb_rows);
             let it0 = iterations;
             lp.iterations_recorded = it0;
             let budget = max_iterations.saturating_sub(it0);
@@ -624,6 +658,19 @@ impl<'a> Session<'a> {
             };
             iterations += outcome.iterations;
             notes.extend(outcome.notes.iter().cloned());
+            // A solver that followed Coulomb's law within the inner problem hands back the
+            // bounds of its state; one that could not keeps them fixed for the rest of the
+            // step (the Tresca fixed point of the outer loop).
+            let inner = match outcome.bound.clone() {
+                Some(b) => {
+                    bound.clone_from(&b);
+                    Inner { bound: b, ..inner }
+                }
+                None => {
+                    coulomb &= !asked_coulomb;
+                    inner
+                }
+            };
             let residual = inner.residual(&outcome.state);
             let ok = outcome.converged;
             let outcome_blocked = outcome.blocked.clone();
@@ -640,7 +687,7 @@ impl<'a> Session<'a> {
             // The Tresca fixed point: the bounds from the new normal forces.
             let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
             let change = bound_change(&bound, &new_bound);
-            let settled = !friction || change <= 1e-10;
+            let settled = !friction || change <= BOUNDS_SETTLED;
             self.show_outer(
                 load_step,
                 (outer, iterations),

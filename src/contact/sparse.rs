@@ -32,6 +32,13 @@
 //! is then not unique). A repeated status halves the step; the iteration limit or a repeated
 //! status ends it without a verdict (`stalled`), and the driver hands over to the evolutive
 //! iteration.
+//!
+//! Friction follows Coulomb's law within the iteration (docs/formulation.md §6.4): each
+//! iterate's slip bounds are μ·max(λ_n − c, 0) of the last iterate's normal forces (zero
+//! where the pair is open), and an iterate whose statuses hold while its bounds still moved
+//! is solved again with the new bounds — the same factor, two triangular solves. The outer
+//! Tresca fixed point then finds its bounds settled after one pass instead of refactoring
+//! for every outer iteration (64 × 64 wall: 79 → 32 iterations).
 
 use std::collections::HashSet;
 
@@ -40,7 +47,9 @@ use faer::sparse::linalg::cholesky;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, Mat, Par, Side};
 
-use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState, Violation};
+use crate::contact::lcp::{
+    bound_change, status_key, Inner, InnerOutcome, InnerState, Violation, BOUNDS_SETTLED,
+};
 use crate::contact::problem::Problem;
 
 /// H over w = (v, s) (lower triangle) and its symbolic factorisation.
@@ -438,50 +447,114 @@ pub fn solve(
     sign: &[f64],
     max_iterations: usize,
 ) -> InnerOutcome {
-    let c = inner
-        .problem
-        .linear_term(inner.base.factor, &inner.base.cohesion);
+    if inner.coulomb.is_empty() {
+        let mut out = iterate(inner.clone(), sys, open, sign, max_iterations, MAX_HALVINGS);
+        out.bound = None;
+        return out;
+    }
+    // Coulomb's law within the iteration: stopped at its first repeated status (a cycle of
+    // the lagged bounds, seen with μ = 10 near collapse) or half the iterations; the
+    // iteration with the bounds held fixed (Tresca, the outer loop's fixed point) then
+    // starts again from the same statuses.
+    let limit = max_iterations.min(MAX_ITERATIONS / 2);
+    let first = iterate(inner.coulomb_form(), sys, open, sign, limit, 0);
+    if !first.stalled {
+        return first;
+    }
+    let budget = max_iterations.saturating_sub(first.iterations);
+    let mut out = iterate(inner.clone(), sys, open, sign, budget, MAX_HALVINGS);
+    out.bound = None;
+    out.iterations += first.iterations;
+    let why = first.notes.join("; ");
+    out.notes.insert(
+        0,
+        format!(
+            "Coulomb's law within the sparse iteration did not settle in {} iterations \
+             ({why}): the slip bounds were held fixed (Tresca) for this step",
+            first.iterations
+        ),
+    );
+    out
+}
+
+/// The iteration of [`solve`] on `cur`, whose slip bounds follow Coulomb's law where it has
+/// Coulomb rows; the outcome carries the bounds of its state.
+fn iterate(
+    mut cur: Inner,
+    sys: &mut SparseSystem,
+    open: &[bool],
+    sign: &[f64],
+    max_iterations: usize,
+    max_halvings: u32,
+) -> InnerOutcome {
+    let c = cur.problem.linear_term(cur.base.factor, &cur.base.cohesion);
     let mut sign = sign.to_vec();
-    let mut open = inner.start_open(open, &sign);
+    let mut open = cur.start_open(open, &sign);
     let mut seen: HashSet<Vec<i8>> = HashSet::new();
     let mut iterations = 0;
     let mut damping = 0u32;
     let mut last: Option<InnerState> = None;
     // The proximal weight of the next iterate that leaves a body free.
     let mut reg = REGULARISATION;
+    let limit = max_iterations.min(MAX_ITERATIONS);
     loop {
-        let exact = sys.state(inner, &c, &open, &sign, None);
+        let exact = sys.state(&cur, &c, &open, &sign, None);
         let mut center = Vec::new();
         let (st, regularised) = match exact {
             Some(st) => (st, false),
             None => {
-                center = last.as_ref().map_or(&inner.base.offset, |st| &st.s).clone();
-                match sys.state(inner, &c, &open, &sign, Some((reg, &center))) {
+                center = last.as_ref().map_or(&cur.base.offset, |st| &st.s).clone();
+                match sys.state(&cur, &c, &open, &sign, Some((reg, &center))) {
                     Some(st) => (st, true),
                     None => {
-                        let state = last.unwrap_or_else(|| closed_state(inner));
+                        let state = last.unwrap_or_else(|| closed_state(&cur));
                         return stalled(state, iterations, "a status leaves a body free");
                     }
                 }
             }
         };
-        let v = inner.violations(&st);
+        // Coulomb's law: the next iterate's slip bounds from this one's normal forces; the
+        // statuses are checked against them.
+        let used = cur.bound.clone();
+        let moved = match cur.coulomb_bounds(&st) {
+            Some(b) => {
+                let moved = bound_change(&cur.bound, &b) > BOUNDS_SETTLED;
+                cur.bound = b;
+                moved
+            }
+            None => false,
+        };
+        let v = cur.violations(&st);
+        if v.is_empty() && moved {
+            // The statuses hold but the bounds moved: the same status again with the new
+            // bounds (the same factor: two triangular solves).
+            if iterations >= limit {
+                return stalled(st, iterations, "the iteration limit");
+            }
+            seen.clear();
+            if regularised {
+                reg = (reg * 0.1).max(REGULARISATION_MIN);
+            }
+            last = Some(st);
+            iterations += 1;
+            continue;
+        }
         if v.is_empty() && !regularised {
-            return InnerOutcome::converged(st, iterations);
+            return converged(st, iterations, used);
         }
         if v.is_empty() {
             // The statuses hold with the proximal term: where its force is within the
             // tolerance the state solves the problem (a free body's place is not unique),
             // else the next iterate starts from this one.
-            let (fs, _) = inner.scales(&st);
-            let prox = (0..inner.n())
+            let (fs, _) = cur.scales(&st);
+            let prox = (0..cur.n())
                 .filter(|&r| st.open[r])
                 .map(|r| reg * sys.diag[sys.n_glued + r].abs() * (st.s[r] - center[r]).abs())
                 .fold(0.0f64, f64::max);
-            if prox <= inner.tol * fs {
-                return InnerOutcome::converged(st, iterations);
+            if prox <= cur.tol * fs {
+                return converged(st, iterations, used);
             }
-            if iterations >= max_iterations.min(MAX_ITERATIONS) {
+            if iterations >= limit {
                 return stalled(st, iterations, "a status leaves a body free");
             }
             // The free bodies drift by a step inversely proportional to the proximal weight:
@@ -491,12 +564,12 @@ pub fn solve(
             iterations += 1;
             continue;
         }
-        if iterations >= max_iterations.min(MAX_ITERATIONS) {
+        if iterations >= limit {
             return stalled(st, iterations, "the iteration limit");
         }
         if !seen.insert(status_key(&st)) {
             damping += 1;
-            if damping > MAX_HALVINGS {
+            if damping > max_halvings {
                 return stalled(st, iterations, "a repeated status");
             }
         }
@@ -516,6 +589,13 @@ pub fn solve(
         last = Some(st);
         iterations += 1;
     }
+}
+
+/// A solution, with the slip bounds it was solved with (its forces on slipping rows).
+fn converged(state: InnerState, iterations: usize, bound: Vec<f64>) -> InnerOutcome {
+    let mut out = InnerOutcome::converged(state, iterations);
+    out.bound = Some(bound);
+    out
 }
 
 /// The statuses of `st` with the rows of `v` switched (a sticking friction row to slipping
