@@ -384,7 +384,7 @@ fn main() -> ExitCode {
             let printed = loaded.and_then(|l| {
                 out(&if json {
                     let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
-                    format!("{v:#}\n")
+                    format!("{}\n", serde_json::to_string_pretty(&v).unwrap_or_default())
                 } else {
                     report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
                 })

@@ -26,7 +26,7 @@ use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
 use crate::post::{section_points, PointSampler};
 use crate::solution::{History, RunStatus};
-use crate::timings::Timings;
+use crate::timings::{Timings, TimingsFile};
 
 /// A scene read and validated against its mesh.
 #[derive(Debug, Clone)]
@@ -123,7 +123,7 @@ pub struct RunOptions {
 #[derive(Debug, Clone)]
 pub struct RunReport {
     pub out_dir: PathBuf,
-    pub summary: serde_json::Value,
+    pub summary: summary::Summary,
     pub notes: Vec<String>,
 }
 
@@ -263,8 +263,7 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     match solved.failure {
         Some(f) => Err(f),
         None => Ok(RunReport {
-            summary: serde_json::to_value(&summary)
-                .map_err(|e| Error::io(&out_dir, format!("cannot serialise the summary: {e}")))?,
+            summary,
             out_dir,
             notes: post.notes,
         }),
@@ -858,11 +857,11 @@ fn write_run(
     stage.finish();
     timings.add("write", t4.elapsed().as_secs_f64());
     // Dates and timings in their own file: summary.json stays byte-identical between runs.
-    let timing_text = serde_json::to_string_pretty(&serde_json::json!({
-        "created": rec.created,
-        "stages": timings.json(),
-        "within": timings.within_json(),
-    }))
+    let timing_text = serde_json::to_string_pretty(&TimingsFile {
+        created: &rec.created,
+        stages: timings.seconds(),
+        within: timings.within(),
+    })
     .map_err(|e| Error::io(&out_dir, format!("cannot serialise the timings: {e}")))?;
     write_staged(&out_dir.join("timings.json"), timing_text.as_bytes())?;
     // The summary last, then the whole folder swapped in.

@@ -2,9 +2,10 @@
 //!
 //! Place in the flow: reads `Scene`, `Model` and `Plan`; writes text. Nothing depends on it.
 
+use std::collections::BTreeMap;
 use std::fmt::Write;
 
-use serde_json::{json, Value};
+use serde::Serialize;
 
 use crate::input::model::{fmt_num, DofClass, Model};
 use crate::input::scene::{InitialState, InterfaceModel, Plane, Scene, Tangential};
@@ -320,103 +321,314 @@ fn write_tables(o: &mut String, model: &Model) {
 }
 
 /// A scene value that may be an expression: its number, or its text.
-fn scalar_json(s: &crate::input::expr::Scalar) -> serde_json::Value {
-    match s.as_const() {
-        Some(v) => json!(v),
-        None => json!(s.to_string()),
+#[derive(Debug, Clone, Serialize)]
+#[serde(untagged)]
+pub enum ScalarJson {
+    Number(f64),
+    Text(String),
+}
+
+impl From<&crate::input::expr::Scalar> for ScalarJson {
+    fn from(s: &crate::input::expr::Scalar) -> ScalarJson {
+        match s.as_const() {
+            Some(v) => ScalarJson::Number(v),
+            None => ScalarJson::Text(s.to_string()),
+        }
     }
+}
+
+// What `sgbem check --json` prints, as typed records. Key order: the report has always
+// been written with the keys of every object sorted (serde_json's map), and a struct is
+// written in the order of its fields, so every record here declares its fields in
+// alphabetical order; a key that is sometimes absent is skipped when `None`, one that is
+// `null` is an `Option` written as it is.
+
+/// The whole of `sgbem check --json`.
+#[derive(Debug, Clone, Serialize)]
+pub struct CheckJson<'a> {
+    pub bodies: Vec<BodyJson<'a>>,
+    pub boundary_elements: ElementSizes<'a>,
+    pub boundary_parts: Vec<PartJson<'a>>,
+    pub cost: CostJson,
+    pub interfaces: Vec<InterfaceJson<'a>>,
+    pub mesh: MeshJson<'a>,
+    pub outputs: OutputsJson,
+    pub overrides: &'a [String],
+    pub plan: PlanJson<'a>,
+    pub plane: &'static str,
+    pub scene: String,
+    pub thickness: f64,
+    pub title: &'a str,
+    pub units: crate::output::summary::Units,
+    pub unused_curves: &'a [String],
+}
+
+/// The mesh file: its path, format and the Gmsh parameters the scene sets.
+#[derive(Debug, Clone, Serialize)]
+pub struct MeshJson<'a> {
+    pub format: &'static str,
+    /// Each parameter's value as text, by name.
+    pub gmsh_parameters: BTreeMap<&'a str, String>,
+    pub path: String,
+}
+
+/// One body's material, load and sizes.
+#[derive(Debug, Clone, Serialize)]
+pub struct BodyJson<'a> {
+    pub area: f64,
+    pub body_force: Option<[f64; 2]>,
+    pub displacement_components: DofJson,
+    pub elements: usize,
+    pub holes: usize,
+    pub loops: usize,
+    pub name: &'a str,
+    pub nodes: usize,
+    pub perimeter: f64,
+    pub poisson: f64,
+    pub triangles: usize,
+    pub young: f64,
+}
+
+/// A body's displacement components by kind.
+#[derive(Debug, Clone, Serialize)]
+pub struct DofJson {
+    pub free: usize,
+    pub interface: usize,
+    pub known: usize,
+}
+
+/// The boundary elements: their count and extreme sizes.
+#[derive(Debug, Clone, Serialize)]
+pub struct ElementSizes<'a> {
+    pub count: usize,
+    pub largest: SizeAt<'a>,
+    pub largest_neighbour_ratio: SizeAt<'a>,
+    pub smallest: SizeAt<'a>,
+}
+
+/// A size and where it is.
+#[derive(Debug, Clone, Serialize)]
+pub struct SizeAt<'a> {
+    pub at: &'a str,
+    pub value: f64,
+}
+
+impl<'a> From<&'a (f64, String)> for SizeAt<'a> {
+    fn from((value, at): &'a (f64, String)) -> SizeAt<'a> {
+        SizeAt { at, value: *value }
+    }
+}
+
+/// One boundary part: its condition and where it lies.
+#[derive(Debug, Clone, Serialize)]
+pub struct PartJson<'a> {
+    pub condition: String,
+    /// Its elements per body, by body name.
+    pub elements: BTreeMap<&'a str, usize>,
+    pub in_scene: bool,
+    pub length: f64,
+    pub name: &'a str,
+    pub role: &'static str,
+}
+
+/// One interface: its model, values and sizes.
+#[derive(Debug, Clone, Serialize)]
+pub struct InterfaceJson<'a> {
+    pub body_a: &'a str,
+    pub body_b: &'a str,
+    pub cohesion: ScalarJson,
+    pub elements: usize,
+    pub friction: ScalarJson,
+    pub gap: ScalarJson,
+    /// Sides meshed on their own only.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub independent_sides: Option<IndependentJson>,
+    pub initial: &'static str,
+    pub length: f64,
+    pub matched_by_position: bool,
+    pub model: &'static str,
+    pub name: &'a str,
+    pub pairs: usize,
+    pub tangential: &'static str,
+}
+
+/// An interface with independent sides: B's nodes, the pairs that face B and the range
+/// of their gaps measured from the geometry.
+#[derive(Debug, Clone, Serialize)]
+pub struct IndependentJson {
+    pub b_nodes: usize,
+    pub facing_pairs: usize,
+    pub gap_geometry: [f64; 2],
+}
+
+/// The plan: effects, problem, method and stages.
+#[derive(Debug, Clone, Serialize)]
+pub struct PlanJson<'a> {
+    pub advice: &'a [String],
+    pub effects: &'a [&'static str],
+    pub method: &'static str,
+    pub not_simulated: &'a [String],
+    pub problem: &'static str,
+    pub stages: Vec<StageJson<'a>>,
+}
+
+/// One stage of the plan.
+#[derive(Debug, Clone, Serialize)]
+pub struct StageJson<'a> {
+    pub does: &'a str,
+    pub name: &'static str,
+}
+
+/// The estimated cost of the run.
+#[derive(Debug, Clone, Serialize)]
+pub struct CostJson {
+    /// `null` without a contact stage.
+    pub contact: Option<ContactCostJson>,
+    pub peak_bytes: f64,
+    pub post_seconds: f64,
+    pub seconds: f64,
+    pub text: String,
+    pub unknowns: usize,
+}
+
+/// The contact stage's estimated cost.
+#[derive(Debug, Clone, Serialize)]
+pub struct ContactCostJson {
+    pub bytes: f64,
+    pub history_bytes: f64,
+    pub pairs: usize,
+    pub seconds: f64,
+    pub states: usize,
+}
+
+/// The outputs asked for and their estimated sizes.
+#[derive(Debug, Clone, Serialize)]
+pub struct OutputsJson {
+    pub estimate: crate::output::size::SizeFigures,
+    pub every: usize,
+    pub history: &'static str,
+    pub text: String,
+    pub vtk_compressed: bool,
 }
 
 /// What `sgbem check --json` prints: the check report as data, for scripts and editors.
 /// Lengths in the scene's length unit, stresses in its force per length squared.
-pub fn check_json(scene: &Scene, model: &Model, plan: &Plan, mesh_binary: bool) -> Value {
+pub fn check_json<'a>(
+    scene: &'a Scene,
+    model: &'a Model,
+    plan: &'a Plan,
+    mesh_binary: bool,
+) -> CheckJson<'a> {
     let cost = crate::estimate::estimate(model, scene);
     let unknowns: usize = cost.bodies.iter().map(|b| b.n_x + b.n_x0).sum();
     let s = &model.sizes;
-    let size = |(v, at): &(f64, String)| json!({"value": v, "at": at});
-    json!({
-        "scene": scene.path.display().to_string(),
-        "title": scene.title,
-        "overrides": scene.overrides,
-        "mesh": {
-            "path": model.mesh_path.display().to_string(),
-            "format": if mesh_binary { "binary" } else { "ascii" },
-            "gmsh_parameters": scene.mesh_parameters.iter()
-                .map(|(k, v)| (k.clone(), json!(v.to_string())))
-                .collect::<serde_json::Map<_, _>>(),
+    CheckJson {
+        bodies: model.bodies.iter().map(body_json).collect(),
+        boundary_elements: ElementSizes {
+            count: model.element_count(),
+            largest: SizeAt::from(&s.largest),
+            largest_neighbour_ratio: SizeAt::from(&s.grading),
+            smallest: SizeAt::from(&s.smallest),
         },
-        "plane": match scene.plane { Plane::Strain => "strain", Plane::Stress => "stress" },
-        "thickness": scene.thickness,
-        "units": {"length": scene.units.length, "force": scene.units.force},
-        "bodies": model.bodies.iter().map(body_json).collect::<Vec<_>>(),
-        "boundary_elements": {
-            "count": model.element_count(),
-            "smallest": size(&s.smallest),
-            "largest": size(&s.largest),
-            "largest_neighbour_ratio": size(&s.grading),
+        boundary_parts: model.parts.iter().map(|p| part_json(model, p)).collect(),
+        cost: CostJson {
+            contact: cost.contact.as_ref().map(|c| ContactCostJson {
+                bytes: c.bytes,
+                history_bytes: c.history_bytes,
+                pairs: c.pairs,
+                seconds: c.seconds(),
+                states: c.states,
+            }),
+            peak_bytes: cost.peak_bytes,
+            post_seconds: cost.post_seconds,
+            seconds: cost.seconds,
+            text: cost.line(),
+            unknowns,
         },
-        "boundary_parts": model.parts.iter().map(|p| json!({
-            "name": p.spec.name,
-            "role": p.spec.role(),
-            "condition": p.spec.describe(),
-            "in_scene": p.listed,
-            "length": p.length,
-            "elements": p.elements.iter()
-                .map(|(b, n)| (model.bodies[*b].name.clone(), json!(n)))
-                .collect::<serde_json::Map<_, _>>(),
-        })).collect::<Vec<_>>(),
-        "unused_curves": model.unused_curves,
-        "interfaces": model.interfaces.iter().map(|i| interface_json(model, i))
-            .collect::<Vec<_>>(),
-        "plan": {
-            "effects": plan.effects,
-            "problem": plan.problem.describe(),
-            "method": scene.solve.method.name(),
-            "stages": plan.stages.iter().map(|(n, what)| json!({"name": n, "does": what}))
-                .collect::<Vec<_>>(),
-            "advice": plan.advice,
-            "not_simulated": plan.omitted,
+        interfaces: model
+            .interfaces
+            .iter()
+            .map(|i| interface_json(model, i))
+            .collect(),
+        mesh: MeshJson {
+            format: if mesh_binary { "binary" } else { "ascii" },
+            gmsh_parameters: scene
+                .mesh_parameters
+                .iter()
+                .map(|(k, v)| (k.as_str(), v.to_string()))
+                .collect(),
+            path: model.mesh_path.display().to_string(),
         },
-        "cost": {
-            "unknowns": unknowns,
-            "peak_bytes": cost.peak_bytes,
-            "seconds": cost.seconds,
-            "post_seconds": cost.post_seconds,
-            "contact": cost.contact.as_ref().map(|c| json!({
-                "pairs": c.pairs,
-                "seconds": c.seconds(),
-                "bytes": c.bytes,
-                "history_bytes": c.history_bytes,
-                "states": c.states,
-            })),
-            "text": cost.line(),
+        outputs: OutputsJson {
+            estimate: cost.outputs.figures(),
+            every: scene.output.every,
+            history: scene.output.history.name(),
+            text: cost.outputs.line(scene),
+            vtk_compressed: scene.output.vtk_style.compressed,
         },
-        "outputs": {
-            "history": scene.output.history.name(),
-            "every": scene.output.every,
-            "vtk_compressed": scene.output.vtk_style.compressed,
-            "estimate": cost.outputs.json(),
-            "text": cost.outputs.line(scene),
+        overrides: &scene.overrides,
+        plan: PlanJson {
+            advice: &plan.advice,
+            effects: &plan.effects,
+            method: scene.solve.method.name(),
+            not_simulated: &plan.omitted,
+            problem: plan.problem.describe(),
+            stages: plan
+                .stages
+                .iter()
+                .map(|(name, does)| StageJson { does, name })
+                .collect(),
         },
-    })
+        plane: match scene.plane {
+            Plane::Strain => "strain",
+            Plane::Stress => "stress",
+        },
+        scene: scene.path.display().to_string(),
+        thickness: scene.thickness,
+        title: &scene.title,
+        units: crate::output::summary::Units {
+            force: scene.units.force.clone(),
+            length: scene.units.length.clone(),
+        },
+        unused_curves: &model.unused_curves,
+    }
 }
 
-fn body_json(b: &crate::input::model::Body) -> Value {
+fn body_json(b: &crate::input::model::Body) -> BodyJson<'_> {
     let [known, interface, free] = b.dof_counts();
-    json!({
-        "name": b.name,
-        "young": b.young,
-        "poisson": b.poisson,
-        "body_force": b.body_force,
-        "loops": b.loops.len(),
-        "holes": b.loops.iter().filter(|l| l.is_hole).count(),
-        "elements": b.elements.len(),
-        "nodes": b.nodes.len(),
-        "area": b.area,
-        "perimeter": b.perimeter(),
-        "triangles": b.triangles.len(),
-        "displacement_components": {"known": known, "interface": interface, "free": free},
-    })
+    BodyJson {
+        area: b.area,
+        body_force: b.body_force,
+        displacement_components: DofJson {
+            free,
+            interface,
+            known,
+        },
+        elements: b.elements.len(),
+        holes: b.loops.iter().filter(|l| l.is_hole).count(),
+        loops: b.loops.len(),
+        name: &b.name,
+        nodes: b.nodes.len(),
+        perimeter: b.perimeter(),
+        poisson: b.poisson,
+        triangles: b.triangles.len(),
+        young: b.young,
+    }
+}
+
+fn part_json<'a>(model: &'a Model, p: &'a crate::input::model::Part) -> PartJson<'a> {
+    PartJson {
+        condition: p.spec.describe(),
+        elements: p
+            .elements
+            .iter()
+            .map(|(b, n)| (model.bodies[*b].name.as_str(), *n))
+            .collect(),
+        in_scene: p.listed,
+        length: p.length,
+        name: &p.spec.name,
+        role: p.spec.role(),
+    }
 }
 
 /// Pairs of an interface with independent sides that face B, and the range of their
@@ -433,36 +645,38 @@ fn independent_figures(i: &crate::input::model::Interface) -> (usize, f64, f64) 
     (facing.len(), lo, hi)
 }
 
-fn interface_json(model: &Model, i: &crate::input::model::Interface) -> Value {
+fn interface_json<'a>(
+    model: &'a Model,
+    i: &'a crate::input::model::Interface,
+) -> InterfaceJson<'a> {
     let sp = &i.spec;
-    let mut out = json!({
-        "name": sp.name,
-        "model": match sp.model {
-            InterfaceModel::Bonded => "bonded",
-            InterfaceModel::Unilateral => "unilateral",
-        },
-        "initial": match sp.initial {
+    InterfaceJson {
+        body_a: &model.bodies[i.body_a].name,
+        body_b: &model.bodies[i.body_b].name,
+        cohesion: ScalarJson::from(&sp.cohesion),
+        elements: i.elements.len(),
+        friction: ScalarJson::from(&sp.friction),
+        gap: ScalarJson::from(&sp.gap),
+        independent_sides: i.independent().then(|| {
+            let (facing, lo, hi) = independent_figures(i);
+            IndependentJson {
+                b_nodes: i.b_nodes.len(),
+                facing_pairs: facing,
+                gap_geometry: [lo, hi],
+            }
+        }),
+        initial: match sp.initial {
             InitialState::Closed => "closed",
             InitialState::Open => "open",
         },
-        "cohesion": scalar_json(&sp.cohesion),
-        "gap": scalar_json(&sp.gap),
-        "tangential": sp.tangential.name(),
-        "friction": scalar_json(&sp.friction),
-        "body_a": model.bodies[i.body_a].name,
-        "body_b": model.bodies[i.body_b].name,
-        "elements": i.elements.len(),
-        "pairs": i.pairs.len(),
-        "length": i.length,
-        "matched_by_position": i.matched_by_position,
-    });
-    if i.independent() {
-        let (facing, lo, hi) = independent_figures(i);
-        out["independent_sides"] = json!({
-            "facing_pairs": facing,
-            "b_nodes": i.b_nodes.len(),
-            "gap_geometry": [lo, hi],
-        });
+        length: i.length,
+        matched_by_position: i.matched_by_position,
+        model: match sp.model {
+            InterfaceModel::Bonded => "bonded",
+            InterfaceModel::Unilateral => "unilateral",
+        },
+        name: &sp.name,
+        pairs: i.pairs.len(),
+        tangential: sp.tangential.name(),
     }
-    out
 }

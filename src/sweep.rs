@@ -17,6 +17,8 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::sync::atomic::{AtomicBool, Ordering};
 
+use serde::Serialize;
+
 use crate::error::{Error, Result};
 use crate::input::scene;
 
@@ -239,9 +241,12 @@ pub fn sweep(
     let _lock = crate::output::folder::Lock::take(&lock_path, out)?;
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
     remove_stale_points(out, &pts);
-    let listed: Vec<&str> = pts.iter().map(|p| p.name.as_str()).collect();
-    let marker = serde_json::json!({ "tool": "sgbem sweep", "points": listed });
-    super::output::write_atomic(&out.join(SWEEP_MARKER), format!("{marker:#}\n").as_bytes())?;
+    let marker = SweepMarker {
+        points: pts.iter().map(|p| p.name.as_str()).collect(),
+        tool: "sgbem sweep",
+    };
+    let text = serde_json::to_string_pretty(&marker).unwrap_or_default();
+    super::output::write_atomic(&out.join(SWEEP_MARKER), format!("{text}\n").as_bytes())?;
     let exe = std::env::current_exe()
         .map_err(|e| Error::io(scene_path, format!("cannot find the sgbem program: {e}")))?;
     let codes = run_points(&exe, scene_path, &pts, jobs, out, allow_geo_shell, &write)?;
@@ -342,6 +347,14 @@ fn finished(pts: &[Point], out: &Path) -> Vec<Option<i32>> {
 
 /// The list of the points a sweep wrote, in its folder.
 const SWEEP_MARKER: &str = ".sgbem-sweep.json";
+
+/// The sweep folder's marker [`SWEEP_MARKER`]: its points' folders, in point order; fields
+/// in alphabetical order, the order of its keys as it has always been written.
+#[derive(Serialize)]
+struct SweepMarker<'a> {
+    points: Vec<&'a str>,
+    tool: &'static str,
+}
 
 /// Removes the point folders of the previous sweep into `out` that `pts` does not have:
 /// only the entries their run's marker lists (a folder holding anything else keeps it).

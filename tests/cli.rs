@@ -508,6 +508,9 @@ fn check_json_is_the_report_as_data() {
     let (code, out, err) = sgbem(&[&args[..], &["--json"]].concat());
     assert_eq!(code, 0, "{err}");
     let v: serde_json::Value = serde_json::from_str(&out).expect("check --json is JSON");
+    // Written with the keys of every object sorted, at every depth, as always.
+    let sorted = serde_json::to_string_pretty(&v).unwrap_or_default();
+    assert_eq!(out, format!("{sorted}\n"));
     let names: Vec<&str> = v["bodies"]
         .as_array()
         .unwrap()

@@ -80,7 +80,7 @@ fn the_estimate_of_a_many_body_wall_follows_its_peak_memory() {
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));
-    assert_eq!(report.summary["status"], "converged");
+    assert_eq!(report.summary.status.as_str(), "converged");
     let peak = peak_kb() as f64 * 1024.0;
     println!(
         "105-body wall: estimate {:.0} MB, measured peak {:.0} MB",

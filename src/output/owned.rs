@@ -7,6 +7,8 @@
 use std::collections::BTreeSet;
 use std::path::{Path, PathBuf};
 
+use serde::Serialize;
+
 use crate::error::{Error, Result};
 
 /// The name of the marker file.
@@ -181,16 +183,27 @@ pub(crate) fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error
     )
 }
 
+/// The marker `.sgbem-run.json`; fields in alphabetical order, the order of its keys as
+/// it has always been written.
+#[derive(Serialize)]
+struct Marker<'a> {
+    about: &'static str,
+    files: &'a BTreeSet<String>,
+    tool: &'static str,
+    tool_version: &'static str,
+}
+
 /// The marker text listing `entries`.
 pub(crate) fn marker_text(entries: &BTreeSet<String>) -> String {
-    let v = serde_json::json!({
-        "tool": "sgbem",
-        "tool_version": env!("CARGO_PKG_VERSION"),
-        "about": "the files and folders sgbem wrote here: a later run or export replaces \
-                  only these, and refuses a folder holding anything else",
-        "files": entries,
-    });
-    format!("{}\n", serde_json::to_string_pretty(&v).unwrap_or_default())
+    let marker = Marker {
+        about: "the files and folders sgbem wrote here: a later run or export replaces \
+                only these, and refuses a folder holding anything else",
+        files: entries,
+        tool: "sgbem",
+        tool_version: env!("CARGO_PKG_VERSION"),
+    };
+    let text = serde_json::to_string_pretty(&marker).unwrap_or_default();
+    format!("{text}\n")
 }
 
 /// Every entry under `dir` (relative; folders with a trailing `/`), the marker excepted.

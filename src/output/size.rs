@@ -35,6 +35,8 @@
 //! wall): the estimate of a full history is as rough as that count. With "steps" or "final"
 //! the number of states is exact, and the estimate within 30 % on the shipped scenes.
 
+use serde::Serialize;
+
 use crate::estimate::{fmt_bytes, BodySize, ContactEstimate};
 use crate::input::model::Model;
 use crate::input::scene::{HistoryLevel, InterfaceModel, Scene, Tangential};
@@ -82,17 +84,32 @@ impl OutputSize {
         )
     }
 
-    pub fn json(&self) -> serde_json::Value {
-        serde_json::json!({
-            "states": self.states,
-            "archive_bytes": self.archive.round(),
-            "vtk_bytes": self.vtk.round(),
-            "csv_bytes": self.csv.round(),
-            "mesh_bytes": self.mesh.round(),
-            "summary_bytes": self.summary.round(),
-            "total_bytes": self.total().round(),
-        })
+    /// The sizes as `sgbem check --json` writes them (`outputs.estimate`), rounded to
+    /// bytes.
+    pub fn figures(&self) -> SizeFigures {
+        SizeFigures {
+            archive_bytes: self.archive.round(),
+            csv_bytes: self.csv.round(),
+            mesh_bytes: self.mesh.round(),
+            states: self.states,
+            summary_bytes: self.summary.round(),
+            total_bytes: self.total().round(),
+            vtk_bytes: self.vtk.round(),
+        }
     }
+}
+
+/// The estimated sizes in `sgbem check --json`, in bytes; fields in alphabetical order,
+/// the order of the keys as the file has always been written.
+#[derive(Debug, Clone, Serialize)]
+pub struct SizeFigures {
+    pub archive_bytes: f64,
+    pub csv_bytes: f64,
+    pub mesh_bytes: f64,
+    pub states: usize,
+    pub summary_bytes: f64,
+    pub total_bytes: f64,
+    pub vtk_bytes: f64,
 }
 
 /// HDF5's bytes per dataset besides its values.

@@ -182,11 +182,15 @@ pub(super) fn write_model(file: &h5::File, rec: &RunRecord) -> R<()> {
     put_attr(root, "format_version", FORMAT_VERSION)?;
     put_attr_str(root, "tool_version", &rec.tool_version)?;
     put_attr_str(root, "scene", &rec.scene_text)?;
-    let overrides = serde_json::Value::from(rec.overrides.clone());
-    put_attr_str(root, "overrides", &overrides.to_string())?;
+    let overrides = serde_json::to_string(&rec.overrides).unwrap_or_default();
+    put_attr_str(root, "overrides", &overrides)?;
     put_attr_str(root, "mesh_sha256", &rec.mesh_sha256)?;
-    let units = serde_json::json!({"length": rec.units.length, "force": rec.units.force});
-    put_attr_str(root, "units", &units.to_string())?;
+    let units = serde_json::to_string(&crate::output::summary::Units {
+        force: rec.units.force.clone(),
+        length: rec.units.length.clone(),
+    })
+    .unwrap_or_default();
+    put_attr_str(root, "units", &units)?;
     put_attr_str(root, "title", &rec.title)?;
     put_attr_str(root, "plane", plane_name(rec.plane))?;
     put_attr(root, "thickness", rec.thickness)?;
