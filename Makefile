@@ -143,16 +143,14 @@ out/%/summary.json: pipelines/%.toml $(MESHES) | build
 	  $(SGBEM) run $< --out out/$* --quiet; \
 	fi
 
-# The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa (a sweep of the
-# base scene: one folder per cohesion in out/vault/sweep/, with sweep.csv), then the tables
-# beside the paper's Tables 3 and 4 (out/vault/table3.md, table4.md).
+# The paper's example 3: the vault on two piers for cohesion 0.4 ... 0 MPa (the sweep file
+# pipelines/sweeps/vault.toml: one folder per cohesion in out/vault/sweep/, with sweep.csv),
+# then the tables beside the paper's Tables 3 and 4 (out/vault/table3.md, table4.md).
 .PHONY: vault
-VAULT_COHESION := 4.0,3.0,2.0,1.0,0.0# daN/cm² (0.4 ... 0 MPa)
 JOBS ?= 2
 
 vault: build out/mesh/vault.msh
-	$(SGBEM) sweep pipelines/vault_c0.toml --set 'interface.*.cohesion=$(VAULT_COHESION)' \
-	  --jobs $(JOBS) --out out/vault/sweep
+	$(SGBEM) sweep --file pipelines/sweeps/vault.toml --jobs $(JOBS)
 	python3 pipelines/vault_table.py out
 
 # A sweep file (pipelines/sweeps/*.toml: scene, --set values, folder) through the generic

@@ -83,20 +83,32 @@ enum Command {
     },
     /// Run a scene for every combination of values and tabulate the headline results.
     Sweep {
-        /// The scene file (TOML).
-        scene: PathBuf,
+        /// The scene file (TOML); not with `--file`, whose `scene` it is.
+        #[arg(required_unless_present = "file", conflicts_with = "file")]
+        scene: Option<PathBuf>,
+        /// A sweep file (TOML: `scene`, `set`, and optionally `out`, `columns`, `parts`,
+        /// `allow_geo_shell`; paths relative to the file). The options given with it
+        /// override the file's: `--out` and `--columns` replace its own, a `--set` replaces
+        /// the file's entry for the same key (or adds a key), `--parts` and
+        /// `--allow-geo-shell` turn on.
+        #[arg(long, value_name = "FILE")]
+        file: Option<PathBuf>,
         /// A swept key and its values, e.g. `--set interface.joint.cohesion=0,1,2`
         /// (repeatable: every combination runs; `*` matches every key of a table, e.g.
         /// `interface.*.cohesion`; a single value is a plain override).
-        #[arg(long = "set", value_name = "KEY=V1,V2,...", required = true)]
+        #[arg(
+            long = "set",
+            value_name = "KEY=V1,V2,...",
+            required_unless_present = "file"
+        )]
         set: Vec<String>,
         /// Runs at a time.
         #[arg(long, default_value_t = 1)]
         jobs: usize,
         /// Folder for the runs (one sub-folder per point, named from key=value) and
-        /// sweep.csv / sweep.md.
-        #[arg(long)]
-        out: PathBuf,
+        /// sweep.csv / sweep.md (with `--file`: the file's `out`, else out/<file name>).
+        #[arg(long, required_unless_present = "file")]
+        out: Option<PathBuf>,
         /// Mesh a `.geo` even if it runs programs (gmsh's SystemCall, OnelabRun): only
         /// for a .geo you have read and trust.
         #[arg(long)]
@@ -427,6 +439,7 @@ fn main() -> ExitCode {
         }
         Command::Sweep {
             scene,
+            file,
             set,
             jobs,
             out,
@@ -443,17 +456,15 @@ fn main() -> ExitCode {
                 (_, _, true) => sgbem::sweep::Mode::Table,
                 _ => sgbem::sweep::Mode::All,
             };
-            match sgbem::sweep::Columns::parse(columns.as_deref(), parts) {
-                Ok(cols) => sweep_command(
-                    &scene,
-                    &set,
-                    (jobs, allow_geo_shell),
-                    &out,
-                    (mode, &cols),
-                    &mut interrupted,
-                ),
-                Err(m) => Err(sgbem::error::Error::input(&scene, m)),
-            }
+            let given = sgbem::sweep::file::Given {
+                scene,
+                sets: set,
+                out,
+                columns,
+                parts,
+                allow_geo_shell,
+            };
+            sweep_command(file.as_deref(), given, jobs, mode, &mut interrupted)
         }
         Command::Inspect { archive } => {
             sgbem::output::archive::inspect(&archive).and_then(|text| out(&text))
@@ -481,17 +492,38 @@ fn fail(e: &Error) -> ExitCode {
     ExitCode::from(e.exit_code() as u8)
 }
 
-/// `sgbem sweep` in `mode`: the runs, the table, and the exit status of the sweep (130 when
-/// a signal ended it, through `interrupted`).
+/// `sgbem sweep` of `given` (the command line, merged into the sweep file `file` if given)
+/// in `mode`: the runs, the table, and the exit status of the sweep (130 when a signal ended
+/// it, through `interrupted`).
 fn sweep_command(
-    scene: &std::path::Path,
-    set: &[String],
-    (jobs, allow_geo_shell): (usize, bool),
-    out: &std::path::Path,
-    (mode, columns): (sgbem::sweep::Mode, &sgbem::sweep::Columns),
+    file: Option<&std::path::Path>,
+    given: sgbem::sweep::file::Given,
+    jobs: usize,
+    mode: sgbem::sweep::Mode,
     interrupted: &mut bool,
 ) -> sgbem::error::Result<()> {
-    let w = sgbem::sweep::sweep(scene, set, jobs, out, allow_geo_shell, mode, columns)?;
+    let given = match file {
+        Some(f) => sgbem::sweep::file::read(f, given)?,
+        None => given,
+    };
+    // The command line makes both present (clap's required_unless_present), a file both.
+    let (Some(scene), Some(out)) = (&given.scene, &given.out) else {
+        return Err(Error::input(
+            "sgbem sweep",
+            "give a SCENE with --set and --out, or a sweep file with --file",
+        ));
+    };
+    let columns = sgbem::sweep::Columns::parse(given.columns.as_deref(), given.parts)
+        .map_err(|m| Error::input(scene, m))?;
+    let w = sgbem::sweep::sweep(
+        scene,
+        &given.sets,
+        jobs,
+        out,
+        given.allow_geo_shell,
+        mode,
+        &columns,
+    )?;
     match mode {
         sgbem::sweep::Mode::List => return Ok(()),
         sgbem::sweep::Mode::Point(k) => {

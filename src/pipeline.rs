@@ -406,22 +406,28 @@ fn record_solution(
             .into_iter()
             .take(recorded)
         {
-            states.push(IterateRecord::new(
-                st.index,
-                st.load_step,
-                st.load_factor,
-                st.fields,
-                st.interfaces,
-            ));
+            states.push(
+                IterateRecord::new(
+                    st.index,
+                    st.load_step,
+                    st.load_factor,
+                    st.fields,
+                    st.interfaces,
+                )
+                .with_body_force(&st.body_force, &rec.bodies),
+            );
         }
     }
-    states.push(IterateRecord::new(
-        final_index,
-        final_step,
-        solved.load_factor,
-        solved.fields.clone(),
-        solved.interfaces.clone(),
-    ));
+    states.push(
+        IterateRecord::new(
+            final_index,
+            final_step,
+            solved.load_factor,
+            solved.fields.clone(),
+            solved.interfaces.clone(),
+        )
+        .with_body_force(&solved.body_force, &rec.bodies),
+    );
     rec.states = states;
     // The archive's thread gets the states' fields shared, not copied (IterateRecord); the
     // history goes there alone (the VTK files do not need it).
@@ -714,6 +720,23 @@ fn write_tables(
         write_staged(
             &out_dir.join("thrust.csv"),
             csv::thrust_table(&rows, &units.force, &units.length).as_bytes(),
+        )?;
+        // The hubs as the final state's VTK thrust block draws them.
+        let pairs: Vec<(usize, usize)> = loaded
+            .model
+            .interfaces
+            .iter()
+            .map(|it| (it.body_a, it.body_b))
+            .collect();
+        let down = crate::post::thrust::down(&solved.body_force);
+        let hubs = crate::post::thrust::hubs(&pairs, &post.thrust, &down);
+        let named: Vec<(&str, &crate::post::thrust::Hub)> = hubs
+            .iter()
+            .map(|h| (bodies.get(h.body).map_or("", |b| b.name.as_str()), h))
+            .collect();
+        write_staged(
+            &out_dir.join("thrust_hubs.csv"),
+            csv::hub_table(&named, &units.force, &units.length).as_bytes(),
         )?;
     }
     for (name, rows) in &post.sections {

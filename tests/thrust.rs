@@ -8,6 +8,8 @@
 
 mod support;
 
+use std::collections::BTreeMap;
+
 use serde_json::Value;
 use support::*;
 
@@ -221,8 +223,9 @@ fn arch_thrust_line_stays_in_the_ring() {
 
 /// A running-bond wall (geo/wall.geo: 3 courses of 2 bricks, 0.4 × 0.2 m, the middle
 /// course a half, a whole and a half brick) on a clamped base under its weight, the joints
-/// unilateral and sticking.
-fn bond_scene() -> String {
+/// unilateral and sticking: `mesh` the .geo, `body_force` the weight's vector, `extra` more
+/// tables.
+fn bond_scene(mesh: &std::path::Path, body_force: &str, extra: &str) -> String {
     format!(
         r#"
 plane = "strain"
@@ -235,7 +238,7 @@ nj = 4
 [defaults.body]
 young = 5.0e6
 poisson = 0.2
-body_force = [0.0, -20.0]
+body_force = {body_force}
 [defaults.interface]
 model = "unilateral"
 tangential = "stick"
@@ -246,8 +249,9 @@ uy = 0.0
 directory = "out"
 field = false
 history = "final"
+{extra}
 "#,
-        root().join("geo/wall.geo").display()
+        mesh.display()
     )
 }
 
@@ -313,27 +317,54 @@ fn thrust_block(vtu: &str) -> (Vec<[f64; 2]>, Vec<Vec<usize>>, Vec<i32>) {
     (points, cells, joint)
 }
 
-/// A running-bond wall: every brick with more than two loaded joints gets a hub (a point with
-/// `joint` −1) and a line from each of its joints' points of application to it; the line
-/// ends are the joints' points (summary.json) to 1e-12; the hub lies on the line of action
-/// of the resultant of the brick's bed joints below (above for the first course), whose
-/// moment about it vanishes, and the brick balances about it: its joints' forces (N, T at
-/// their points) and its weight at its centroid, to 1e-10 of the moments' scale.
-#[test]
-fn running_bond_bricks_get_their_force_paths() {
-    let dir = tmpdir("thrust-bond");
-    let scene = write(&dir, "bond.toml", &bond_scene());
-    let out = dir.join("out");
-    let s = run(&scene, &out);
-    assert_eq!(s["status"], "converged");
-    let (_, rows) = thrust_csv(&out);
+/// `thrust_hubs.csv` as body -> (x, y, R, group, joints).
+#[allow(clippy::type_complexity)]
+fn hub_csv(out: &std::path::Path) -> BTreeMap<String, ([f64; 2], [f64; 2], String, usize)> {
+    let text = std::fs::read_to_string(out.join("thrust_hubs.csv")).expect("thrust_hubs.csv");
+    let mut lines = text.lines();
+    assert_eq!(
+        lines.next(),
+        Some("body,x [m],y [m],R_x [kN],R_y [kN],group,joints")
+    );
+    let num = |c: &str| c.parse::<f64>().expect("a number");
+    lines
+        .map(|l| {
+            let c: Vec<&str> = l.split(',').collect();
+            let joints = c[6].parse().expect("a count");
+            let v = (
+                [num(c[1]), num(c[2])],
+                [num(c[3]), num(c[4])],
+                c[5].to_string(),
+                joints,
+            );
+            (c[0].to_string(), v)
+        })
+        .collect()
+}
+
+/// The hubs of the bond wall run into `out` (summary `s`), checked: each brick with more
+/// than two loaded joints gets a hub (a point with `joint` −1) and a line from each of its
+/// joints' points of application to it; the line ends are the joints' points (summary.json)
+/// to 1e-12; `thrust_hubs.csv` has the same hubs, bit for bit; the hub lies on the line of
+/// action of the resultant of the brick's bed joints below (above for the first course),
+/// whose moment about it vanishes and which is the CSV's resultant, and the brick balances
+/// about it: its joints' forces (N, T at their points) and its weight at its centroid, to
+/// 1e-10 of the moments' scale. `back` takes the run's coordinates to the upright wall's
+/// (where the weight points to −y), in which the checks are made. Returns each brick's hub
+/// in the upright wall.
+fn check_hubs(
+    out: &std::path::Path,
+    s: &Value,
+    back: &dyn Fn([f64; 2]) -> [f64; 2],
+) -> BTreeMap<String, [f64; 2]> {
+    let (_, rows) = thrust_csv(out);
     let f = |t: &Value, k: &str| t[k].as_f64().unwrap_or(f64::NAN);
-    // Per joint: bodies, point, N, T (None without a point).
+    // Per joint: bodies, point (upright), N, T (None without a point).
     let joints: Vec<_> = rows
         .iter()
         .map(|r| {
             let t = &s["thrust"][&r[0]];
-            let p = t["x"].as_f64().map(|x| [x, f(t, "y")]);
+            let p = t["x"].as_f64().map(|x| back([x, f(t, "y")]));
             (
                 r[1].clone(),
                 r[2].clone(),
@@ -343,7 +374,7 @@ fn running_bond_bricks_get_their_force_paths() {
             )
         })
         .collect();
-    let mut loaded: std::collections::BTreeMap<String, Vec<usize>> = Default::default();
+    let mut loaded: BTreeMap<String, Vec<usize>> = Default::default();
     for (k, j) in joints.iter().enumerate() {
         if j.2.is_some() {
             loaded.entry(j.0.clone()).or_default().push(k);
@@ -364,6 +395,9 @@ fn running_bond_bricks_get_their_force_paths() {
     let (points, cells, joint) = thrust_block(&vtu);
     let hubs: Vec<usize> = (0..points.len()).filter(|&i| joint[i] == -1).collect();
     assert_eq!(hubs.len(), many.len());
+    let csv = hub_csv(out);
+    assert_eq!(csv.len(), hubs.len(), "{csv:?}");
+    let mut found = BTreeMap::new();
     let mut worst = (0.0f64, 0.0f64, 0.0f64);
     for &h in &hubs {
         // The lines ending at the hub: their other ends are the brick's joints' points.
@@ -381,17 +415,23 @@ fn running_bond_bricks_get_their_force_paths() {
             })
             .expect("the hub's brick");
         assert_eq!(&js, &loaded[*body], "{body}");
+        let (cx, resultant, group, count) = &csv[*body];
+        assert_eq!(
+            (*cx, *count),
+            (points[h], js.len()),
+            "{body}: CSV against VTK"
+        );
         for (&e, &k) in ends.iter().zip(&js) {
             let p = joints[k].2.unwrap_or_default();
-            worst.0 = worst
-                .0
-                .max((points[e][0] - p[0]).abs().max((points[e][1] - p[1]).abs()));
+            let q = back(points[e]);
+            worst.0 = worst.0.max((q[0] - p[0]).abs().max((q[1] - p[1]).abs()));
         }
         // Forces on the brick: −N n + T τ with n its outward normal, τ = (−n_y, n_x) of the
         // first body's normal.
         let rect = bond_brick(body);
-        let x = points[h];
+        let x = back(points[h]);
         let (mut below, mut rest, mut scale) = (0.0, 0.0, 0.0);
+        let mut r_below = [0.0; 2];
         let has_below = js.iter().any(|&k| {
             let other = if joints[k].0 == **body {
                 &joints[k].1
@@ -400,6 +440,7 @@ fn running_bond_bricks_get_their_force_paths() {
             };
             outward(rect, bond_brick(other))[1] < 0.0
         });
+        assert_eq!(group, if has_below { "below" } else { "above" }, "{body}");
         for &k in &js {
             let (a, b, p, n, t) = &joints[k];
             let na = outward(bond_brick(a), bond_brick(b));
@@ -414,11 +455,19 @@ fn running_bond_bricks_get_their_force_paths() {
             let ny = sign * na[1];
             if (has_below && ny < 0.0) || (!has_below && ny > 0.0) {
                 below += m;
+                r_below = [r_below[0] + fb[0], r_below[1] + fb[1]];
             } else {
                 rest += m;
             }
             scale += r[0].hypot(r[1]) * fb[0].hypot(fb[1]);
         }
+        // The CSV's resultant is the group's (in the run's coordinates).
+        let rr = back(*resultant);
+        let size = r_below[0].hypot(r_below[1]);
+        assert!(
+            (rr[0] - r_below[0]).hypot(rr[1] - r_below[1]) < 1e-9 * size,
+            "{body}: R {rr:?} against {r_below:?}"
+        );
         // The weight at the centroid.
         let w = [0.0, -20.0 * (rect[1] - rect[0]) * (rect[3] - rect[2])];
         let g = [
@@ -437,6 +486,7 @@ fn running_bond_bricks_get_their_force_paths() {
             rect[2..].iter().any(|y| (x[1] - y).abs() < 1e-12),
             "{body}: {x:?}"
         );
+        found.insert(body.to_string(), x);
     }
     println!(
         "ends {:.1e}, group moment {:.1e}, balance {:.1e}",
@@ -446,4 +496,80 @@ fn running_bond_bricks_get_their_force_paths() {
         worst.0 < 1e-12 && worst.1 < 1e-10 && worst.2 < 1e-10,
         "{worst:?}"
     );
+    found
+}
+
+/// Runs the bond wall meshed from `mesh` under `body_force` (and `extra` tables) in a folder
+/// named `name`; returns its run folder and summary.
+fn run_bond(
+    name: &str,
+    mesh: &std::path::Path,
+    body_force: &str,
+    extra: &str,
+) -> (std::path::PathBuf, Value) {
+    let dir = tmpdir(name);
+    let scene = write(&dir, "bond.toml", &bond_scene(mesh, body_force, extra));
+    let out = dir.join("out");
+    let s = run(&scene, &out);
+    assert_eq!(s["status"], "converged");
+    (out, s)
+}
+
+/// A running-bond wall: every brick with more than two loaded joints gets a hub and a line
+/// from each of its joints' points to it, the same hubs in thrust_hubs.csv, and the brick
+/// balances about its hub ([`check_hubs`]).
+#[test]
+fn running_bond_bricks_get_their_force_paths() {
+    let wall = root().join("geo/wall.geo");
+    let (out, s) = run_bond("thrust-bond", &wall, "[0.0, -20.0]", "");
+    check_hubs(&out, &s, &|p| p);
+}
+
+/// The same wall turned a quarter turn (counter-clockwise: its base on the right, x = 0)
+/// under its weight along +x, a sideways body force: its bed joints are vertical, so "below"
+/// must come from the body force (a −y rule would take the head joints). The hubs are the
+/// upright wall's turned (to 1e-9 of the wall's size) and the bricks balance about them as
+/// there. The weight grows in pseudo-time (`20 t`, t = 0.5 then 1), so the final state's
+/// body force is not the one the model records (t = 0.5): the archive keeps the state's, and
+/// `sgbem export` draws the same thrust block.
+#[test]
+fn sideways_body_force_turns_the_hubs() {
+    let dir = tmpdir("thrust-bond-turned");
+    let turned = write(
+        &dir,
+        "turned.geo",
+        &format!(
+            "Include \"{}\";\nRotate {{{{0, 0, 1}}, {{0, 0, 0}}, Pi/2}} {{ Surface{{:}}; }}\n",
+            root().join("geo/wall.geo").display()
+        ),
+    );
+    let time = "[solve]\ntime = [0.5, 1.0]";
+    let (out, s) = run_bond("thrust-bond-sideways", &turned, "[\"20*t\", 0.0]", time);
+    // (x, y) of the turned wall is (−y, x) of the upright one.
+    let turned_hubs = check_hubs(&out, &s, &|p| [p[1], -p[0]]);
+    let vtk = dir.join("exported");
+    let a = out.join("archive.h5");
+    let (code, _, err) = sgbem(&[
+        "export",
+        a.to_str().unwrap(),
+        "--vtk",
+        vtk.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let file = "thrust_0000.vtu";
+    let ran = std::fs::read(out.join("vtk").join(file)).unwrap();
+    assert!(
+        ran == std::fs::read(vtk.join(file)).unwrap(),
+        "export draws another block"
+    );
+    let wall = root().join("geo/wall.geo");
+    let (out, s) = run_bond("thrust-bond-upright", &wall, "[0.0, -20.0]", "");
+    let upright = check_hubs(&out, &s, &|p| p);
+    let mut worst = 0.0f64;
+    for (body, x) in &upright {
+        let y = turned_hubs[body];
+        worst = worst.max((x[0] - y[0]).abs().max((x[1] - y[1]).abs()));
+    }
+    println!("turned against upright hubs: {worst:.1e} m");
+    assert!(worst < 1e-9 * 0.8, "{worst}");
 }

@@ -565,6 +565,139 @@ fn sweep_runs_every_point_and_tabulates() {
     assert_eq!(a.values, ["[0.5, 1]", "[1]"]);
 }
 
+/// A sweep file (`sgbem sweep --file`) is the sweep of its command line: the same points
+/// and byte for byte the same sweep.csv and sweep.md, with the scene and the folder relative
+/// to the file. The command line's `--set` replaces the file's entry for the same key in its
+/// place or adds a key, `--out` replaces its folder.
+#[test]
+fn sweep_file_gives_the_tables_of_its_command_line() {
+    let dir = tmpdir("workflow-sweep-file");
+    let scene = geo_scene(&dir, "");
+    std::fs::create_dir_all(dir.join("sweeps")).unwrap();
+    let file = write(
+        &dir.join("sweeps"),
+        "ty.toml",
+        "# two loads, two starts\n\
+         scene = \"../scene.toml\"\n\
+         set = [\"boundary.top.ty=-1,-2\", \"interface.*.initial=closed,open\"]\n\
+         out = \"../from_file\"\n\
+         columns = [\"detached_length\", \"normal_resultant\", \"tangential_resultant\"]\n",
+    );
+    let f = file.to_str().unwrap();
+    let (code, _, err) = sgbem(&["sweep", "--file", f, "--jobs", "2"]);
+    assert_eq!(code, 0, "{err}");
+    let by_file = dir.join("from_file");
+    let by_line = dir.join("from_line");
+    let sets = ["boundary.top.ty=-1,-2", "interface.*.initial=closed,open"];
+    let columns = [
+        "--columns",
+        "detached_length,normal_resultant,tangential_resultant",
+    ];
+    let (code, _, err) = sweep_into(scene.to_str().unwrap(), &sets, &by_line, &columns);
+    assert_eq!(code, 0, "{err}");
+    for t in ["sweep.csv", "sweep.md"] {
+        let (a, b) = (
+            std::fs::read(by_file.join(t)),
+            std::fs::read(by_line.join(t)),
+        );
+        assert_eq!(a.unwrap(), b.unwrap(), "{t}");
+    }
+    let csv = std::fs::read_to_string(by_file.join("sweep.csv")).unwrap();
+    assert_eq!(csv.lines().count(), 5, "{csv}");
+    assert!(csv.contains("joint.tangential_resultant"), "{csv}");
+    // The command line over the file: a key of the file replaced in its place, one added,
+    // the folder replaced.
+    let other = dir.join("other");
+    let (code, listed, err) = sgbem(&[
+        "sweep",
+        "--file",
+        f,
+        "--set",
+        "solve.method=qp",
+        "--set",
+        "boundary.top.ty=-3",
+        "--out",
+        other.to_str().unwrap(),
+        "--list",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let first = listed.lines().next().unwrap_or_default();
+    assert_eq!(
+        first,
+        format!(
+            "1\t{}\t--set 'boundary.top.ty=-3' --set 'interface.*.initial=closed' --set \
+             'solve.method=qp'",
+            other.join("ty=-3_initial=closed_method=qp").display()
+        )
+    );
+    assert_eq!(listed.lines().count(), 2, "{listed}");
+}
+
+/// A sweep file's mistakes are input errors (exit 2) naming the file and what to fix, before
+/// anything runs: an unknown key (with the allowed keys), a scene that is not there, a
+/// missing `set`, a value of the wrong type, a scene given twice.
+#[test]
+fn sweep_file_errors_name_the_file_and_the_key() {
+    let dir = tmpdir("workflow-sweep-file-errors");
+    geo_scene(&dir, "");
+    let out = dir.join("out");
+    let cases = [
+        (
+            "scene = \"scene.toml\"\nset = [\"boundary.top.ty=-1\"]\ncolums = [\"pairs\"]\n",
+            vec![
+                "unknown key `colums`",
+                "did you mean `columns`",
+                "allowed keys: scene, set, out, columns, parts, allow_geo_shell",
+            ],
+        ),
+        (
+            "scene = \"../scene.toml\"\nset = [\"boundary.top.ty=-1\"]\n",
+            vec![
+                "scene = \"../scene.toml\": no such scene file",
+                "relative to the sweep file",
+            ],
+        ),
+        (
+            "scene = \"scene.toml\"\n",
+            vec!["`set = [\"KEY=V1,V2,...\", ...]` is required"],
+        ),
+        (
+            "scene = \"scene.toml\"\nset = [\"boundary.top.ty=-1\"]\nparts = \"yes\"\n",
+            vec!["`parts` must be true or false"],
+        ),
+    ];
+    for (k, (text, words)) in cases.iter().enumerate() {
+        let name = format!("bad{k}.toml");
+        let file = write(&dir, &name, text);
+        let o = out.to_str().unwrap();
+        let (code, _, err) = sgbem(&["sweep", "--file", file.to_str().unwrap(), "--out", o]);
+        assert_eq!(code, 2, "{name}: {err}");
+        assert!(err.contains(&name), "{name}: {err}");
+        for w in words {
+            assert!(err.contains(w), "{name}: `{w}` not in {err}");
+        }
+        assert!(!out.exists(), "{name}: nothing runs");
+    }
+    let file = write(
+        &dir,
+        "good.toml",
+        "scene = \"scene.toml\"\nset = [\"a=1\"]\n",
+    );
+    let scene = dir.join("scene.toml");
+    let (code, _, err) = sgbem(&[
+        "sweep",
+        scene.to_str().unwrap(),
+        "--file",
+        file.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("cannot be used with"), "{err}");
+    let missing = dir.join("none.toml");
+    let (code, _, err) = sgbem(&["sweep", "--file", missing.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("none.toml: no such sweep file"), "{err}");
+}
+
 /// timings.json counts every second once: the collapse search's trials (each a step with
 /// its own assembly and contact stages) are itemised under `within.collapse_search`, not
 /// added to the top-level stages again, so that `stages.total` is the run's wall time (the

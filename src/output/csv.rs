@@ -1,10 +1,11 @@
 //! CSV tables: one row per interface pair (final state), one row per section point, one row
-//! per joint (`thrust.csv`, final state).
+//! per joint (`thrust.csv`, final state) and the hubs of the bodies with more joints
+//! (`thrust_hubs.csv`).
 
 use std::fmt::Write;
 
 use crate::input::model::{Body, Interface};
-use crate::post::thrust::Thrust;
+use crate::post::thrust::{Hub, Thrust};
 use crate::solution::{InterfaceResult, PairStatus};
 
 /// `x,y,s,status,normal_traction,tangential_traction,normal_opening,tangential_slip,gap`:
@@ -126,6 +127,31 @@ pub fn thrust_table(rows: &[ThrustRow], force: &str, length: &str) -> String {
             }
             None => o.push_str(",,,,,,,\n"),
         }
+    }
+    o
+}
+
+/// `thrust_hubs.csv`: per body with a hub (post/thrust.rs `hubs`, final state), in body order,
+/// `body,x,y,R_x,R_y,group,joints`: the body's name, its hub, the resultant on the body of
+/// its group of joints (`below`: its bed joints below, along its body force; `above`: those
+/// above, where none is below) and how many loaded joints the hub joins; the scene's units in
+/// brackets as in `thrust.csv`. Only the header where no body has a hub.
+pub fn hub_table(rows: &[(&str, &Hub)], force: &str, length: &str) -> String {
+    let f = if force.is_empty() { "force" } else { force };
+    let l = if length.is_empty() { "length" } else { length };
+    let mut o = format!("body,x [{l}],y [{l}],R_x [{f}],R_y [{f}],group,joints\n");
+    for (name, h) in rows {
+        let _ = writeln!(
+            o,
+            "{},{:e},{:e},{:e},{:e},{},{}",
+            quoted(name),
+            h.x[0] + 0.0,
+            h.x[1] + 0.0,
+            h.resultant[0] + 0.0,
+            h.resultant[1] + 0.0,
+            if h.below { "below" } else { "above" },
+            h.joints.len()
+        );
     }
     o
 }

@@ -452,6 +452,10 @@ pub struct IterateRecord {
     pub interfaces: Arc<Vec<InterfaceResult>>,
     /// Interior values, one per body, or empty when no field was evaluated for this state.
     pub interior: Vec<InteriorRecord>,
+    /// The body forces of the state (before the load factor), one per body, where they
+    /// differ from the bodies' recorded ones (a body force in pseudo-time, the collapse
+    /// search's multiplier); empty: the bodies' own ([`IterateRecord::body_forces`]).
+    pub body_force: Vec<Option<[f64; 2]>>,
 }
 
 impl IterateRecord {
@@ -469,6 +473,32 @@ impl IterateRecord {
             fields: Arc::new(fields),
             interfaces: Arc::new(interfaces),
             interior: Vec::new(),
+            body_force: Vec::new(),
+        }
+    }
+
+    /// The state with the body forces `body_force` (one per body of `bodies`), kept only where
+    /// they differ from the bodies' recorded ones.
+    pub fn with_body_force(
+        mut self,
+        body_force: &[Option<[f64; 2]>],
+        bodies: &[BodyRecord],
+    ) -> IterateRecord {
+        let own: Vec<Option<[f64; 2]>> = bodies.iter().map(|b| b.body_force).collect();
+        self.body_force = if body_force == own.as_slice() {
+            Vec::new()
+        } else {
+            body_force.to_vec()
+        };
+        self
+    }
+
+    /// The body forces of the state, one per body of `bodies` (before the load factor).
+    pub fn body_forces(&self, bodies: &[BodyRecord]) -> Vec<Option<[f64; 2]>> {
+        if self.body_force.len() == bodies.len() {
+            self.body_force.clone()
+        } else {
+            bodies.iter().map(|b| b.body_force).collect()
         }
     }
 }

@@ -823,7 +823,7 @@ fn field_grid(rec: &RunRecord, k: usize) -> Grid {
 /// `in_closed_part` −1, `displacement` the mean of its joints' points'. Also the joints'
 /// names, one a line, for the field data `joint_names`.
 fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
-    use crate::post::thrust::{hubs, segments, thrust};
+    use crate::post::thrust::{down, hubs, segments, thrust};
     let st = &rec.states[k];
     let mut g = ThrustColumns::default();
     let mut point_of = vec![None; rec.interfaces.len()];
@@ -863,7 +863,8 @@ fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
             cell_types.push(VTK_LINE);
         }
     }
-    for h in hubs(&bodies, &all, rec.bodies.len()) {
+    let down = down(&st.body_forces(&rec.bodies));
+    for h in hubs(&bodies, &all, &down) {
         let ends: Vec<u64> = h.joints.iter().filter_map(|&j| point_of[j]).collect();
         let mut u = [0.0; 2];
         for &e in &ends {

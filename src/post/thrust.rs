@@ -31,7 +31,8 @@
 //!
 //! The VTK line: [`segments`] joins the two joints of a body; a body with more ([`hubs`]) gets
 //! a line from each joint's point to its hub, the point where the resultant of its bed joints
-//! below crosses the bed, about which that resultant has no moment (docs/thrust.md).
+//! below ("below" along the body's body force, −y without one) crosses the bed, about which
+//! that resultant has no moment (docs/thrust.md); the hubs are also `thrust_hubs.csv`.
 
 use crate::solution::{InterfaceResult, PairStatus};
 
@@ -239,62 +240,97 @@ pub struct Hub {
     pub x: [f64; 2],
     /// The body's joints that carry a point, in run order.
     pub joints: Vec<usize>,
+    /// The resultant on the body of its group (the joints below, or above), times the
+    /// thickness: `R` of [`hubs`].
+    pub resultant: [f64; 2],
+    /// The group is the joints below the body (else above it).
+    pub below: bool,
 }
 
 /// A joint is a bed joint below the body where the body's outward normal points down by
 /// more than this (cos 60°), above where it points up by more.
 const BED: f64 = 0.5;
 
+/// Each body's "down": the direction of its body force `body_force` (of the state), −y where
+/// it has none, or a zero or not finite one.
+pub fn down(body_force: &[Option<[f64; 2]>]) -> Vec<[f64; 2]> {
+    body_force
+        .iter()
+        .map(|f| {
+            let f = f.unwrap_or_default();
+            let len = f[0].hypot(f[1]);
+            if len > 0.0 && len.is_finite() {
+                [f[0] / len, f[1] / len]
+            } else {
+                [0.0, -1.0]
+            }
+        })
+        .collect()
+}
+
 /// The hubs of the bodies with more than two joints that carry a point (docs/thrust.md
-/// "Bodies with more joints"). `bodies[k]` is joint k's (first, second) body. Body `b`'s
-/// group G: its loaded joints whose outward normal (of `b`) points down (`n_y < −0.5`), or
-/// where there is none, up (`n_y > 0.5`). The hub lies on the line of action of G's resultant
-/// `R = Σ F_j`: with `M` the moment of G's forces about the centre `m = Σ N_j p_j / Σ N_j`
-/// of its points of application, `x = m + M (R_y, −R_x) / |R|²`, so that G's moment about
-/// the hub vanishes. On a straight bed M = 0 and the hub is `m`. By the body's equilibrium
-/// the rest of its loads (the other joints, its weight, loads on its sides) have the
-/// resultant `−R` on the same line. No hub where G is empty, carries no compression or no
-/// resultant.
-pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], n_bodies: usize) -> Vec<Hub> {
+/// "Bodies with more joints"). `bodies[k]` is joint k's (first, second) body; `down[b]` body
+/// b's unit "down" ([`down`]: its body force's direction, else −y). Body `b`'s group G: its
+/// loaded joints whose outward normal n (of `b`) points down (`n · down > 0.5`), or where
+/// there is none, up (`n · down < −0.5`). The hub lies on the line of action of G's resultant
+/// `R = Σ F_j`: with `M` the moment of G's forces about the centre `m = Σ N_j p_j / Σ N_j` of
+/// its points of application, `x = m + M (R_y, −R_x) / |R|²`, so that G's moment about the
+/// hub vanishes. On a straight bed M = 0 and the hub is `m`. By the body's equilibrium the
+/// rest of its loads (the other joints, its weight, loads on its sides) have the resultant
+/// `−R` on the same line. No hub where G is empty, carries no compression or no resultant.
+pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], down: &[[f64; 2]]) -> Vec<Hub> {
     let has_point: Vec<bool> = thrusts.iter().map(|t| t.point.is_some()).collect();
     let mut out = Vec::new();
-    for (body, joints) in loaded_joints(bodies, &has_point, n_bodies)
+    for (body, joints) in loaded_joints(bodies, &has_point, down.len())
         .into_iter()
         .enumerate()
     {
         if joints.len() <= 2 {
             continue;
         }
-        // Force, moment and outward normal as body `body` sees joint k.
+        let d = down[body];
+        // Force, moment and outward normal along "down" as body `body` sees joint k.
         let seen = |k: usize| {
             let t = &thrusts[k];
             let sign = if bodies[k].0 == body { 1.0 } else { -1.0 };
             let f = [sign * t.force[0], sign * t.force[1]];
-            (f, sign * t.moment, sign * t.normal_mean[1])
+            let n = t.normal_mean;
+            (f, sign * t.moment, sign * (n[0] * d[0] + n[1] * d[1]))
         };
-        let group = |up: f64| -> Vec<usize> {
+        let group = |along: f64| -> Vec<usize> {
             joints
                 .iter()
                 .copied()
-                .filter(|&k| up * seen(k).2 > BED)
+                .filter(|&k| along * seen(k).2 > BED)
                 .collect()
         };
-        let below = group(-1.0);
-        let g = if below.is_empty() { group(1.0) } else { below };
-        if let Some(x) = hub(&g, thrusts, &seen) {
-            out.push(Hub { body, x, joints });
+        let below = group(1.0);
+        let (g, is_below) = if below.is_empty() {
+            (group(-1.0), false)
+        } else {
+            (below, true)
+        };
+        if let Some((x, resultant)) = hub(&g, thrusts, &seen) {
+            out.push(Hub {
+                body,
+                x,
+                joints,
+                resultant,
+                below: is_below,
+            });
         }
     }
     out
 }
 
 /// The point on the line of action of the resultant of joints `g` nearest to the centre of
-/// their normal forces (see [`hubs`]); `seen(k)`: joint k's force and moment on the body.
+/// their normal forces (see [`hubs`]), and that resultant; `seen(k)`: joint k's force and
+/// moment on the body.
 fn hub(
     g: &[usize],
     thrusts: &[Thrust],
     seen: &dyn Fn(usize) -> ([f64; 2], f64, f64),
-) -> Option<[f64; 2]> {
+) -> Option<([f64; 2], [f64; 2])> {
     let (mut r, mut m0, mut n, mut c) = ([0.0; 2], 0.0, 0.0, [0.0; 2]);
     for &k in g {
         let (f, mk, _) = seen(k);
@@ -312,7 +348,7 @@ fn hub(
     let m = [c[0] / n, c[1] / n];
     // G's moment about m: M_O − m × R.
     let mm = m0 - (m[0] * r[1] - m[1] * r[0]);
-    Some([m[0] + mm * r[1] / r2, m[1] - mm * r[0] / r2])
+    Some(([m[0] + mm * r[1] / r2, m[1] - mm * r[0] / r2], r))
 }
 
 #[cfg(test)]
@@ -398,14 +434,14 @@ mod tests {
         let load = |tn: f64, ts: f64| InterfaceResult {
             pairs: vec![pair(PairStatus::Closed, tn, ts); 2],
         };
-        let down = [0.0, -1.0];
+        let n = [0.0, -1.0];
         let thrusts = [
-            thrust(&joint(0.0, 0.0, down), &load(-1.0, 0.0), 1.0),
-            thrust(&joint(1.0, 0.0, down), &load(-3.0, 0.5), 1.0),
-            thrust(&joint(0.5, 1.0, down), &load(-4.0, 0.0), 1.0),
+            thrust(&joint(0.0, 0.0, n), &load(-1.0, 0.0), 1.0),
+            thrust(&joint(1.0, 0.0, n), &load(-3.0, 0.5), 1.0),
+            thrust(&joint(0.5, 1.0, n), &load(-4.0, 0.0), 1.0),
         ];
         let bodies = [(0, 1), (0, 2), (3, 0)];
-        let h = hubs(&bodies, &thrusts, 4);
+        let h = hubs(&bodies, &thrusts, &down(&[None; 4]));
         assert_eq!(h.len(), 1);
         assert_eq!((h[0].body, h[0].joints.clone()), (0, vec![0, 1, 2]));
         assert!(
@@ -420,5 +456,14 @@ mod tests {
         let m = thrusts[0].moment + thrusts[1].moment;
         let about = m - (h[0].x[0] * (f[0][1] + f[1][1]) - h[0].x[1] * (f[0][0] + f[1][0]));
         assert!(about.abs() < 1e-15, "{about}");
+        assert_eq!((h[0].resultant, h[0].below), ([0.5, 4.0], true));
+        // A body force along +x: no joint of body 0 is within 60° of it, or of its opposite.
+        assert!(hubs(&bodies, &thrusts, &down(&[Some([5.0, 0.0]); 4])).is_empty());
+        // Along −y again, scaled: the same hub; a zero or missing body force is −y.
+        assert_eq!(hubs(&bodies, &thrusts, &down(&[Some([0.0, -9.0]); 4])), h);
+        assert_eq!(
+            down(&[Some([0.0, 0.0]), None, Some([3.0, 4.0])]),
+            [[0.0, -1.0], [0.0, -1.0], [0.6, 0.8]]
+        );
     }
 }

@@ -35,10 +35,12 @@
 //!                        load_factor: u (N×2, the bodies' nodes concatenated), t (M×2×2),
 //!                        status, traction (P×2: s, n), jump (P×2), normal_opening (P), with
 //!                        friction tangential_status and slip (P): the interfaces' pairs
-//!                        concatenated
-//! /solution/             the final state per body and interface: attributes as a state;
-//!                        bodies/<name>/{u (n×2), t (m×2×2)}, interfaces/<name>/{status,
-//!                        traction, jump, normal_opening[, tangential_status, slip]},
+//!                        concatenated; body_force (B×2, NaN: none) where the state's body
+//!                        forces differ from the bodies' (pseudo-time, collapse search)
+//! /solution/             the final state per body and interface: attributes (and
+//!                        body_force) as a state; bodies/<name>/{u (n×2), t (m×2×2)},
+//!                        interfaces/<name>/{status, traction, jump,
+//!                        normal_opening[, tangential_status, slip]},
 //!                        interior/<name>/{mesh_nodes, x, u, sigma (k×3)}
 //! /timings/              attribute created (UTC date of the run); one scalar dataset per
 //!                        stage (seconds). The date and the timings are the only parts

@@ -466,13 +466,27 @@ fn read_state_compact(
             .collect();
         interfaces.push(InterfaceResult { pairs });
     }
-    Ok(IterateRecord::new(
+    let mut st = IterateRecord::new(
         attr_usize(g, "iteration")?,
         attr_usize(g, "load_step")?,
         attr_f64(g, "load_factor")?,
         fields,
         interfaces,
-    ))
+    );
+    st.body_force = state_body_force(g, rec)?;
+    Ok(st)
+}
+
+/// A state's `body_force` (where the writer kept it: it differs from the bodies'), empty
+/// where there is none; a row of NaN is a body without one.
+fn state_body_force(g: &Group, rec: &RunRecord) -> R<Vec<Option<[f64; 2]>>> {
+    if !g.link_exists("body_force") {
+        return Ok(Vec::new());
+    }
+    let f = get_vec2(g, "body_force", Some(rec.bodies.len()))?;
+    Ok(f.into_iter()
+        .map(|v| v.iter().all(|c| c.is_finite()).then_some(v))
+        .collect())
 }
 
 fn read_state(g: &Group, rec: &RunRecord) -> R<IterateRecord> {
@@ -531,6 +545,7 @@ fn read_state(g: &Group, rec: &RunRecord) -> R<IterateRecord> {
         fields,
         interfaces,
     );
+    st.body_force = state_body_force(g, rec)?;
     if g.link_exists("interior") {
         let gf = open_group(g, "interior")?;
         for b in &rec.bodies {

@@ -11,6 +11,8 @@
 //! and exits 130; SIGKILL to the sweep ends them through the kernel (parent-death signal).
 //! `DIR/.sgbem-sweep.json` lists the points a sweep wrote: a re-sweep removes the points of
 //! the previous one that its grid no longer has (only the files their runs listed).
+//!
+//! Files: this one runs and tabulates; `file.rs` reads sweep files (`--file`).
 
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
@@ -21,6 +23,8 @@ use serde::Serialize;
 
 use crate::error::{Error, Result};
 use crate::input::scene;
+
+pub mod file;
 
 /// One swept key and its values (the text after `=`, split at top-level commas).
 #[derive(Debug, Clone)]
