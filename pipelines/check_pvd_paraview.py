@@ -63,7 +63,7 @@ def leaves(obj):
 
 def check_states(run, times, with_field, with_thrust):
     """states.pvd: one multiblock per time, named blocks, the field only at the last time,
-    the thrust line at every time where the run has interfaces."""
+    the thrust line and the contact rows at every time where the run has interfaces."""
     pvd = os.path.join(run, "vtk", "states.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -73,7 +73,7 @@ def check_states(run, times, with_field, with_thrust):
         reader.UpdatePipeline(t)
         named = named_leaves(servermanager.Fetch(reader))
         want = ["boundary", "field"] if with_field and k == len(times) - 1 else ["boundary"]
-        want += ["thrust"] if with_thrust else []
+        want += ["thrust", "contact"] if with_thrust else []
         if [n for n, _ in named] != want:
             fail(f"{pvd} at time {t}: blocks {[n for n, _ in named]}, want {want}")
         for n, b in named:
@@ -81,9 +81,12 @@ def check_states(run, times, with_field, with_thrust):
                 fail(f"{pvd} at time {t}: empty block {n}")
             if n == "thrust" and b.GetPointData().GetArray("N") is None:
                 fail(f"{pvd} at time {t}: the thrust block has no N")
+            if n == "contact" and b.GetPointData().GetArray("contact_status") is None:
+                fail(f"{pvd} at time {t}: the contact block has no contact_status")
     print(f"check_pvd_paraview: {pvd}: {len(times)} multiblocks, block boundary at every "
           f"time, field {'at the last time only' if with_field else 'nowhere'}, thrust "
-          f"{'at every time' if with_thrust else 'nowhere (no interfaces)'}: ok")
+          f"{'at every time' if with_thrust else 'nowhere (no interfaces)'}, contact rows "
+          f"{'at every time' if with_thrust else 'nowhere'}: ok")
 
 
 def main():

@@ -13,7 +13,7 @@ files keep integers: a string array would make meshio refuse the whole file.)
 Usage: xvfb-run -a pvpython pipelines/view.py RUN_DIR OUT.png   (what `make view` runs)
 
 Reads RUN_DIR/vtk/states.pvd (one multiblock per time, blocks "boundary", where computed
-"field", where the run has interfaces "thrust"), or history.pvd of older runs; either may come back from ParaView's
+"field", where the run has interfaces "thrust" and "contact"), or history.pvd of older runs; either may come back from ParaView's
 reader as a multiblock or, with a single part, as a plain grid: both are handled. The view
 is set at the last time step. The warp factor comes from the results: 5 % of the model size
 (the larger side of its bounding box) over the largest displacement magnitude, rounded to
@@ -149,9 +149,12 @@ def main():
     reader, t = open_series(run)
     blocks = leaves(servermanager.Fetch(reader))
     thrust = [(s, b) for s, b in blocks if s is not None and s.endswith("/thrust")]
+    # The contact rows' points are for colouring by their own arrays in the GUI, not drawn.
+    contact = [(s, b) for s, b in blocks if s is not None and s.endswith("/contact")]
     field = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is not None]
     boundary = [(s, b) for s, b in blocks
-                if b.GetPointData().GetArray("stress") is None and (s, b) not in thrust]
+                if b.GetPointData().GetArray("stress") is None and (s, b) not in thrust
+                and (s, b) not in contact]
     if not boundary:
         sys.exit(f"view: {run}: the series has no boundary block at time {t:g}")
     show = field[0][1] if field else boundary[0][1]

@@ -542,13 +542,16 @@ fn export_rebuilds_identical_vtk_files() {
         [
             "boundary_0000.vtu",
             "thrust_0000.vtu",
+            "contact_0000.vtu",
             "state_0000.vtm",
             "boundary_0001.vtu",
             "thrust_0001.vtu",
+            "contact_0001.vtu",
             "state_0001.vtm",
             "boundary_0002.vtu",
             "field_0002.vtu",
             "thrust_0002.vtu",
+            "contact_0002.vtu",
             "state_0002.vtm",
             "states.pvd",
             "history.pvd"
@@ -574,7 +577,7 @@ fn export_rebuilds_identical_vtk_files() {
         cli.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "{err}");
-    assert!(out.contains("12 VTK files"), "{out}");
+    assert!(out.contains("15 VTK files"), "{out}");
     let mut c = files(&cli);
     assert!(c.remove(".sgbem-run.json").is_some());
     assert_eq!(c, a);
@@ -699,6 +702,11 @@ fn vtk_content() {
         let index = if k == 2 { 2 } else { 1 };
         want.push(format!(
             "    <DataSet index=\"{index}\" name=\"thrust\" file=\"thrust_000{k}.vtu\"/>"
+        ));
+        // The contact rows, beside it.
+        want.push(format!(
+            "    <DataSet index=\"{}\" name=\"contact\" file=\"contact_000{k}.vtu\"/>",
+            index + 1
         ));
         assert_eq!(blocks, want, "state_000{k}.vtm");
         assert!(vtm.contains("<VTKFile type=\"vtkMultiBlockDataSet\""));
@@ -966,10 +974,10 @@ fn record_from_a_model() {
     let back = read_archive(&dir.join("archive.h5")).unwrap();
     assert_eq!(back.mesh.nodes, loaded.mesh.nodes);
     assert_eq!(back.scene_text, loaded.scene.text);
-    // One state without a field: its boundary, its thrust line, its multiblock and the two
-    // series.
+    // One state without a field: its boundary, its thrust line, its contact rows, its
+    // multiblock and the two series.
     let files = write_vtk(&dir.join("vtk"), &back).unwrap();
-    assert_eq!(files.len(), 5);
+    assert_eq!(files.len(), 6);
 }
 
 /// A complete run folder (summary.json, CSV tables, archive, VTK files) from a real model

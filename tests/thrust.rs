@@ -573,3 +573,116 @@ fn sideways_body_force_turns_the_hubs() {
     println!("turned against upright hubs: {worst:.1e} m");
     assert!(worst < 1e-9 * 0.8, "{worst}");
 }
+
+/// The VTK block `contact` (`vtk/contact_NNNN.vtu`): one point per contact row, whose
+/// statuses and tractions are the interface tables' row by row, and whose normal and
+/// tangential forces add up to each joint's N and T of the thrust line (3 × 3 running-bond wall, friction 0.3:
+/// 23 of its rows slip).
+#[test]
+fn contact_block_holds_every_row_of_the_interface_tables() {
+    let out = tmpdir("thrust-contact-block").join("out");
+    let scene = root().join("pipelines/wall_running_bond.toml");
+    let s = |p: &std::path::Path| p.to_str().unwrap_or_default().to_string();
+    let (code, _, err) = sgbem(&[
+        "run",
+        &s(&scene),
+        "--out",
+        &s(&out),
+        "--set",
+        "mesh.courses=3",
+        "--set",
+        "mesh.bricks=3",
+        "--set",
+        "defaults.interface.friction=0.3",
+        "--set",
+        "output.history=\"final\"",
+        "--quiet",
+    ]);
+    assert_eq!(code, 0, "{err}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let vtm = std::fs::read_to_string(out.join("vtk/state_0000.vtm")).unwrap();
+    assert!(
+        vtm.contains("name=\"contact\" file=\"contact_0000.vtu\""),
+        "{vtm}"
+    );
+    let vtu = std::fs::read_to_string(out.join("vtk/contact_0000.vtu")).unwrap();
+    let arrays = binary_arrays(&vtu, false);
+    let get = |n: &str| &arrays.iter().find(|(k, _)| k == n).expect(n).1;
+    let f64s = |n: &str| -> Vec<f64> {
+        get(n)
+            .chunks(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap_or_default()))
+            .collect()
+    };
+    let i32s = |n: &str| -> Vec<i32> {
+        get(n)
+            .chunks(4)
+            .map(|c| i32::from_le_bytes(c.try_into().unwrap_or_default()))
+            .collect()
+    };
+    let (iface, pair, status, tstatus) = (
+        i32s("interface"),
+        i32s("pair"),
+        i32s("contact_status"),
+        i32s("tangential_status"),
+    );
+    let (tn, tt, force, shear) = (
+        f64s("normal_traction"),
+        f64s("tangential_traction"),
+        f64s("normal_force"),
+        f64s("tangential_force"),
+    );
+    // The interface names: UTF-8 bytes in an ascii UInt8 array, one name per line.
+    let names_text = vtu
+        .split("Name=\"interface_names\"")
+        .nth(1)
+        .and_then(|t| t.split('>').nth(1))
+        .and_then(|t| t.split('<').next())
+        .expect("interface_names");
+    let bytes: Vec<u8> = names_text
+        .split_whitespace()
+        .map(|b| b.parse().expect("a byte"))
+        .collect();
+    let names: Vec<String> = String::from_utf8(bytes)
+        .expect("UTF-8")
+        .lines()
+        .map(str::to_string)
+        .collect();
+    let thrust = summary["thrust"].as_object().expect("thrust block");
+    assert_eq!(names.len(), thrust.len());
+    let mut rows_seen = 0;
+    let mut slipping = 0;
+    for (i, name) in names.iter().enumerate() {
+        let table = read_interface_csv(&out.join("interfaces").join(format!("{name}.csv")));
+        let at: Vec<usize> = (0..iface.len()).filter(|&p| iface[p] == i as i32).collect();
+        assert_eq!(at.len(), table.len(), "{name}");
+        let (mut sum, mut sum_t) = (0.0, 0.0);
+        for (j, (&p, row)) in at.iter().zip(&table).enumerate() {
+            assert_eq!(pair[p], j as i32, "{name}");
+            assert_eq!(status[p] == 1, row.closed, "{name} pair {j}");
+            assert_eq!((tn[p], tt[p]), (row.tn, row.tt), "{name} pair {j}");
+            let want = match row.tangential_status.as_deref() {
+                Some("stick") => 1,
+                Some("slip") => 2,
+                Some("open") => 0,
+                _ => -1,
+            };
+            assert_eq!(tstatus[p], want, "{name} pair {j}");
+            slipping += usize::from(want == 2);
+            sum += force[p];
+        }
+        // N is compression positive; the rows' normal forces are tension positive.
+        let n = thrust[name]["normal_force"].as_f64().expect("N");
+        assert!(
+            (sum + n).abs() <= 1e-12 * n.abs().max(1e-300),
+            "{name}: {sum} vs {n}"
+        );
+        rows_seen += at.len();
+    }
+    assert_eq!(rows_seen, iface.len());
+    assert!(
+        slipping > 0,
+        "no row slips: the test would not see the friction statuses"
+    );
+}

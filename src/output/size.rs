@@ -21,7 +21,9 @@
 //!   `vtk = "compressed"`: the binary part taken as 0.3 of its size (measured 0.24 on the
 //!   105-brick wall, 0.32 on the clamped beam; it depends on the numbers). With interfaces,
 //!   per kept state a thrust file: about 2.75 kB and 270 B per interface (measured 3.0 kB
-//!   for 1 joint, 8.4 kB for the arch's 21).
+//!   for 1 joint, 8.4 kB for the arch's 21), and a contact file: about 3 kB, 30 B per
+//!   interface and 4/3 of 137 B per pair (measured 4.9 kB for two_blocks' 9 pairs, 359 kB
+//!   for the 1 925 pairs of the 105-brick wall).
 //! * **CSV**: `interfaces/*.csv` about 105 B per pair, sections 115 B per point and, with
 //!   a history, 145 B per point and kept state (`sections/NAME_path.csv`); `thrust.csv`
 //!   about 120 B and 215 B per interface; `thrust_hubs.csv` 50 B and 95 B per body with
@@ -191,7 +193,10 @@ pub fn output_size(
     let boundary = 4.0 / 3.0 * zip * ((24.0 + per(&boundary_arrays)) * nodes + 13.0 * elements);
     let mut vtk = s * (boundary + 3000.0);
     if ni > 0.0 {
+        // The thrust file; the contact rows' file (every array, base64: 4/3 of 137 B per
+        // pair, or 0.3 of it compressed, and the interface names).
         vtk += s * (2750.0 + 270.0 * ni);
+        vtk += s * (3000.0 + 30.0 * ni + 4.0 / 3.0 * zip * 137.0 * pairs);
     }
     if scene.output.field {
         let field_arrays = [

@@ -89,6 +89,11 @@ pub(crate) fn thrust_name(k: usize) -> String {
     format!("thrust_{k:04}.vtu")
 }
 
+/// File name of the contact rows of state `k`.
+pub(crate) fn contact_name(k: usize) -> String {
+    format!("contact_{k:04}.vtu")
+}
+
 /// File name of the multiblock of state `k` (`states.pvd`'s entry).
 pub(crate) fn state_name(k: usize) -> String {
     format!("state_{k:04}.vtm")
@@ -130,8 +135,9 @@ enum File {
     Boundary(usize),
     Field(usize),
     Thrust(usize),
+    Contact(usize),
     /// The multiblock of a state: its boundary file, where it has one its field file, and
-    /// where the run has interfaces its thrust line.
+    /// where the run has interfaces its thrust line and its contact rows.
     State(usize, bool, bool),
     StatesPvd,
     Pvd,
@@ -156,6 +162,7 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
         }
         if thrust {
             files.push(File::Thrust(k));
+            files.push(File::Contact(k));
         }
         files.push(File::State(k, field, thrust));
         field_of.push(field.then_some(k));
@@ -168,6 +175,7 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
             File::Boundary(k) => dir.join(boundary_name(k)),
             File::Field(k) => dir.join(field_name(k)),
             File::Thrust(k) => dir.join(thrust_name(k)),
+            File::Contact(k) => dir.join(contact_name(k)),
             File::State(k, _, _) => dir.join(state_name(k)),
             File::StatesPvd => dir.join("states.pvd"),
             File::Pvd => dir.join("history.pvd"),
@@ -192,6 +200,17 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
                     fields: None,
                 };
                 grid_xml(grid, &meta, &style)
+            }
+            File::Contact(k) => {
+                let mut meta = state_meta(rec, k, times[k]);
+                let names: Vec<&str> = rec.interfaces.iter().map(|i| i.name.as_str()).collect();
+                meta.push(("interface_names", FieldValue::Text(names.join("\n"))));
+                // Every array of the contact rows, as for the thrust line.
+                let style = VtkStyle {
+                    compressed: rec.vtk.compressed,
+                    fields: None,
+                };
+                grid_xml(contact_grid(rec, k), &meta, &style)
             }
             File::State(k, field, thrust) => state_vtm(k, field, thrust).into_bytes(),
             File::StatesPvd => states_pvd(&times).into_bytes(),
@@ -227,6 +246,12 @@ fn state_vtm(k: usize, field: bool, thrust: bool) -> String {
             "    <DataSet index=\"{}\" name=\"thrust\" file=\"{}\"/>",
             1 + usize::from(field),
             thrust_name(k)
+        );
+        let _ = writeln!(
+            o,
+            "    <DataSet index=\"{}\" name=\"contact\" file=\"{}\"/>",
+            2 + usize::from(field),
+            contact_name(k)
         );
     }
     o.push_str("  </vtkMultiBlockDataSet>\n</VTKFile>\n");
@@ -901,6 +926,87 @@ fn thrust_grid(rec: &RunRecord, k: usize) -> (Grid, String) {
         active: ["N", "displacement", ""],
     };
     (grid, names.join("\n"))
+}
+
+/// The contact rows of state `k` as points (one vertex per pair, at the pair's point on the
+/// first body): `interface` and `pair` (indices; the file's field data `interface_names`
+/// names the interfaces), `contact_status` (1 closed, 0 open), `tangential_status` (1 stick,
+/// 2 slip, 0 open, −1 not a friction pair), `gap` (the initial normal gap),
+/// `normal_opening` (gap + normal jump where open, 0 where closed), `normal_traction`
+/// (tension positive) and `tangential_traction` on the first body, `normal_force` and
+/// `tangential_force` (the tractions times the pair's tributary length and the thickness),
+/// `slip` (the accumulated slip path), `displacement` (the first body's, for Warp By Vector).
+fn contact_grid(rec: &RunRecord, k: usize) -> Grid {
+    let st = &rec.states[k];
+    let mut c = ContactColumns::default();
+    for (i, (it, r)) in rec.interfaces.iter().zip(st.interfaces.iter()).enumerate() {
+        let w = it.weights();
+        for (j, p) in r.pairs.iter().enumerate() {
+            let x = it.x[j];
+            let u = st.fields[it.body_a].u[it.node_a[j]];
+            let w = w.get(j).copied().unwrap_or(0.0) * rec.thickness;
+            c.pts.extend([x[0], x[1], 0.0]);
+            c.disp.extend([u[0], u[1], 0.0]);
+            c.interface.push(i as i32);
+            c.pair.push(j as i32);
+            c.status.push(match p.status {
+                PairStatus::Closed => 1,
+                PairStatus::Open => 0,
+            });
+            c.tangential.push(match p.tangential_status() {
+                Some("stick") => 1,
+                Some("slip") => 2,
+                Some(_) => 0,
+                None => -1,
+            });
+            c.gap.push(it.gap[j]);
+            c.opening.push(it.opening(r, j));
+            c.tn.push(p.traction[1]);
+            c.tt.push(p.traction[0]);
+            c.fn_.push(p.traction[1] * w);
+            c.ft.push(p.traction[0] * w);
+            c.slip.push(p.slip);
+        }
+    }
+    let n = c.status.len();
+    Grid {
+        points: c.pts,
+        connectivity: (0..n as u64).collect(),
+        cell_types: vec![VTK_VERTEX; n],
+        point_data: vec![
+            array("interface", 1, Values::I32(c.interface)),
+            array("pair", 1, Values::I32(c.pair)),
+            array("contact_status", 1, Values::I32(c.status)),
+            array("tangential_status", 1, Values::I32(c.tangential)),
+            array("gap", 1, Values::F64(c.gap)),
+            array("normal_opening", 1, Values::F64(c.opening)),
+            array("normal_traction", 1, Values::F64(c.tn)),
+            array("tangential_traction", 1, Values::F64(c.tt)),
+            array("normal_force", 1, Values::F64(c.fn_)),
+            array("tangential_force", 1, Values::F64(c.ft)),
+            array("slip", 1, Values::F64(c.slip)),
+            array("displacement", 3, Values::F64(c.disp)),
+        ],
+        active: ["contact_status", "displacement", ""],
+    }
+}
+
+/// The point arrays of the contact block.
+#[derive(Default)]
+struct ContactColumns {
+    pts: Vec<f64>,
+    disp: Vec<f64>,
+    interface: Vec<i32>,
+    pair: Vec<i32>,
+    status: Vec<i32>,
+    tangential: Vec<i32>,
+    gap: Vec<f64>,
+    opening: Vec<f64>,
+    tn: Vec<f64>,
+    tt: Vec<f64>,
+    fn_: Vec<f64>,
+    ft: Vec<f64>,
+    slip: Vec<f64>,
 }
 
 /// The point arrays of the thrust block, filled point by point.
