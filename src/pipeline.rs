@@ -792,6 +792,7 @@ fn summary_of(
         },
         effects: plan.effects.clone(),
         equilibrium: summary::equilibrium(&post.balances),
+        failure: solved.failure.as_ref().map(|e| e.message().to_string()),
         interface_curves: summary::interface_curves(&model.interfaces, &interfaces),
         interfaces,
         load_factor: solved.load_factor,

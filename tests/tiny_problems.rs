@@ -228,6 +228,16 @@ impl Run {
         if let Some(s) = &self.summary {
             assert_eq!(s["status"], "not converged", "{}", self.method);
             assert_eq!(s["contact"]["converged"], false, "{}", self.method);
+            // summary.json says why, with the same words as stderr.
+            let failure = s["failure"].as_str().unwrap_or_default();
+            for w in words {
+                assert!(
+                    failure.contains(w),
+                    "{}: summary failure {failure}",
+                    self.method
+                );
+            }
+            assert!(self.err.contains(failure), "{}: {failure}", self.method);
         }
     }
 }

@@ -28,6 +28,10 @@ pub struct Summary {
     pub effects: Vec<&'static str>,
     /// Per body: its loads and imbalance.
     pub equilibrium: BTreeMap<String, BodyEquilibrium>,
+    /// Where the run did not converge: why, as the message on stderr says it (the
+    /// mechanism, with the bodies and the motion, where no equilibrium exists).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub failure: Option<String>,
     /// Per Physical Curve split into one interface per pair of bodies, when there is one.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub interface_curves: Option<BTreeMap<String, CurveFigures>>,
@@ -617,6 +621,7 @@ mod tests {
                     relative_imbalance: 1e-12,
                 },
             )]),
+            failure: Some("no equilibrium exists".to_string()),
             interface_curves: Some(BTreeMap::from([(
                 "joint".to_string(),
                 CurveFigures {
