@@ -430,6 +430,10 @@ const FEW_SWITCHES: usize = 16;
 /// Iterations of one inner solve, and halvings of the step after repeated statuses, before
 /// the evolutive path takes over (the active set ends in a few where it converges).
 const MAX_ITERATIONS: usize = 200;
+/// Iterations of the attempt with Coulomb's law within the iteration before the bounds are
+/// held fixed: the running-bond walls settle in at most 32 (4 128 bricks); a trial beyond a
+/// collapse multiplier, where no equilibrium exists, spends all of them.
+const COULOMB_ITERATIONS: usize = 50;
 const MAX_HALVINGS: u32 = 8;
 
 /// Displacements this many times those of the loaded, all-closed state mean a body is free.
@@ -453,10 +457,10 @@ pub fn solve(
         return out;
     }
     // Coulomb's law within the iteration: stopped at its first repeated status (a cycle of
-    // the lagged bounds, seen with μ = 10 near collapse) or half the iterations; the
+    // the lagged bounds, seen with μ = 10 near collapse) or `COULOMB_ITERATIONS`; the
     // iteration with the bounds held fixed (Tresca, the outer loop's fixed point) then
     // starts again from the same statuses.
-    let limit = max_iterations.min(MAX_ITERATIONS / 2);
+    let limit = max_iterations.min(COULOMB_ITERATIONS);
     let first = iterate(inner.coulomb_form(), sys, open, sign, limit, 0);
     if !first.stalled {
         return first;
