@@ -12,6 +12,17 @@ csv (interfaces/*.csv, sections/*.csv), json (summary.json). Checks:
   thrust     thrust.csv and summary.json `thrust`: per joint N, T, the point of application
              and its eccentricity recomputed from /solution (docs/thrust.md); the last VTK
              thrust file holds the same points;
+  hubs       thrust_hubs.csv: its header and units, one row per body at most, in body order,
+             bodies that exist, finite numbers and a resultant, group below or above, and
+             joints (more than two) the body's loaded joints in thrust.csv; the last VTK
+             thrust file holds the same hubs (its points of joint -1);
+  contact    the VTK contact block of every archived state (contact_NNNN.vtu, block
+             "contact" of state_NNNN.vtm): a vertex per pair at the archive's pair point,
+             interface and pair indices, interface_names in run order, contact_status,
+             tangential_status, normal traction and opening, forces (traction x tributary
+             length x thickness) equal to the archive's state; for the final state
+             contact_status and normal_traction equal to the interface CSVs and each
+             interface's normal_force adding up to -N of thrust.csv;
   vtk        history.pvd lists existing files, one boundary file per archived state, times
              increasing; each file read by meshio and pyvista with the point data of SPEC.md
              and values equal to the archive's.
@@ -33,8 +44,12 @@ BOUNDARY_DATA = {"displacement": 3, "traction": 3, "normal": 3, "contact_status"
                  "normal_traction": 1, "normal_opening": 1, "body": 1}
 FIELD_DATA = {"displacement": 3, "stress": 6, "sxx": 1, "syy": 1, "szz": 1, "sxy": 1, "von_mises": 1,
               "principal_stress": 3, "body": 1}
+CONTACT_DATA = {"interface": 1, "pair": 1, "contact_status": 1, "tangential_status": 1, "gap": 1,
+                "normal_opening": 1, "normal_traction": 1, "tangential_traction": 1, "normal_force": 1,
+                "tangential_force": 1, "slip": 1, "displacement": 3}
 REL = 1e-9
 TITLE = [""]   # the run's title, from summary.json
+CODES = {"closed": 1, "open": 0}   # contact_status of the interface CSVs
 
 
 class Checker:
@@ -326,6 +341,140 @@ def check_thrust(c, run, h5, summary, ifaces):
                 float(np.abs(m.points).max(initial=1.0)))
 
 
+def csv_units(h5):
+    """The scene's force and length units as the CSV headers write them."""
+    units = json.loads(text(h5.attrs.get("units", "{}")))
+    return units.get("force") or "force", units.get("length") or "length"
+
+
+def check_hubs(c, run, h5, ifaces):
+    """thrust_hubs.csv (docs/thrust.md "Bodies with more joints"), final state."""
+    path = run / "thrust_hubs.csv"
+    if not c.ok(path.exists() == bool(ifaces), f"{path}: written {path.exists()}, interfaces {len(ifaces)}"):
+        return
+    if not ifaces:
+        return
+    force, length = csv_units(h5)
+    rows = list(csv.reader(path.open()))
+    header, rows = rows[0], rows[1:]
+    c.ok(header == ["body", f"x [{length}]", f"y [{length}]", f"R_x [{force}]", f"R_y [{force}]", "group", "joints"],
+         f"{path}: header {header}")
+    bodies = [text(h5["bodies"][n].attrs["name"]) for n in names(h5["bodies"])]
+    # The loaded joints (those with a point of application) of each body, from thrust.csv.
+    loaded = {}
+    tpath = run / "thrust.csv"
+    if tpath.exists():
+        for r in list(csv.reader(tpath.open()))[1:]:
+            if r[5] != "":
+                for b in (r[1], r[2]):
+                    loaded[b] = loaded.get(b, 0) + 1
+    c.ok(len({r[0] for r in rows}) == len(rows), f"{path}: a body has more than one row")
+    index = []
+    for r in rows:
+        if not c.ok(len(r) == 7, f"{path}: row {r} does not have 7 fields"):
+            continue
+        body = r[0]
+        if c.ok(body in bodies, f"{path}: body {body!r} is not one of the run's"):
+            index.append(bodies.index(body))
+        try:
+            values = np.array([float(v) for v in r[1:5]])
+        except ValueError:
+            c.ok(False, f"{path}: {body}: not numbers: {r[1:5]}")
+            continue
+        c.ok(np.all(np.isfinite(values)), f"{path}: {body}: numbers not finite: {r[1:5]}")
+        c.ok(np.hypot(values[2], values[3]) > 0, f"{path}: {body}: no resultant")
+        c.ok(r[5] in ("below", "above"), f"{path}: {body}: group {r[5]!r}, not below or above")
+        c.ok(r[6].isdigit() and int(r[6]) > 2, f"{path}: {body}: joints {r[6]!r}, not more than two")
+        c.ok(r[6].isdigit() and int(r[6]) == loaded.get(body, 0),
+             f"{path}: {body}: joints {r[6]}, thrust.csv gives it {loaded.get(body, 0)} loaded joints")
+    c.ok(index == sorted(index), f"{path}: rows not in body order")
+    last = sorted((run / "vtk").glob("thrust_*.vtu"))
+    if last and all(len(r) == 7 for r in rows):
+        m = meshio.read(last[-1])
+        at = m.points[np.asarray(m.point_data["joint"]).ravel() == -1][:, :2]
+        want = np.array([[float(r[1]), float(r[2])] for r in rows]).reshape(-1, 2)
+        c.close(at, want, f"{last[-1]}: hubs (joint -1) vs {path.name}", float(np.abs(m.points).max(initial=1.0)))
+
+
+def check_contact(c, run, h5, ifaces, count):
+    """The VTK block "contact" of every archived state against the archive; the final
+    state's against the interface CSVs and thrust.csv."""
+    vtk = run / "vtk"
+    if not (vtk / "history.pvd").exists():
+        return
+    files = sorted(vtk.glob("contact_*.vtu"))
+    if not ifaces:
+        c.ok(not files, f"{vtk}: contact files without interfaces")
+        return
+    c.ok(len(files) == count, f"{vtk}: {len(files)} contact files for {count} archived states")
+    run_names = [text(i.attrs["name"]) for i in ifaces]
+    sizes = [i["x"].shape[0] for i in ifaces]
+    x = np.vstack([i["x"][()] for i in ifaces])
+    thickness = float(h5.attrs.get("thickness", 1.0))
+    weight = np.concatenate([tributary(i, i["x"][()], i["elements"][()]) for i in ifaces]) * thickness
+    which = np.repeat(np.arange(len(ifaces)), sizes)
+    pair = np.concatenate([np.arange(n) for n in sizes])
+    states = h5["states"]
+    for k in range(count):
+        path = vtk / f"contact_{k:04d}.vtu"
+        vtm = vtk / f"state_{k:04d}.vtm"
+        if not c.ok(path.exists(), f"{path} is missing"):
+            continue
+        if c.ok(vtm.exists(), f"{vtm} is missing"):
+            blocks = {e.get("name"): e.get("file") for e in ET.parse(vtm).getroot().iter("DataSet")}
+            c.ok(blocks.get("contact") == path.name, f"{vtm}: block contact is {blocks.get('contact')}")
+        m = read_vtu(c, path, CONTACT_DATA)
+        st = states[f"{k:04d}"]
+        d = m.point_data
+        if not c.ok(len(m.points) == len(x), f"{path}: {len(m.points)} points for {len(x)} pairs"):
+            continue
+        if not c.ok(set(CONTACT_DATA) <= set(d), f"{path}: point data {sorted(d)}"):
+            continue
+        vertices = sum(len(cb.data) for cb in m.cells if cb.type == "vertex")
+        c.ok(vertices == len(x), f"{path}: {vertices} vertices for {len(x)} pairs")
+        got = bytes(np.asarray(m.field_data.get("interface_names", []), dtype=np.uint8)).decode()
+        c.ok(got.split("\n") == run_names, f"{path}: interface_names differ from the run order")
+        c.ok(float(np.ravel(m.field_data["iteration"])[0]) == float(st.attrs["iteration"]),
+             f"{path}: iteration differs from the archive's state {k}")
+        c.ok(np.array_equal(d["interface"], which), f"{path}: interface indices")
+        c.ok(np.array_equal(d["pair"], pair), f"{path}: pair indices")
+        c.close(m.points[:, :2], x, f"{path}: points vs the archive's pair points")
+        status = st["status"][()]
+        c.ok(np.array_equal(d["contact_status"], status), f"{path}: contact_status vs the archive's state {k}")
+        ts = st["tangential_status"][()].astype(int) if "tangential_status" in st else np.full(len(x), -1)
+        ts = np.where((status == 0) & (ts != -1), 0, ts)      # an open friction pair: 0
+        c.ok(np.array_equal(d["tangential_status"], ts), f"{path}: tangential_status vs the archive's state {k}")
+        traction = st["traction"][()]
+        c.close(d["normal_traction"], traction[:, 1], f"{path}: normal_traction vs the archive's state {k}")
+        c.close(d["tangential_traction"], traction[:, 0], f"{path}: tangential_traction vs the archive's state {k}")
+        c.close(d["normal_opening"], st["normal_opening"][()], f"{path}: normal_opening vs the archive's state {k}")
+        fscale = float(np.max(np.abs(traction), initial=0.0) * np.max(weight, initial=0.0)) or 1.0
+        c.close(d["normal_force"], traction[:, 1] * weight, f"{path}: normal_force vs traction x length", fscale)
+        c.close(d["tangential_force"], traction[:, 0] * weight, f"{path}: tangential_force vs traction x length",
+                fscale)
+        if k != count - 1:
+            continue
+        # The final state: the interface tables and the thrust line.
+        thrust = {}
+        tpath = run / "thrust.csv"
+        if tpath.exists():
+            thrust = {r[0]: r[3] for r in list(csv.reader(tpath.open()))[1:]}
+        for i, name in enumerate(run_names):
+            at = which == i
+            tpath_i = run / "interfaces" / f"{name}.csv"
+            if tpath_i.exists():
+                rows = list(csv.DictReader(tpath_i.open()))
+                if c.ok(len(rows) == at.sum(), f"{path}: {at.sum()} points of {name}, its table {len(rows)} rows"):
+                    c.ok([CODES[r["status"]] for r in rows] == list(d["contact_status"][at]),
+                         f"{path}: contact_status of {name} vs {tpath_i.name}")
+                    c.close(d["normal_traction"][at], [float(r["normal_traction"]) for r in rows],
+                            f"{path}: normal_traction of {name} vs {tpath_i.name}")
+            if name in thrust and thrust[name] != "":
+                f = d["normal_force"][at]
+                c.close(f.sum(), -float(thrust[name]), f"{path}: normal_force of {name} vs -N of thrust.csv",
+                        float(np.abs(f).sum()) or 1.0)
+
+
 def check_csv(c, run, h5, ifaces):
     for i in ifaces:
         name = text(i.attrs["name"])
@@ -516,6 +665,8 @@ def main():
         if count:
             check_csv(c, run, h5, ifaces)
             check_thrust(c, run, h5, summary, ifaces)
+            check_hubs(c, run, h5, ifaces)
+            check_contact(c, run, h5, ifaces, count)
         check_vtk(c, run, h5, bodies, count)
     if c.failures:
         for f in c.failures:

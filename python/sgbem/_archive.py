@@ -6,6 +6,8 @@ children's group names in run order, each child a `name` attribute with its real
 `/states/NNNN` hold every archived state with the bodies' nodes and elements and the
 interfaces' pairs concatenated, sliced by `/states/node_offset`, `element_offset` and
 `pair_offset`; `/solution/interior/<body>` holds the interior field of the final state.
+The hubs of the thrust line are not archived: `Run.hubs` reads the run folder's
+thrust_hubs.csv.
 """
 
 import json
@@ -36,6 +38,22 @@ def _texts(values):
 def _floats(values):
     """Float data with `-0.0` made `0.0` (adding 0.0 does exactly that)."""
     return np.asarray(values, dtype=float) + 0.0
+
+
+def _tributary(it, x):
+    """Each pair's tributary length, as sgbem weighs the pairs: where the sides were meshed
+    on their own the pairing's weights, else half of each of the interface's elements that
+    joins the pair to another (the integrals of the P1 hats), added element by element."""
+    if "pairing" in it:
+        return _floats(it["pairing"]["weight"])
+    e = np.asarray(it["elements"], dtype=np.int64).reshape(-1, 2)
+    w = np.zeros(len(x))
+    if len(e):
+        d = x[e[:, 1]] - x[e[:, 0]]
+        half = 0.5 * np.hypot(d[:, 0], d[:, 1])
+        # np.add.at adds in index order: the element's first pair, then its second.
+        np.add.at(w, e.ravel(), np.repeat(half, 2))
+    return w
 
 
 def open(path):  # noqa: A001 - the package's documented name, `sgbem.open`
@@ -234,6 +252,84 @@ class Run:
         df.attrs["units"] = {c: units[c] for c in df.columns}
         return df
 
+    def contact_points(self, state=-1):
+        """Every interface's contact points at archived state `state` (default the last, the
+        final state) in one frame, one row per pair, interfaces in run order: the block
+        "contact" of the state's multiblock (vtk/contact_NNNN.vtu, NNNN the state), computed
+        from the archive. Columns: interface (its name), pair (the row of `pairs(interface)`),
+        x, y (the pair's point on the first body), contact_status ("closed"/"open"),
+        tangential_status ("stick"/"slip", "open" for an open friction pair, "none" for a
+        pair without friction), gap (initial), normal_opening, normal_traction and
+        tangential_traction (on the first body, tension positive), normal_force and
+        tangential_force (the tractions times the pair's tributary length and the
+        thickness: per interface they add up to -N and T of `thrust()`), slip (accumulated
+        path, 0 without friction), ux, uy (the first body's displacement at the pair).
+        The VTK file's integer codes: contact_status 1 closed, 0 open; tangential_status
+        1 stick, 2 slip, 0 open, -1 none."""
+        k = self._state(state)
+        with self._file() as f:
+            st = f["states"][f"{k:04}"]
+            thickness = float(f.attrs.get("thickness", 1.0))
+            u = _floats(st["u"]).reshape(-1, 2)
+            status = np.asarray(st["status"])
+            traction = _floats(st["traction"]).reshape(-1, 2)
+            opening = _floats(st["normal_opening"])
+            total = len(status)
+            if "tangential_status" in st:
+                ts = np.asarray(st["tangential_status"], dtype=np.int64)
+                slip = _floats(st["slip"])
+            else:  # no friction in the run
+                ts, slip = np.full(total, -1, dtype=np.int64), np.zeros(total)
+            parts = {c: [] for c in ("interface", "pair", "x", "y", "gap", "w", "ux", "uy")}
+            for i, (name, gname) in enumerate(self._interfaces):
+                it = f["interfaces"][gname]
+                x = _floats(it["x"]).reshape(-1, 2)
+                n = len(x)
+                a = int(it.attrs["body_a_index"])
+                ua = u[self._node_offset[a] + np.asarray(it["node_a"], dtype=np.int64)]
+                parts["interface"].append([name] * n)
+                parts["pair"].append(np.arange(n, dtype=np.int64))
+                parts["x"].append(x[:, 0])
+                parts["y"].append(x[:, 1])
+                parts["gap"].append(_floats(it["gap"]))
+                parts["w"].append(_tributary(it, x))
+                parts["ux"].append(ua[:, 0])
+                parts["uy"].append(ua[:, 1])
+            a = st.attrs
+            meta = {"state": k, "iteration": int(a["iteration"]),
+                    "load_step": int(a["load_step"]), "load_factor": float(a["load_factor"])}
+        col = {c: np.concatenate(v) if v else np.zeros(0) for c, v in parts.items()}
+        if len(col["x"]) != total:
+            raise ValueError(f"{self.archive}: state {k} holds {total} pairs, the interfaces "
+                             f"{len(col['x'])}")
+        w = col["w"] * thickness
+        df = pd.DataFrame({
+            "interface": pd.Series(col["interface"], dtype=object),
+            "pair": col["pair"].astype(np.int64),
+            "x": col["x"], "y": col["y"],
+            "contact_status": [_STATUS.get(int(v), "?") for v in status],
+            "tangential_status": [
+                "none" if t == -1 else "open" if s == 0 else _TANGENTIAL.get(int(t), "?")
+                for s, t in zip(status, ts)],
+            "gap": col["gap"],
+            "normal_opening": opening,
+            "normal_traction": traction[:, 1],
+            "tangential_traction": traction[:, 0],
+            "normal_force": traction[:, 1] * w + 0.0,
+            "tangential_force": traction[:, 0] * w + 0.0,
+            "slip": slip,
+            "ux": col["ux"], "uy": col["uy"],
+        })
+        length, stress, force = self.units["length"], self.units["stress"], self.units["force"]
+        df.index.name = "point"
+        df.attrs.update(meta)
+        df.attrs["units"] = {
+            "interface": "", "pair": "1", "x": length, "y": length, "contact_status": "",
+            "tangential_status": "", "gap": length, "normal_opening": length,
+            "normal_traction": stress, "tangential_traction": stress, "normal_force": force,
+            "tangential_force": force, "slip": length, "ux": length, "uy": length}
+        return df
+
     def thrust(self):
         """The thrust line of the final state, one row per joint (interface) in run order,
         with the columns of thrust.csv: joint, body_a, body_b, N (normal force, compression
@@ -274,6 +370,47 @@ class Run:
             "joint": "", "body_a": "", "body_b": "", "N": force, "T": force, "x": length,
             "y": length, "s": length, "e": length, "e_over_half_length": "1", "inside": "",
             "in_closed_part": ""}
+        return df
+
+    def hubs(self):
+        """The hubs of the final state, one row per body with more than two loaded joints
+        that has one, in body order, with the columns of thrust_hubs.csv (docs/thrust.md,
+        "Bodies with more joints"): body, x, y (the hub: on the line of action of the
+        resultant of the body's group of joints), R_x, R_y (that resultant on the body,
+        times the thickness), group ("below": the bed joints below along the body force;
+        "above": those above, where none is below), joints (how many loaded joints the hub
+        joins, more than two). The hubs are not in the archive: read from thrust_hubs.csv
+        in the run folder (FileNotFoundError for an archive away from its folder); an
+        empty frame for a run without interfaces or without hubs."""
+        force, length = self.units["force"], self.units["length"]
+        units = {"body": "", "x": length, "y": length, "R_x": force, "R_y": force,
+                 "group": "", "joints": "1"}
+        path = self.folder / "thrust_hubs.csv"
+        if not self.interfaces and not path.is_file():
+            df = pd.DataFrame({c: pd.Series(dtype=object if c in ("body", "group") else
+                                            np.int64 if c == "joints" else float)
+                               for c in units})
+        elif not path.is_file():
+            raise FileNotFoundError(
+                f"{path}: no such file: the hubs are written beside thrust.csv in the run "
+                f"folder, not into the archive (open the run folder, or a run of a sgbem "
+                f"that writes thrust_hubs.csv)")
+        else:
+            df = pd.read_csv(path, keep_default_na=False, dtype=str)
+            head = {c.split(" [")[0]: c for c in df.columns}
+            if list(head) != list(units):
+                raise ValueError(f"{path}: columns {list(df.columns)}, expected "
+                                 f"{list(units)} (with units in brackets)")
+            df.columns = list(head)
+            for c in ("x", "y", "R_x", "R_y"):
+                df[c] = df[c].astype(float) + 0.0
+            df["joints"] = df["joints"].astype(np.int64)
+            # The header's units are the scene's, as self.units gives them.
+            for c, h in head.items():
+                if "[" in h:
+                    units[c] = h.split(" [", 1)[1].rstrip("]")
+        df.index.name = "hub"
+        df.attrs["units"] = units
         return df
 
     def to_pyvista(self, state=-1):

@@ -170,6 +170,8 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
         "load_step", "iteration", "load_factor", "solver"]
     blocks = lame.to_pyvista()
     assert blocks.keys() == ["boundary", "field"] and blocks["field"].n_points > 0
+    assert len(lame.contact_points()) == 0 and len(lame.hubs()) == 0
+    assert list(lame.hubs().columns) == ["body", "x", "y", "R_x", "R_y", "group", "joints"]
     # A sliding mechanism: exit 3, every output written; the error names the folder.
     with pytest.raises(sgbem.SgbemError) as e:
         sgbem.run(ROOT / "pipelines/incline_block_slides.toml", out=tmp_path / "slides",
@@ -229,3 +231,169 @@ def test_thrust_equals_thrust_csv(beam, wall):
     t = beam.thrust().iloc[0]
     assert t["N"] > 0 and t["inside"] and t["in_closed_part"]
     assert 0.5 < abs(t["e_over_half_length"]) < 1.0
+
+
+# Codes of the VTK contact block (src/output/vtk.rs `contact_grid`).
+CONTACT_STATUS = {1: "closed", 0: "open"}
+TANGENTIAL_STATUS = {1: "stick", 2: "slip", 0: "open", -1: "none"}
+
+
+def vtk_text(values):
+    """Text field data of sgbem's VTK files: UTF-8 bytes in a UInt8 array."""
+    return bytes(np.asarray(values, dtype=np.uint8)).decode("utf-8")
+
+
+def patch_nonmatching(tmp_path):
+    """The patch test of tests/geometry_contact.rs: two blocks meshed on their own (10
+    elements under the interface, 7 above), on rollers, the top pushed down: an interface
+    with `pairing/` in the archive (its pairs weighted by the pairing's weights)."""
+    scene = tmp_path / "patch.toml"
+    scene.write_text(
+        'title = "patch test, independent meshes"\nplane = "strain"\n'
+        f'[mesh]\nfile = "{ROOT / "geo/patch_nonmatching.geo"}"\nn_lower = 10\nn_upper = 7\n'
+        "[body.upper]\nyoung = 1000.0\npoisson = 0.3\n"
+        "[body.lower]\nyoung = 3000.0\npoisson = 0.2\n"
+        "[boundary.top]\nuy = -0.01\ntx = 0.0\n[boundary.base]\nuy = 0.0\ntx = 0.0\n"
+        "[boundary.left]\nux = 0.0\nty = 0.0\n[boundary.right]\nux = 0.0\nty = 0.0\n"
+        '[interface.contact]\nmodel = "unilateral"\ninitial = "open"\ntangential = "stick"\n'
+        "[solve]\ntolerance = 1e-10\n")
+    return sgbem.run(scene, out=tmp_path / "patch")
+
+
+def check_contact_points(run):
+    """contact_points() of the final state against the interface tables, pairs() and
+    thrust(), interface by interface."""
+    df = run.contact_points()
+    assert len(df) == run.summary["counts"]["interface_pairs"]
+    assert list(df["interface"].unique()) == run.interfaces        # run order
+    thrust = run.thrust().set_index("joint")
+    same = {"x": "x", "y": "y", "contact_status": "status", "gap": "gap",
+            "normal_opening": "normal_opening", "normal_traction": "normal_traction",
+            "tangential_traction": "tangential_traction"}
+    for name, rows in df.groupby("interface", sort=False):
+        table, pairs = csv_table(run, name), run.pairs(name)
+        assert list(rows["pair"]) == list(range(len(table))) == list(pairs.index)
+        friction = "tangential_status" in table.columns
+        columns = dict(same, **({"tangential_status": "tangential_status", "slip": "slip"}
+                                if friction else {}))
+        for ours, theirs in columns.items():
+            for other in (table[theirs], pairs[theirs]):
+                if other.dtype == object:
+                    assert list(rows[ours]) == list(other), (name, ours)
+                else:
+                    np.testing.assert_array_equal(rows[ours].to_numpy(), other.to_numpy(),
+                                                  err_msg=f"{name}.{ours}")
+        if not friction:
+            assert (rows["tangential_status"] == "none").all() and (rows["slip"] == 0).all()
+        # Per joint the pairs' forces add up to the thrust line's resultants (docs/thrust.md).
+        fn, ft = rows["normal_force"], rows["tangential_force"]
+        n, t = thrust.loc[name, "N"], thrust.loc[name, "T"]
+        assert fn.sum() == pytest.approx(-n, rel=0, abs=1e-12 * max(fn.abs().sum(), 1e-300))
+        assert ft.sum() == pytest.approx(t, rel=0, abs=1e-12 * max(ft.abs().sum(), 1e-300))
+        assert (fn[rows["contact_status"] == "open"] == 0).all()      # no cohesion here
+    return df
+
+
+def test_contact_points_equal_the_interface_tables_and_the_thrust(beam, wall):
+    for run in (beam, wall):
+        df = check_contact_points(run)
+        assert df.attrs["state"] == run.state_count - 1
+        assert df.attrs["iteration"] == run.states["iteration"].iloc[-1]
+    p = beam.contact_points()
+    assert p.attrs["units"]["normal_force"] == "daN" and p.attrs["units"]["gap"] == "cm"
+    assert (p["contact_status"] == "open").sum() == 89 and set(p["interface"]) == {"joint"}
+    w = wall.contact_points()
+    assert len(w) == 182 and (w["tangential_status"] == "slip").sum() >= 1
+    assert negative_zeros(w.select_dtypes("float")) == 0
+
+
+def test_contact_points_equal_the_vtk_contact_block(beam, wall, tmp_path):
+    """Every column, bit for bit, against block "contact" of the state's multiblock
+    (vtk/state_NNNN.vtm, read by pyvista), at the first and the last state; also where the
+    sides were meshed on their own (the pairs' tributary lengths from the pairing)."""
+    pyvista = pytest.importorskip("pyvista")
+    patch = patch_nonmatching(tmp_path)
+    with h5py.File(patch.archive, "r") as f:
+        assert "pairing" in f["interfaces"][patch.interfaces[0]]
+    check_contact_points(patch)
+    for run in (beam, wall, patch):
+        for state in sorted({0, run.state_count - 1}):
+            df = run.contact_points(state)
+            blocks = pyvista.read(run.folder / f"vtk/state_{state:04d}.vtm")
+            vtk = blocks["contact"]
+            names = vtk_text(vtk.field_data["interface_names"]).split("\n")
+            assert names == run.interfaces
+            assert vtk.n_points == len(df)
+            d = vtk.point_data
+            assert [names[i] for i in d["interface"]] == list(df["interface"])
+            assert [CONTACT_STATUS[v] for v in d["contact_status"]] == list(df["contact_status"])
+            assert [TANGENTIAL_STATUS[v] for v in d["tangential_status"]] == list(
+                df["tangential_status"])
+            for col in ("pair", "gap", "normal_opening", "normal_traction",
+                        "tangential_traction", "normal_force", "tangential_force", "slip"):
+                np.testing.assert_array_equal(d[col], df[col].to_numpy(), err_msg=col)
+            for j, (p, u) in enumerate((("x", "ux"), ("y", "uy"))):
+                np.testing.assert_array_equal(vtk.points[:, j], df[p].to_numpy())
+                np.testing.assert_array_equal(d["displacement"][:, j], df[u].to_numpy())
+    # The patch test's exact state: the oedometric pressure on every pair, p over the
+    # interface's length 2 (tests/geometry_contact.rs).
+    def oedometric(e, nu):
+        return e * (1 - nu) / ((1 + nu) * (1 - 2 * nu))
+
+    p = 0.01 / (1 / oedometric(1000.0, 0.3) + 1 / oedometric(3000.0, 0.2))
+    c = patch.contact_points()
+    assert len(c) == 8 and (c["contact_status"] == "closed").all()
+    assert c["normal_force"].sum() == pytest.approx(-2 * p, rel=1e-8)
+
+
+def test_hubs_equal_thrust_hubs_csv(beam, wall, tmp_path):
+    beam_hubs = beam.hubs()                       # one joint, two bodies: no hub
+    assert len(beam_hubs) == 0 and list(beam_hubs.columns) == [
+        "body", "x", "y", "R_x", "R_y", "group", "joints"]
+    hubs = wall.hubs()
+    table = pd.read_csv(wall.folder / "thrust_hubs.csv", keep_default_na=False)
+    assert list(table.columns) == ["body", "x [m]", "y [m]", "R_x [kN]", "R_y [kN]", "group",
+                                   "joints"]
+    assert list(hubs.columns) == [c.split(" [")[0] for c in table.columns]
+    assert hubs.attrs["units"] == {"body": "", "x": "m", "y": "m", "R_x": "kN", "R_y": "kN",
+                                   "group": "", "joints": "1"}
+    for col in ("body", "group"):
+        assert list(hubs[col]) == list(table[col])
+    for col, head in zip(("x", "y", "R_x", "R_y"), table.columns[1:5]):
+        np.testing.assert_array_equal(hubs[col].to_numpy(), table[head].to_numpy(),
+                                      err_msg=col)
+    assert list(hubs["joints"]) == list(table["joints"])
+    # A hub per brick of the 3 x 4 bond but the last of the top course (its head joint
+    # opens: two loaded joints); in body order, each joining the body's loaded joints of
+    # thrust(), more than two.
+    assert len(hubs) == 12 and hubs["joints"].dtype == np.int64
+    positions = [wall.bodies.index(b) for b in hubs["body"]]
+    assert positions == sorted(positions)
+    loaded = wall.thrust().dropna(subset=["x"])
+    for body, joints in zip(hubs["body"], hubs["joints"]):
+        assert joints == ((loaded["body_a"] == body) | (loaded["body_b"] == body)).sum() > 2
+    # Straight beds: the hub lies on the body's bed, the first course's (resting on the
+    # clamped base, no joint below) on its top bed, the others' on their bottom bed, where
+    # the bed joints below carry the brick (R_y > 0) or, above the first course, press it.
+    with h5py.File(wall.archive, "r") as f:
+        for _, h in hubs.iterrows():
+            gname = dict(wall._bodies)[h["body"]]
+            nodes = np.asarray(f["bodies"][gname]["nodes"])
+            bed = nodes[:, 1].min() if h["group"] == "below" else nodes[:, 1].max()
+            assert h["y"] == pytest.approx(bed, abs=1e-12)
+            assert nodes[:, 0].min() <= h["x"] <= nodes[:, 0].max()
+            assert (h["R_y"] > 0) == (h["group"] == "below")
+    # The final state's VTK thrust block holds the same hubs (joint -1), bit for bit.
+    pyvista = pytest.importorskip("pyvista")
+    last = wall.state_count - 1
+    thrust = pyvista.read(wall.folder / f"vtk/state_{last:04d}.vtm")["thrust"]
+    at = thrust.points[thrust.point_data["joint"] == -1]
+    np.testing.assert_array_equal(at[:, :2], hubs[["x", "y"]].to_numpy())
+    # An archive away from its run folder: no hubs (they are not archived), the contact
+    # points still.
+    alone = tmp_path / "archive.h5"
+    alone.write_bytes(wall.archive.read_bytes())
+    run = sgbem.open(alone)
+    with pytest.raises(FileNotFoundError, match="thrust_hubs.csv"):
+        run.hubs()
+    pd.testing.assert_frame_equal(run.contact_points(), wall.contact_points())
