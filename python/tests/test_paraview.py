@@ -5,8 +5,10 @@ runs when view.py extracted a block from the plain grid its reader returned).
 Skipped, saying so, where pvpython or xvfb-run is missing (`make setup` does not install
 ParaView: apt-get install -y paraview xvfb)."""
 
+import random
 import shutil
 import subprocess
+import time
 
 import numpy as np
 import pytest
@@ -34,8 +36,11 @@ for name in ("contact_status", "tangential_status"):
 def pvpython(*args):
     # xvfb-run -a can hand two servers started close together the same display; ParaView then
     # aborts creating its window before it reads anything. That failure of the X server (and
-    # only that one) is tried again, once, with a new server.
-    for _ in range(2):
+    # only that one) is tried again with a new server, up to three times, after a pause of a
+    # random length (two runs that collided at once collided again when retried at once).
+    for attempt in range(4):
+        if attempt:
+            time.sleep(random.uniform(0.5, 3.0))
         proc = subprocess.run(["xvfb-run", "-a", "pvpython", *map(str, args)],
                               capture_output=True, text=True, timeout=300, check=False)
         no_window = "CreateAWindow" in proc.stderr or "cannot open display" in proc.stderr
