@@ -2,7 +2,7 @@
 //! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
 //! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
 //! elements per course height) for 7 … 410 bricks with the full history (the default) and
-//! 798 and 2 048 bricks with the final state; the solver (evolutive path or sparse) and its
+//! 798, 2 048 and 4 128 bricks with the final state; the solver (evolutive path or sparse) and its
 //! iterations: seconds per stage (from the run's `timings.json`), peak memory of the run,
 //! fitted exponents against the number of bodies (all walls, and those of 200 bodies on). Writes out/bench/masonry.csv and prints a table.
 //! `SGBEM_BENCH_VOUSSOIRS=6,12` and `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` (courses x
@@ -196,8 +196,8 @@ fn main() {
     let scene = root().join("pipelines/wall_running_bond.toml");
     let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
     // Walls of over 3000 unilateral pairs (14 x 14 on) are solved by the sparse solver, as
-    // a scene without `method` is; 28 x 28 (798 bodies) and 45 x 45 (2 048) with the final
-    // state only (64 x 64, 4 160 bodies: `SGBEM_BENCH_WALLS=64x64:final`).
+    // a scene without `method` is; 28 x 28 (798 bodies), 45 x 45 (2 048) and 64 x 64
+    // (4 128: about 85 s and 7.7 GB) with the final state only.
     for size in sizes(
         "SGBEM_BENCH_WALLS",
         &[
@@ -209,6 +209,7 @@ fn main() {
             "20x20",
             "28x28:final",
             "45x45:final",
+            "64x64:final",
         ],
     ) {
         let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
