@@ -85,3 +85,53 @@ pub fn scaled_lu_solve(
         residual,
     })
 }
+
+/// The solution of the 3 × 3 system `a x = b` by elimination with partial pivoting; None
+/// where a pivot vanishes against the largest entry.
+pub fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+    let big = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
+    for k in 0..3 {
+        let p = (k..3).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+        if a[p][k].abs() <= 1e-14 * big || big == 0.0 {
+            return None;
+        }
+        a.swap(k, p);
+        b.swap(k, p);
+        let pivot = a[k];
+        for i in k + 1..3 {
+            let f = a[i][k] / pivot[k];
+            for (x, p) in a[i].iter_mut().zip(pivot).skip(k) {
+                *x -= f * p;
+            }
+            b[i] -= f * b[k];
+        }
+    }
+    let mut x = [0.0; 3];
+    for k in (0..3).rev() {
+        let s: f64 = (k + 1..3).map(|j| a[k][j] * x[j]).sum();
+        x[k] = (b[k] - s) / a[k][k];
+    }
+    Some(x)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::solve3;
+
+    #[test]
+    fn solve3_needs_its_pivoting_and_refuses_a_singular_matrix() {
+        // The first pivot is zero: without row exchanges the elimination would divide by it.
+        let a = [[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]];
+        let x = [1.0, -2.0, 0.5];
+        let b = [
+            a[0][0] * x[0] + a[0][1] * x[1] + a[0][2] * x[2],
+            a[1][0] * x[0] + a[1][1] * x[1] + a[1][2] * x[2],
+            a[2][0] * x[0] + a[2][1] * x[1] + a[2][2] * x[2],
+        ];
+        let got = solve3(a, b).expect("regular");
+        for i in 0..3 {
+            assert!((got[i] - x[i]).abs() < 1e-14, "{got:?}");
+        }
+        assert!(solve3([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 1.0, 1.0]], b).is_none());
+    }
+}

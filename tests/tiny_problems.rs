@@ -475,6 +475,9 @@ fn infeasible_a_block_pulled_off_is_a_named_mechanism() {
             "no equilibrium exists (a mechanism)",
             "leaving body \"upper\" free",
             "opens it along (0.000, 1.000)",
+            // The pull at the right end turns the block about its heel, the joint's left
+            // end, the one point still closed.
+            "the motion: body \"upper\" turns anticlockwise about (0, 0.5)",
         ]);
         if r.method == "qp" {
             assert!(r.err.contains("the QP is unbounded"), "{}", r.err);
@@ -503,6 +506,7 @@ fn infeasible_a_push_beyond_mu_n_slides() {
             "no equilibrium exists (a sliding mechanism)",
             "body \"upper\" slides on interface \"joint\"",
             "tangential/normal resultant 0.600 > mu = 0.500",
+            "the motion: body \"upper\" moves along (1.000, 0.000)",
         ]);
     }
 }
@@ -528,6 +532,8 @@ fn infeasible_a_push_beyond_the_tipping_limit_tips() {
             "leaving body \"upper\" free",
             "tipping about the last closed point",
             "opens it along (0.000, 1.000)",
+            // About the toe, the joint's right end.
+            "the motion: body \"upper\" turns clockwise about (1, 0.5)",
         ]);
         // x = Σ x_i F_i / Σ F_i over nodal forces F_i that here are larger than their sum
         // (the toe pushes, its neighbour pulls): its rounding grows by Σ|F_i| / |Σ F_i|.

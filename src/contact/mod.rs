@@ -650,7 +650,16 @@ impl<'a> Session<'a> {
                 Ok(o) => o,
                 Err((e, probe)) => {
                     lp.undecided = matches!(e, InnerFailure::StickClosure { .. });
-                    let (err, blocked) = self.explain(&e, &probe, &inner);
+                    let (mut err, blocked) = self.explain(&e, &probe, &inner);
+                    if blocked {
+                        err += &motion_words(
+                            self.model,
+                            &inner,
+                            &mut self.sparse,
+                            &probe.state,
+                            &probe.blocked,
+                        );
+                    }
                     mechanism = blocked;
                     failure = Some(failed(method, load_step, &err));
                     break;
@@ -677,7 +686,16 @@ impl<'a> Session<'a> {
             let state = outcome.state;
             if !ok {
                 mechanism = !outcome_blocked.is_empty();
-                let hint = self.hint(&outcome_blocked, &state, &inner);
+                let mut hint = self.hint(&outcome_blocked, &state, &inner);
+                if mechanism {
+                    hint += &motion_words(
+                        self.model,
+                        &inner,
+                        &mut self.sparse,
+                        &state,
+                        &outcome_blocked,
+                    );
+                }
                 failure = Some(not_converged(method, load_step, residual, &notes, &hint));
                 last = Some((state, residual));
                 break;
@@ -1059,6 +1077,94 @@ impl<'a> Session<'a> {
             parts.join("; ")
         )
     }
+}
+
+/// The motion of the mechanism that the rows `blocked` open from the state `st`: each
+/// moving body's rigid motion, from the sparse system's null direction under the loads
+/// ([`sparse::mechanism_motion`]), in words — translation along a unit vector, or rotation
+/// about a point (the instantaneous centre) and its sense; empty where it cannot be found.
+fn motion_words(
+    model: &Model,
+    inner: &Inner,
+    system: &mut Option<sparse::SparseSystem>,
+    st: &InnerState,
+    blocked: &[usize],
+) -> String {
+    if blocked.is_empty() {
+        return String::new();
+    }
+    if system.is_none() {
+        *system = sparse::SparseSystem::new(inner.problem).ok();
+    }
+    let Some(sys) = system.as_mut() else {
+        return String::new();
+    };
+    let (mut open, mut sign) = (st.open.clone(), st.sign.clone());
+    for &r in blocked {
+        open[r] = true;
+        if inner.is_friction(r) {
+            // A sticking row slips against its excess force.
+            sign[r] = -st.lambda[r].signum();
+        }
+    }
+    let Some(dw) = sparse::mechanism_motion(inner, sys, &open, &sign, &st.s) else {
+        return String::new();
+    };
+    let (motions, _) = inner.problem.rigid_motions(model, &dw);
+    let size = model.scale.max(f64::MIN_POSITIVE);
+    let amount = |m: &problem::BodyMotion| {
+        m.translation[0].hypot(m.translation[1]) + m.rotation.abs() * size
+    };
+    let largest = motions.iter().map(amount).fold(0.0f64, f64::max);
+    let mut moving: Vec<&problem::BodyMotion> = motions
+        .iter()
+        .filter(|m| amount(m) > 1e-3 * largest)
+        .collect();
+    moving.sort_by(|a, b| amount(b).total_cmp(&amount(a)));
+    if moving.is_empty() {
+        return String::new();
+    }
+    let fmt = crate::input::model::fmt_num;
+    let words: Vec<String> = moving
+        .iter()
+        .take(4)
+        .map(|m| {
+            let name = &model.bodies[m.body].name;
+            let t = m.translation;
+            let tl = t[0].hypot(t[1]);
+            if m.rotation.abs() * size <= 1e-6 * tl {
+                // Components that print as zero print without a sign.
+                let c = |v: f64| if v.abs() < 5e-4 { 0.0 } else { v };
+                format!(
+                    "body \"{name}\" moves along ({:.3}, {:.3})",
+                    c(t[0] / tl),
+                    c(t[1] / tl)
+                )
+            } else {
+                // The point that does not move: c + k × t / ω.
+                let p = [
+                    m.centroid[0] - t[1] / m.rotation,
+                    m.centroid[1] + t[0] / m.rotation,
+                ];
+                let sense = if m.rotation > 0.0 {
+                    "anticlockwise"
+                } else {
+                    "clockwise"
+                };
+                format!(
+                    "body \"{name}\" turns {sense} about ({}, {})",
+                    fmt((p[0] * 1e6).round() / 1e6),
+                    fmt((p[1] * 1e6).round() / 1e6)
+                )
+            }
+        })
+        .collect();
+    let more = if moving.len() > 4 {
+        format!(" and {} more bodies", moving.len() - 4)
+    } else {
+        String::new()
+    };
+    format!("; the motion: {}{more}", words.join(", "))
 }
 
 /// A history row of a state.

@@ -320,20 +320,19 @@ impl SparseSystem {
         y
     }
 
-    /// The state of the status `open` (free rows open whatever `open` says) with the slip
-    /// directions `sign` of slipping friction rows; None when the status leaves a body free.
-    /// With a proximal term `(ε, s̄)` every open row r gets the spring `ε H_rr (s_r − s̄_r)`:
-    /// a body that the status leaves free then moves by a finite step from s̄ towards what
-    /// stops it (iterates only: a result is a state without it, or one whose spring force is
-    /// within the tolerance).
-    fn state(
+    /// The unknowns `w = (v, s)` of the status `open` (free rows open whatever `open`
+    /// says, stick rows of open pairs following them), with the slip directions of slipping
+    /// friction rows and the proximal term `prox` as for [`SparseSystem::state`]; None where
+    /// the status leaves a body free. Also the statuses followed and the directions used.
+    #[allow(clippy::type_complexity)]
+    fn solve_w(
         &mut self,
         inner: &Inner,
         c: &[f64],
         open: &[bool],
         sign: &[f64],
         prox: Option<(f64, &[f64])>,
-    ) -> Option<InnerState> {
+    ) -> Option<(Vec<bool>, Vec<f64>, Vec<f64>)> {
         let reg = prox.map_or(0.0, |p| p.0);
         let (ng, n) = (self.n_glued, self.n);
         // A stick row of an open pair ties as its pair closes.
@@ -404,6 +403,32 @@ impl SparseSystem {
         if !w.iter().all(|v| v.is_finite()) || (reg == 0.0 && size(&w) > SINGULAR * reference) {
             return None;
         }
+        Some((open, sg, w))
+    }
+
+    /// The state of the status `open` (free rows open whatever `open` says) with the slip
+    /// directions `sign` of slipping friction rows; None when the status leaves a body free.
+    /// With a proximal term `(ε, s̄)` every open row r gets the spring `ε H_rr (s_r − s̄_r)`:
+    /// a body that the status leaves free then moves by a finite step from s̄ towards what
+    /// stops it (iterates only: a result is a state without it, or one whose spring force is
+    /// within the tolerance).
+    fn state(
+        &mut self,
+        inner: &Inner,
+        c: &[f64],
+        open: &[bool],
+        sign: &[f64],
+        prox: Option<(f64, &[f64])>,
+    ) -> Option<InnerState> {
+        let (ng, n) = (self.n_glued, self.n);
+        let (open, sg, w) = self.solve_w(inner, c, open, sign, prox)?;
+        let target = |r: usize| {
+            if inner.is_friction(r) {
+                -sg[r] * inner.bound[r]
+            } else {
+                0.0
+            }
+        };
         let grad = self.apply(&w);
         let mut lambda: Vec<f64> = (0..n).map(|r| grad[ng + r] + c[ng + r]).collect();
         for r in 0..n {
@@ -630,4 +655,29 @@ fn closed_state(inner: &Inner) -> InnerState {
         s: inner.base.offset.clone(),
         lambda: inner.base.lambda0.clone(),
     }
+}
+
+/// The motion of a mechanism: the direction in which the unknowns `w = (v, s)` of the status
+/// `open` (slip directions `sign`) run as the proximal weight on its open rows falls from
+/// 1e-6 to 1e-8 of their diagonal, anchored at the openings `centre` — the loaded motion of
+/// the bodies that the status leaves free, the part of `w` that the weight alone holds.
+/// Normalised to a largest entry of 1; None where the status holds every body (then `w`
+/// hardly changes) or a factorisation fails.
+pub fn mechanism_motion(
+    inner: &Inner,
+    sys: &mut SparseSystem,
+    open: &[bool],
+    sign: &[f64],
+    centre: &[f64],
+) -> Option<Vec<f64>> {
+    let c = inner
+        .problem
+        .linear_term(inner.base.factor, &inner.base.cohesion);
+    let (_, _, w1) = sys.solve_w(inner, &c, open, sign, Some((1e-6, centre)))?;
+    let (_, _, w2) = sys.solve_w(inner, &c, open, sign, Some((1e-8, centre)))?;
+    let size = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+    let dw: Vec<f64> = w2.iter().zip(&w1).map(|(a, b)| a - b).collect();
+    let big = size(&dw);
+    // A free body's part grows a hundredfold; the rest changes by about 1e-6 of itself.
+    (big > 0.5 * size(&w2) && big > 0.0).then(|| dw.iter().map(|x| x / big).collect())
 }

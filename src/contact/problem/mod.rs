@@ -161,6 +161,18 @@ pub struct Problem {
     implied_at: std::collections::HashSet<(usize, usize, usize)>,
     n_glued: usize,
     factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    /// Each global dof's node (body-local) and direction.
+    dof_at: Vec<(usize, [f64; 2])>,
+}
+
+/// The rigid motion of one body in a mechanism: translation of its centroid and rotation
+/// (radians per unit of the motion's scale), with the body's node coordinates' centroid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyMotion {
+    pub body: usize,
+    pub centroid: [f64; 2],
+    pub translation: [f64; 2],
+    pub rotation: f64,
 }
 
 /// The all-closed state for one load factor and cohesion: glued displacements v⁰ and row
@@ -205,6 +217,14 @@ impl Problem {
         let (expr, kept) = eliminate(&cands, bodies.n_dofs);
         let set = final_rows(model, &cands, &kept);
         let glued = glued_maps(&expr, &set.index_of, set.rows.len());
+        let mut dof_at = vec![(0, [0.0; 2]); bodies.n_dofs];
+        for map in &bodies.node_dofs {
+            for (&node, dofs) in map {
+                for &(d, dir) in dofs {
+                    dof_at[d] = (node, dir);
+                }
+            }
+        }
         let BodyOperators {
             ops,
             dof_start,
@@ -232,6 +252,7 @@ impl Problem {
             implied_at: set.implied_at,
             n_glued: glued.n_glued,
             factor,
+            dof_at,
         };
         problem.check_base(&kg, model)?;
         Ok(problem)
@@ -312,6 +333,70 @@ impl Problem {
                     .collect()
             })
             .collect()
+    }
+
+    /// The rigid motion of each body under the change `dw = (dv, ds)` of the glued
+    /// displacements and the openings (a mechanism's motion): per body the least-squares
+    /// translation and rotation of its interface dofs' displacements, and the largest part of
+    /// them that no rigid motion explains (relative to the largest displacement).
+    pub fn rigid_motions(&self, model: &Model, dw: &[f64]) -> (Vec<BodyMotion>, f64) {
+        let (dv, ds) = dw.split_at(self.n_glued.min(dw.len()));
+        let mut out = Vec::with_capacity(self.ops.len());
+        let (mut largest, mut misfit) = (0.0f64, 0.0f64);
+        for (b, op) in self.ops.iter().enumerate() {
+            let nodes = &model.bodies[b].nodes;
+            let m = nodes.len().max(1) as f64;
+            let c = nodes
+                .iter()
+                .fold([0.0, 0.0], |a, p| [a[0] + p[0] / m, a[1] + p[1] / m]);
+            let scale = model.scale.max(f64::MIN_POSITIVE);
+            // Rows of the fit: d·(t + ω k × (x − c)) = U, ω scaled by the model's size.
+            let mut rows = Vec::with_capacity(op.u_idx.len());
+            for l in 0..op.u_idx.len() {
+                let d = self.dof_start[b] + l;
+                let mut u: f64 = self.tmap[d].iter().map(|&(g, x)| x * dv[g]).sum();
+                for &(r, x) in &self.offs[d] {
+                    if r < self.n_open_rows {
+                        u += x * ds[r];
+                    }
+                }
+                let (node, e) = self.dof_at[d];
+                let x = nodes.get(node).copied().unwrap_or(c);
+                let a = [
+                    e[0],
+                    e[1],
+                    (-(x[1] - c[1]) * e[0] + (x[0] - c[0]) * e[1]) / scale,
+                ];
+                rows.push((a, u));
+                largest = largest.max(u.abs());
+            }
+            let mut g = [[0.0f64; 3]; 3];
+            let mut h = [0.0f64; 3];
+            for (a, u) in &rows {
+                for i in 0..3 {
+                    h[i] += a[i] * u;
+                    for j in 0..3 {
+                        g[i][j] += a[i] * a[j];
+                    }
+                }
+            }
+            // A body whose dofs leave a mode unseen (all along one line): that mode is zero.
+            let tr = g[0][0] + g[1][1] + g[2][2];
+            for (i, row) in g.iter_mut().enumerate() {
+                row[i] += 1e-12 * tr;
+            }
+            let q = crate::linalg::solve3(g, h).unwrap_or([0.0; 3]);
+            for (a, u) in &rows {
+                misfit = misfit.max((a[0] * q[0] + a[1] * q[1] + a[2] * q[2] - u).abs());
+            }
+            out.push(BodyMotion {
+                body: b,
+                centroid: c,
+                translation: [q[0], q[1]],
+                rotation: q[2] / scale,
+            });
+        }
+        (out, misfit / largest.max(f64::MIN_POSITIVE))
     }
 
     /// The number of glued unknowns v.
