@@ -671,12 +671,18 @@ fn contact_block_holds_every_row_of_the_interface_tables() {
             assert_eq!(tstatus[p], want, "{name} pair {j}");
             slipping += usize::from(want == 2);
             sum += force[p];
+            sum_t += shear[p];
         }
         // N is compression positive; the rows' normal forces are tension positive.
         let n = thrust[name]["normal_force"].as_f64().expect("N");
         assert!(
             (sum + n).abs() <= 1e-12 * n.abs().max(1e-300),
             "{name}: {sum} vs {n}"
+        );
+        let t = thrust[name]["tangential_force"].as_f64().expect("T");
+        assert!(
+            (sum_t - t).abs() <= 1e-12 * n.abs().max(t.abs()).max(1e-300),
+            "{name}: {sum_t} vs {t}"
         );
         rows_seen += at.len();
     }
