@@ -24,7 +24,7 @@ use crate::output::progress::Progress;
 use crate::output::record::{Array, InteriorRecord, IterateRecord, RunRecord};
 use crate::output::{csv, summary, write_staged};
 use crate::plan::{self, Plan};
-use crate::post::{section_points, PointSampler};
+use crate::post::{section_offsets, section_points, PointSampler};
 use crate::solution::{History, RunStatus};
 use crate::timings::{Timings, TimingsFile};
 
@@ -548,8 +548,11 @@ fn postprocess(
     // state (the path, for plots like the paper's Fig. 6), the states in parallel.
     let full_path = scene.output.history != HistoryLevel::Final && !loads.is_empty();
     for s in &scene.output.sections {
+        // Evaluated at `from + t (to − from)` taken relative to each body: far from the
+        // origin the points written (`pts`) are those rounded to the nearest coordinates.
         let pts = section_points(s.from, s.to, s.points);
-        let sampler = PointSampler::new(&inputs, settings, &pts);
+        let offsets = section_offsets(s.from, s.to, s.points);
+        let sampler = PointSampler::with_offsets(&inputs, settings, s.from, &offsets);
         let rows = section_rows(&pts, sampler.evaluate(&inputs));
         if solved.failure.is_none() {
             if let Some(x) = rows.iter().find_map(|(x, v)| {

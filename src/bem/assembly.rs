@@ -23,10 +23,12 @@
 //! (P, F) = (W, −U)ᵀ. Known data go to the load: `V t̄ − (K + ½M) ū` on W rows,
 //! `(Kᵀ − ½Mᵀ) t̄ + D ū` on P rows, plus the body-force terms W^b, P^b (docs/formulation.md §4).
 //!
-//! Degenerate scale (docs/formulation.md §8.4): each body is integrated in coordinates centred on
-//! its bounding box and divided by its diagonal, so that it fits in a unit disk, and the
-//! blocks are brought back to physical units (V·L², K·L, D·1). This uses the single-layer
-//! kernel up to an additive constant, an equivalent formulation that is uniquely solvable.
+//! Degenerate scale (docs/formulation.md §8.4): each body is integrated in the coordinates of
+//! its [`Scaling`], taken relative to one of its nodes (exact far from the origin), centred on
+//! the centroid of its nodes and divided by twice their largest distance from it, so that it
+//! fits in a disk of radius ½, and the blocks are brought back to physical units (V·L², K·L,
+//! D·1). This uses the single-layer kernel up to an additive constant, an equivalent
+//! formulation that is uniquely solvable.
 //!
 //! Assembly runs in parallel over test elements (rayon): each element yields the partial
 //! rows of the unknowns supported on it, which are then added in order.
@@ -63,15 +65,16 @@ pub enum Unknown {
         dir: [f64; 2],
     },
     /// Amplitude of a traction distributed as a rigid motion over a whole loop (one mode
-    /// `[a, b, ω]`: `(a − ω(y−y_c)/L, b + ω(x−x_c)/L)`). Added where a loop's rigid motions
-    /// are not fixed by known or interface displacements (a hole with tractions only): the
-    /// hypersingular rows cannot see such a motion, so the displacement equation tested with
-    /// the mode is added with it. Its amplitude vanishes with the discretisation error.
+    /// `[a, b, ω]`: `(a − ω(y−y_c)/L, b + ω(x−x_c)/L)`, with `(x_c, L)` the loop's
+    /// [`Scaling`], which keeps `x − x_c` exact far from the origin). Added where a loop's
+    /// rigid motions are not fixed by known or interface displacements (a hole with tractions
+    /// only): the hypersingular rows cannot see such a motion, so the displacement equation
+    /// tested with the mode is added with it. Its amplitude vanishes with the discretisation
+    /// error.
     LoopMode {
         loop_index: usize,
         mode: [f64; 3],
-        centre: [f64; 2],
-        length: f64,
+        about: Scaling,
     },
     /// Displacement component of node `node` along `dir`; on an interface, its pair and
     /// local component.
@@ -90,15 +93,13 @@ impl Unknown {
     /// The value at x of a [`Unknown::LoopMode`] distribution ([0, 0] for other unknowns).
     pub fn loop_mode_value(&self, x: [f64; 2]) -> [f64; 2] {
         match *self {
-            Unknown::LoopMode {
-                mode,
-                centre,
-                length,
-                ..
-            } => [
-                mode[0] - mode[2] * (x[1] - centre[1]) / length,
-                mode[1] + mode[2] * (x[0] - centre[0]) / length,
-            ],
+            Unknown::LoopMode { mode, about, .. } => {
+                let r = about.centred(x);
+                [
+                    mode[0] - mode[2] * r[1] / about.length,
+                    mode[1] + mode[2] * r[0] / about.length,
+                ]
+            }
             _ => [0.0, 0.0],
         }
     }
@@ -113,16 +114,8 @@ fn loop_modes(body: &Body) -> Vec<Unknown> {
             .iter()
             .map(|&e| body.elements[e].nodes[0])
             .collect();
-        let n = nodes.len().max(1) as f64;
-        let centre = [
-            nodes.iter().map(|&k| body.nodes[k][0]).sum::<f64>() / n,
-            nodes.iter().map(|&k| body.nodes[k][1]).sum::<f64>() / n,
-        ];
-        let length = 2.0
-            * nodes
-                .iter()
-                .map(|&k| (body.nodes[k][0] - centre[0]).hypot(body.nodes[k][1] - centre[1]))
-                .fold(0.0, f64::max);
+        let points: Vec<[f64; 2]> = nodes.iter().map(|&k| body.nodes[k]).collect();
+        let about = Scaling::of(&points);
         let mut basis: Vec<[f64; 3]> = Vec::new();
         let add = |v: [f64; 3], basis: &mut Vec<[f64; 3]>| -> Option<[f64; 3]> {
             let mut r = v;
@@ -143,7 +136,7 @@ fn loop_modes(body: &Body) -> Vec<Unknown> {
         };
         for &k in &nodes {
             let d = body.dofs[k];
-            let x = body.nodes[k];
+            let r = about.centred(body.nodes[k]);
             for c in 0..2 {
                 if d.class[c] == DofClass::Free {
                     continue;
@@ -152,7 +145,7 @@ fn loop_modes(body: &Body) -> Vec<Unknown> {
                 let row = [
                     dir[0],
                     dir[1],
-                    (-(x[1] - centre[1]) * dir[0] + (x[0] - centre[0]) * dir[1]) / length,
+                    (-r[1] * dir[0] + r[0] * dir[1]) / about.length,
                 ];
                 add(row, &mut basis);
             }
@@ -165,8 +158,7 @@ fn loop_modes(body: &Body) -> Vec<Unknown> {
                 out.push(Unknown::LoopMode {
                     loop_index: li,
                     mode,
-                    centre,
-                    length,
+                    about,
                 });
             }
         }
@@ -200,9 +192,8 @@ pub struct BodySystem {
     /// Largest relative asymmetry of G (diagnostic; zero up to roundoff in the usual case).
     pub asymmetry: f64,
     pub material: Material,
-    /// Centre and length of the scaled coordinates used for integration.
-    pub centre: [f64; 2],
-    pub length: f64,
+    /// The scaled coordinates used for integration.
+    pub scaling: Scaling,
     /// The known displacement components (node, global direction): the nodes held by
     /// displacement conditions.
     pub held: Vec<(usize, [f64; 2])>,
@@ -248,8 +239,8 @@ pub fn assemble_body(
     assemble_body_scaled(model, bi, plane, settings, load_factor, scene_file, s)
 }
 
-/// [`assemble_body`] with the integration coordinates `(x − centre)/length` given; the
-/// degenerate-scale test uses it to integrate a body at its physical size.
+/// [`assemble_body`] with the integration coordinates given (a [`Scaling`], or `(c, L)` for
+/// `(x − c)/L`); the degenerate-scale test uses it to integrate a body at its physical size.
 pub fn assemble_body_scaled(
     model: &Model,
     bi: usize,
@@ -257,8 +248,10 @@ pub fn assemble_body_scaled(
     settings: &QuadratureSettings,
     load_factor: f64,
     scene_file: &std::path::Path,
-    (centre, length): ([f64; 2], f64),
+    scaling: impl Into<Scaling>,
 ) -> Result<BodySystem> {
+    let scaling: Scaling = scaling.into();
+    let length = scaling.length;
     let body = &model.bodies[bi];
     let mat = material(body, plane);
     let ne = body.elements.len();
@@ -277,7 +270,7 @@ pub fn assemble_body_scaled(
     let held = held_components(body, n_sys, &mut entries, &node_elems);
 
     // --- Scaled geometry ----------------------------------------------------------------------
-    let scaled = |p: [f64; 2]| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
+    let scaled = |p: [f64; 2]| scaling.scaled(p);
     let elems: Vec<ElementRef> = body
         .elements
         .iter()
@@ -349,8 +342,7 @@ pub fn assemble_body_scaled(
         known_t,
         asymmetry,
         material: mat,
-        centre,
-        length,
+        scaling,
         held,
         held_rows,
         held_load,
@@ -817,22 +809,88 @@ pub(crate) fn body_segment(body: &Body, ei: usize) -> Segment {
     Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
 }
 
-/// Centre and length of the scaled coordinates `(x − c)/L`: c is the centroid of the
-/// boundary nodes and L twice the largest distance from it, so the scaled body lies in a
-/// disk of radius 1/2, below every degenerate scale (docs/formulation.md §8.4). Both follow
-/// rotations, translations and rescalings of the body exactly, so results do too.
-pub fn scaling(body: &Body) -> ([f64; 2], f64) {
-    let n = body.nodes.len().max(1) as f64;
-    let c = [
-        body.nodes.iter().map(|p| p[0]).sum::<f64>() / n,
-        body.nodes.iter().map(|p| p[1]).sum::<f64>() / n,
-    ];
-    let r = body
-        .nodes
-        .iter()
-        .map(|p| (p[0] - c[0]).hypot(p[1] - c[1]))
-        .fold(0.0, f64::max);
-    (c, 2.0 * r)
+/// The coordinates a body is integrated in (docs/formulation.md §8.4):
+/// `x' = ((x − o) − c)/L`, with o one of its boundary nodes, c the centroid of its boundary
+/// nodes relative to o and L twice their largest distance from c, so that the scaled body
+/// lies in a disk of radius 1/2, below every degenerate scale. They follow rotations,
+/// translations and rescalings of the body, so results do too. Far from the origin, the
+/// difference `x − o` of two nearby floating-point numbers is exact (Sterbenz): a body
+/// moved by 1e15 whose nodes are still the same numbers plus the shift is integrated in the
+/// same coordinates, to the last bit, as near the origin.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Scaling {
+    /// A boundary node of the body (the first), or the point given.
+    pub origin: [f64; 2],
+    /// The centroid of the boundary nodes, relative to `origin`.
+    pub centre: [f64; 2],
+    /// Twice the largest distance of a boundary node from the centroid.
+    pub length: f64,
+}
+
+impl Scaling {
+    /// The scaling of a set of points: about the first, their centroid and extent.
+    pub fn of(points: &[[f64; 2]]) -> Scaling {
+        let origin = points.first().copied().unwrap_or([0.0; 2]);
+        let rel = |p: &[f64; 2]| [p[0] - origin[0], p[1] - origin[1]];
+        let n = points.len().max(1) as f64;
+        let centre = [
+            points.iter().map(|p| rel(p)[0]).sum::<f64>() / n,
+            points.iter().map(|p| rel(p)[1]).sum::<f64>() / n,
+        ];
+        let r = points
+            .iter()
+            .map(|p| {
+                let d = rel(p);
+                (d[0] - centre[0]).hypot(d[1] - centre[1])
+            })
+            .fold(0.0, f64::max);
+        Scaling {
+            origin,
+            centre,
+            length: 2.0 * r,
+        }
+    }
+
+    /// `x − o`: exact for a point near the body.
+    pub fn relative(&self, x: [f64; 2]) -> [f64; 2] {
+        [x[0] - self.origin[0], x[1] - self.origin[1]]
+    }
+
+    /// The scaled coordinates of a point given relative to `origin`.
+    pub fn scaled_relative(&self, r: [f64; 2]) -> [f64; 2] {
+        [
+            (r[0] - self.centre[0]) / self.length,
+            (r[1] - self.centre[1]) / self.length,
+        ]
+    }
+
+    /// `(x − o) − c`: a point relative to the centroid, unscaled.
+    pub fn centred(&self, x: [f64; 2]) -> [f64; 2] {
+        let r = self.relative(x);
+        [r[0] - self.centre[0], r[1] - self.centre[1]]
+    }
+
+    /// The scaled coordinates `((x − o) − c)/L` of a point.
+    pub fn scaled(&self, x: [f64; 2]) -> [f64; 2] {
+        self.scaled_relative(self.relative(x))
+    }
+}
+
+impl From<([f64; 2], f64)> for Scaling {
+    /// The scaled coordinates `(x − c)/L` about a given point c.
+    fn from((c, length): ([f64; 2], f64)) -> Scaling {
+        Scaling {
+            origin: c,
+            centre: [0.0; 2],
+            length,
+        }
+    }
+}
+
+/// The [`Scaling`] of a body: about its first boundary node, the centroid of its boundary
+/// nodes and their extent.
+pub fn scaling(body: &Body) -> Scaling {
+    Scaling::of(&body.nodes)
 }
 
 fn scale4(b: &[[[[f64; 2]; 2]; 2]; 2], s: f64) -> [[[[f64; 2]; 2]; 2]; 2] {

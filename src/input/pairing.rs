@@ -138,7 +138,15 @@ fn pieces(p: [f64; 2], q: [f64; 2], b: &Side, cands: &[usize], reach: Reach) -> 
         }
         let xm = 0.5 * (lo + hi);
         let eta = (xm - xr) / (xs - xr);
-        let dist = dot(sub(lerp(xr_pt, xs_pt, eta), lerp(p, q, xm)), nu);
+        // Both points relative to p (exact differences), not as positions: far from the
+        // origin the positions would round.
+        let dist = dot(
+            sub(
+                lerp(sub(xr_pt, p), sub(xs_pt, p), eta),
+                lerp([0.0; 2], sub(q, p), xm),
+            ),
+            nu,
+        );
         if dist > reach.ahead || dist < -reach.behind {
             continue;
         }
@@ -479,14 +487,14 @@ fn overlaps(p: [f64; 2], q: [f64; 2], r: [f64; 2], s: [f64; 2]) -> bool {
 /// Distance between two segments (zero where they touch or cross).
 pub fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     let point_seg = |p: [f64; 2], s0: [f64; 2], s1: [f64; 2]| -> f64 {
-        let v = sub(s1, s0);
+        let (v, w) = (sub(s1, s0), sub(p, s0));
         let l2 = dot(v, v);
         let t = if l2 > 0.0 {
-            (dot(sub(p, s0), v) / l2).clamp(0.0, 1.0)
+            (dot(w, v) / l2).clamp(0.0, 1.0)
         } else {
             0.0
         };
-        norm(sub(p, lerp(s0, s1, t)))
+        norm([w[0] - t * v[0], w[1] - t * v[1]])
     };
     let cross = |u: [f64; 2], v: [f64; 2]| u[0] * v[1] - u[1] * v[0];
     let (o1, o2) = (cross(sub(b, a), sub(c, a)), cross(sub(b, a), sub(d, a)));

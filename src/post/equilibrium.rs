@@ -260,15 +260,15 @@ fn interface_wrench(
             sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
         ];
         // Where the sides were meshed on their own, B takes the force where its partners are.
-        let x = if sign < 0.0 && it.independent() {
-            it.b_point(body, j)
+        let arm = if sign < 0.0 && it.independent() {
+            it.b_offset(body, j, c)
         } else {
-            p.x
+            [p.x[0] - c[0], p.x[1] - c[1]]
         };
         total.add(Wrench {
             fx: f[0],
             fy: f[1],
-            m: cross([x[0] - c[0], x[1] - c[1]], f),
+            m: cross(arm, f),
         });
     }
     Some(total)

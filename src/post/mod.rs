@@ -30,10 +30,13 @@
 //! * **Invariants**: [`out_of_plane_stress`], [`von_mises`], [`principal_stresses`].
 //!
 //! **Scaled coordinates.** The boundary operators of a body are integrated in the scaled
-//! coordinates `x' = (x − c)/L` of [`crate::bem::assembly::scaling`] (docs/formulation.md §8.4),
-//! which amounts to the single-layer kernel `U + const·I`. The interior identities use the same
-//! coordinates, so that interior values belong to the same discrete solution as the boundary
-//! values. Back in physical units the single-layer displacement integrals carry a factor L,
+//! coordinates `x' = ((x − o) − c)/L` of [`crate::bem::assembly::scaling`] (docs/formulation.md
+//! §8.4), which amounts to the single-layer kernel `U + const·I`. The interior identities use the
+//! same coordinates, so that interior values belong to the same discrete solution as the
+//! boundary values. Points are taken relative to the body's node o as they come in (exact for
+//! points near the body), and everything after (rays of the boundary layer, nearest elements,
+//! winding numbers) works in those relative coordinates: a model far from the origin keeps its
+//! digits. Back in physical units the single-layer displacement integrals carry a factor L,
 //! the double layer 1, the stress single layer 1, the stress double layer 1/L, and the
 //! body-force terms `u^b` and `σ^b` the factors L² and L. For data in equilibrium
 //! (`∮t ds + b|Ω| = 0`) the constants of the single layer and of `u^b` cancel and the result
@@ -50,7 +53,7 @@ use std::collections::HashMap;
 
 use rayon::prelude::*;
 
-use crate::bem::assembly::scaling;
+use crate::bem::assembly::{scaling, Scaling};
 use crate::bem::galerkin::{
     point_integrals_on, ElementFrame, PointDisplacement, PointStress, Segment,
 };
@@ -112,12 +115,6 @@ fn lerp_mat(a: &Mat2, b: &Mat2, xi: f64) -> Mat2 {
         }
     }
     out
-}
-
-/// The physical segment of element `ei` of `body`.
-fn segment(body: &Body, ei: usize) -> Segment {
-    let e = &body.elements[ei];
-    Segment::new(body.nodes[e.nodes[0]], body.nodes[e.nodes[1]])
 }
 
 /// Nearest point of segment `seg` to `x`: (distance, parameter ξ ∈ \[0,1\]).
@@ -384,13 +381,19 @@ fn solve3(a: [[f64; 3]; 3], r: [f64; 3]) -> [f64; 3] {
 
 /// One body prepared for point evaluation, apart from any boundary solution: scaled
 /// geometry, computed once and shared by all points and all states.
+///
+/// Points are taken relative to the body's [`Scaling`] origin, one of its nodes, as soon as
+/// they come in (an exact difference for a point near the body): the boundary layer's rays,
+/// the nearest element and the winding number are then as accurate far from the origin as
+/// near it.
 struct Geometry<'a> {
     body: &'a Body,
     material: Material,
-    centre: Vec2,
-    length: f64,
-    /// Physical segments (for distances) and scaled segments (for the integrals, with
-    /// their normals and lengths).
+    scaling: Scaling,
+    /// The boundary nodes relative to the origin.
+    nodes: Vec<Vec2>,
+    /// Segments relative to the origin (for distances) and scaled segments (for the
+    /// integrals, with their normals and lengths).
     segments: Vec<Segment>,
     scaled: Vec<Segment>,
     frames: Vec<ElementFrame>,
@@ -425,7 +428,7 @@ enum Base {
 }
 
 /// How [`interior`] obtains the value at a point: decided by the geometry alone, so that
-/// one plan serves every state of a run.
+/// one plan serves every state of a run. Points relative to the body's origin.
 #[derive(Debug, Clone, Copy)]
 enum Plan {
     /// The boundary value at parameter ξ of an element.
@@ -445,26 +448,29 @@ struct Integrals {
 }
 
 impl<'a> Geometry<'a> {
-    fn new(body: &'a Body, material: &Material, (centre, length): (Vec2, f64)) -> Self {
+    fn new(body: &'a Body, material: &Material, scaling: Scaling) -> Self {
         assert!(
-            length > 0.0,
-            "body \"{}\" has a degenerate scaling length {length}",
-            body.name
+            scaling.length > 0.0,
+            "body \"{}\" has a degenerate scaling length {}",
+            body.name,
+            scaling.length
         );
-        let sc = |p: Vec2| [(p[0] - centre[0]) / length, (p[1] - centre[1]) / length];
-        let segments: Vec<Segment> = (0..body.elements.len())
-            .map(|ei| segment(body, ei))
+        let nodes: Vec<Vec2> = body.nodes.iter().map(|&p| scaling.relative(p)).collect();
+        let segments: Vec<Segment> = body
+            .elements
+            .iter()
+            .map(|e| Segment::new(nodes[e.nodes[0]], nodes[e.nodes[1]]))
             .collect();
         let scaled: Vec<Segment> = segments
             .iter()
-            .map(|s| Segment::new(sc(s.p), sc(s.q)))
+            .map(|s| Segment::new(scaling.scaled_relative(s.p), scaling.scaled_relative(s.q)))
             .collect();
         let scaled_area = boundary_area(&scaled);
         Geometry {
             body,
             material: *material,
-            centre,
-            length,
+            scaling,
+            nodes,
             segments,
             frames: scaled.iter().map(|s| ElementFrame::new(*s)).collect(),
             scaled,
@@ -492,15 +498,21 @@ impl<'a> Geometry<'a> {
         }
     }
 
-    /// `x` in the scaled coordinates of the integrals.
-    fn scaled_point(&self, x: Vec2) -> Vec2 {
-        let l = self.length;
-        [(x[0] - self.centre[0]) / l, (x[1] - self.centre[1]) / l]
+    /// A point relative to the origin: exact for a point near the body.
+    fn relative(&self, x: Vec2) -> Vec2 {
+        self.scaling.relative(x)
     }
 
-    /// The kernel integrals of every element at x (see [`Integrals`]).
+    /// The point `base + offset` relative to the origin, as `(base − o) + offset`: the sum
+    /// `base + offset` itself would round far from the origin.
+    fn relative_offset(&self, (base, offset): (Vec2, Vec2)) -> Vec2 {
+        let r = self.scaling.relative(base);
+        [r[0] + offset[0], r[1] + offset[1]]
+    }
+
+    /// The kernel integrals of every element at x (relative; see [`Integrals`]).
     fn integrals(&self, settings: &QuadratureSettings, x: Vec2) -> Integrals {
-        let xs = self.scaled_point(x);
+        let xs = self.scaling.scaled_relative(x);
         Integrals {
             xs,
             per_element: self
@@ -520,7 +532,7 @@ impl<'a> Geometry<'a> {
         integrals: impl Iterator<Item = (PointDisplacement, PointStress)>,
     ) -> (Vec2, Mat2) {
         let m = &self.material;
-        let l = self.length;
+        let l = self.scaling.length;
         let (mut u_single, mut u_double) = ([0.0; 2], [0.0; 2]);
         let (mut s_single, mut s_double) = ([[0.0; 2]; 2], [[0.0; 2]; 2]);
         for (ei, (pd, ps)) in integrals.enumerate() {
@@ -561,9 +573,9 @@ impl<'a> Geometry<'a> {
         (u, s)
     }
 
-    /// The Somigliana identities at x, integrating as it goes.
+    /// The Somigliana identities at x (relative), integrating as it goes.
     fn somigliana(&self, v: &Values, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
-        let xs = self.scaled_point(x);
+        let xs = self.scaling.scaled_relative(x);
         let m = &self.material;
         let integrals = self
             .frames
@@ -572,12 +584,16 @@ impl<'a> Geometry<'a> {
         self.identities(v, xs, integrals)
     }
 
-    /// Nearest element to x: (element, distance, parameter ξ).
+    /// Nearest element to x (relative): (element, distance, parameter ξ). Elements within
+    /// 1e-12·L of the nearest distance are as near, and the first of them is taken: at a
+    /// point of symmetry (on the diagonal of a square corner) the last bits of the
+    /// coordinates would choose otherwise.
     fn nearest(&self, x: Vec2) -> (usize, f64, f64) {
         let mut best = (0, f64::INFINITY, 0.0);
+        let tie = 1e-12 * self.scaling.length;
         for (ei, seg) in self.segments.iter().enumerate() {
             let (d, xi) = project(seg, x);
-            if d < best.1 {
+            if d < best.1 - tie {
                 best = (ei, d, xi);
             }
         }
@@ -601,7 +617,7 @@ impl<'a> Geometry<'a> {
         (u, s)
     }
 
-    /// How [`interior`] evaluates x (see there).
+    /// How [`interior`] evaluates x (relative; see there).
     fn plan(&self, x: Vec2) -> Plan {
         let (ei, d, xi) = self.nearest(x);
         let le = self.body.elements[ei].length;
@@ -620,7 +636,7 @@ impl<'a> Geometry<'a> {
         for a in 0..2 {
             let node = self.body.elements[ei].nodes[a];
             if let Some(rho_v) = self.corner_layer[node] {
-                let v = self.body.nodes[node];
+                let v = self.nodes[node];
                 let r = crate::bem::kernels::norm2(x[0] - v[0], x[1] - v[1]);
                 if r < layer * rho_v && r > 0.0 {
                     rays.push((Base::Node(node), r, layer * rho_v, v));
@@ -648,7 +664,7 @@ impl<'a> Geometry<'a> {
                 };
             }
         }
-        let snap = (NEAR_BOUNDARY_FRACTION * le).max(ON_BOUNDARY_TOLERANCE * self.length);
+        let snap = (NEAR_BOUNDARY_FRACTION * le).max(ON_BOUNDARY_TOLERANCE * self.scaling.length);
         if d < snap {
             Plan::Boundary(ei, xi)
         } else {
@@ -678,14 +694,32 @@ impl<'a> Geometry<'a> {
         }
     }
 
-    /// [`contains`] for this body.
-    fn contains(&self, x: Vec2) -> bool {
-        contains(self.body, (self.centre, self.length), x)
+    /// Winding number of the boundary around x (relative): see [`winding_number`].
+    fn winding(&self, x: Vec2) -> i32 {
+        crate::input::model::winding(x, self.segments.iter().map(|s| (s.p, s.q)))
     }
 
-    /// Distance from x to the boundary if x is inside the body, else 0.
+    /// True when x (relative) is inside the body or within [`ON_BOUNDARY_TOLERANCE`]·L of
+    /// its boundary, L the scaling length.
+    fn contains(&self, x: Vec2) -> bool {
+        let (c, l) = (self.scaling.centre, self.scaling.length);
+        let tol = ON_BOUNDARY_TOLERANCE * l;
+        // Every boundary node lies within L/2 of the centroid, hence so does the body.
+        if (x[0] - c[0]).hypot(x[1] - c[1]) > 0.5 * l + tol {
+            return false;
+        }
+        self.winding(x) != 0
+            || self
+                .segments
+                .iter()
+                .map(|seg| project(seg, x).0)
+                .fold(f64::INFINITY, f64::min)
+                <= tol
+    }
+
+    /// Distance from x (relative) to the boundary if x is inside the body, else 0.
     fn clearance(&self, x: Vec2) -> f64 {
-        if winding_number(self.body, x) == 0 {
+        if self.winding(x) == 0 {
             return 0.0;
         }
         self.segments
@@ -700,7 +734,7 @@ impl<'a> Prepared<'a> {
         body: &'a Body,
         material: &Material,
         field: &'a BodyField,
-        scaling: (Vec2, f64),
+        scaling: Scaling,
         body_force: Option<Vec2>,
     ) -> Self {
         let geometry = Geometry::new(body, material, scaling);
@@ -710,31 +744,32 @@ impl<'a> Prepared<'a> {
 
     /// The Somigliana identities at x (no near-boundary switch).
     fn somigliana(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
-        self.geometry.somigliana(&self.values, settings, x)
+        let g = &self.geometry;
+        g.somigliana(&self.values, settings, g.relative(x))
     }
 
     /// See [`interior`].
     fn interior(&self, settings: &QuadratureSettings, x: Vec2) -> (Vec2, Mat2) {
         let (g, v) = (&self.geometry, &self.values);
-        g.value(v, g.plan(x), |y| g.somigliana(v, settings, y))
+        g.value(v, g.plan(g.relative(x)), |y| g.somigliana(v, settings, y))
     }
 }
 
 /// Displacement and stress at x by the Somigliana identities [paper eqs. 1a,b] alone, without
 /// the boundary layer of [`interior`]. `scaling` is [`crate::bem::assembly::scaling`] of the
-/// body, `body_force` the body force already multiplied by the load factor. The point must lie
-/// inside the body and off its boundary; the stress loses about `ε·(L/d)²` to rounding at a
-/// distance d from an element of length L.
+/// body (or `(c, L)`), `body_force` the body force already multiplied by the load factor. The
+/// point must lie inside the body and off its boundary; the stress loses about `ε·(L/d)²` to
+/// rounding at a distance d from an element of length L.
 pub fn somigliana(
     body: &Body,
     material: &Material,
     field: &BodyField,
-    scaling: (Vec2, f64),
+    scaling: impl Into<Scaling>,
     body_force: Option<Vec2>,
     settings: &QuadratureSettings,
     x: Vec2,
 ) -> (Vec2, Mat2) {
-    Prepared::new(body, material, field, scaling, body_force).somigliana(settings, x)
+    Prepared::new(body, material, field, scaling.into(), body_force).somigliana(settings, x)
 }
 
 /// Displacement and stress at a point x of the body (inside it or on its boundary).
@@ -761,12 +796,12 @@ pub fn interior(
     body: &Body,
     material: &Material,
     field: &BodyField,
-    scaling: (Vec2, f64),
+    scaling: impl Into<Scaling>,
     body_force: Option<Vec2>,
     settings: &QuadratureSettings,
     x: Vec2,
 ) -> (Vec2, Mat2) {
-    Prepared::new(body, material, field, scaling, body_force).interior(settings, x)
+    Prepared::new(body, material, field, scaling.into(), body_force).interior(settings, x)
 }
 
 // ---------------------------------------------------------------------------------------
@@ -810,24 +845,6 @@ pub fn winding_number(body: &Body, x: Vec2) -> i32 {
     body.winding_number(x)
 }
 
-/// Distance from x to the boundary of `body`.
-pub(crate) fn boundary_distance(body: &Body, x: Vec2) -> f64 {
-    (0..body.elements.len())
-        .map(|ei| project(&segment(body, ei), x).0)
-        .fold(f64::INFINITY, f64::min)
-}
-
-/// True when x is inside `body` or within [`ON_BOUNDARY_TOLERANCE`]·L of its boundary, with
-/// `(c, L)` its [`scaling`].
-fn contains(body: &Body, (c, l): (Vec2, f64), x: Vec2) -> bool {
-    let tol = ON_BOUNDARY_TOLERANCE * l;
-    // Every boundary node lies within L/2 of c, hence so does the body.
-    if (x[0] - c[0]).hypot(x[1] - c[1]) > 0.5 * l + tol {
-        return false;
-    }
-    winding_number(body, x) != 0 || boundary_distance(body, x) <= tol
-}
-
 /// Displacement and stress at each point, with the index of the first body that contains it
 /// (inside by [`winding_number`], or on its boundary within [`ON_BOUNDARY_TOLERANCE`] of the
 /// body size: the first body wins on an interface), or `None` for a point in no body.
@@ -841,7 +858,9 @@ pub fn evaluate_points(
     points
         .par_iter()
         .map(|&x| {
-            let bi = prepared.iter().position(|p| p.geometry.contains(x))?;
+            let bi = prepared
+                .iter()
+                .position(|p| p.geometry.contains(p.geometry.relative(x)))?;
             let (u, sigma) = prepared[bi].interior(settings, x);
             Some(PointValue { body: bi, u, sigma })
         })
@@ -874,15 +893,38 @@ impl<'a> PointSampler<'a> {
     /// Locates and plans `points` in the bodies of `bodies` (their fields are not used) and
     /// integrates the kernels at each identities point, in parallel.
     pub fn new(bodies: &[BodyInput<'a>], settings: &QuadratureSettings, points: &[Vec2]) -> Self {
+        let at: Vec<(Vec2, Vec2)> = points.iter().map(|&x| (x, [0.0; 2])).collect();
+        Self::at(bodies, settings, &at)
+    }
+
+    /// [`PointSampler::new`] for the points `base + offsets[k]`, each taken relative to the
+    /// body holding it as `(base − o) + offset` (o the body's [`Scaling`] origin): the
+    /// points of a section, `from + t (to − from)`, are then the same far from the origin,
+    /// where their sum would round, as near it ([`section_offsets`]).
+    pub fn with_offsets(
+        bodies: &[BodyInput<'a>],
+        settings: &QuadratureSettings,
+        base: Vec2,
+        offsets: &[Vec2],
+    ) -> Self {
+        let at: Vec<(Vec2, Vec2)> = offsets.iter().map(|&d| (base, d)).collect();
+        Self::at(bodies, settings, &at)
+    }
+
+    /// The sampler of the points `base + offset`.
+    fn at(bodies: &[BodyInput<'a>], settings: &QuadratureSettings, at: &[(Vec2, Vec2)]) -> Self {
         let geometries: Vec<Geometry> = bodies
             .iter()
             .map(|b| Geometry::new(b.body, &b.material, scaling(b.body)))
             .collect();
-        let located: Vec<Option<(usize, Plan)>> = points
+        let located: Vec<Option<(usize, Plan)>> = at
             .par_iter()
-            .map(|&x| {
-                let bi = geometries.iter().position(|g| g.contains(x))?;
-                Some((bi, geometries[bi].plan(x)))
+            .map(|&p| {
+                let bi = geometries
+                    .iter()
+                    .position(|g| g.contains(g.relative_offset(p)))?;
+                let g = &geometries[bi];
+                Some((bi, g.plan(g.relative_offset(p))))
             })
             .collect();
         let pair = std::mem::size_of::<(PointDisplacement, PointStress)>();
@@ -1025,6 +1067,19 @@ pub fn section_points(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
     assert!(count >= 2, "a section needs at least 2 points, got {count}");
     (0..count)
         .map(|k| lerp2(from, to, k as f64 / (count - 1) as f64))
+        .collect()
+}
+
+/// The offsets `t (to − from)` from `from` of the [`section_points`], for
+/// [`PointSampler::with_offsets`].
+pub fn section_offsets(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
+    assert!(count >= 2, "a section needs at least 2 points, got {count}");
+    let d = [to[0] - from[0], to[1] - from[1]];
+    (0..count)
+        .map(|k| {
+            let t = k as f64 / (count - 1) as f64;
+            [t * d[0], t * d[1]]
+        })
         .collect()
 }
 

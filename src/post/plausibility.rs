@@ -104,12 +104,16 @@ pub(crate) fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
     notes
 }
 
-/// The share of its smallest element's length to which the coordinates resolve, above
-/// which a note says so (six digits of the geometry kept).
+/// The share of its smallest element's length to which a node position is held (half the
+/// spacing of floating-point coordinates where the model lies), above which a note says so
+/// (six digits of the geometry kept).
 const RESOLUTION: f64 = 1e-6;
 
-/// A note when the model lies so far from the origin that floating point resolves its
-/// smallest element to less than [`RESOLUTION`] of its length.
+/// A note when the model lies so far from the origin that a node position there is held
+/// only to within more than [`RESOLUTION`] of its smallest element's length. The solver
+/// computes in coordinates relative to each body and loses nothing more there: the note is
+/// about the positions themselves (`check` refuses a mesh whose spacing exceeds a tenth of
+/// an element).
 fn far_note(model: &Model) -> Option<String> {
     let lines = model.bodies.iter().flat_map(|b| {
         b.elements
@@ -117,16 +121,20 @@ fn far_note(model: &Model) -> Option<String> {
             .map(|e| (b.nodes[e.nodes[0]], b.nodes[e.nodes[1]]))
     });
     let (far, step, h) = crate::input::model::resolution(lines);
-    if !(h.is_finite() && h > 0.0 && step > RESOLUTION * h) {
+    let held = 0.5 * step;
+    if !(h.is_finite() && h > 0.0 && held > RESOLUTION * h) {
         return None;
     }
     Some(format!(
-        "the model lies {} from the origin, where floating point resolves coordinates only to \
-         {}, {:.1e} of its smallest element ({}): its geometry, hence its results, keep fewer \
-         than six digits; move the model near the origin (e.g. Translate in the .geo)",
+        "the model lies {} from the origin, where floating-point coordinates are spaced {} \
+         apart: a node position there is held only to within {}, {:.1e} of its smallest \
+         element ({}), so its geometry, and with it its results, may keep fewer than six \
+         digits (the solver works in coordinates relative to each body and loses nothing \
+         more); move the model near the origin (e.g. Translate in the .geo)",
         fmt_num(far),
         fmt_num(step),
-        step / h,
+        fmt_num(held),
+        held / h,
         fmt_num(h)
     ))
 }

@@ -78,9 +78,13 @@ pub struct Thrust {
     forces: Vec<f64>,
     /// The resultant on the first body, `Σ (t_n,j n_j + t_s,j τ_j) w_j`, times the thickness.
     pub force: [f64; 2],
-    /// Its moment about the origin, `Σ x_j × (t_n,j n_j + t_s,j τ_j) w_j`, times the
-    /// thickness (counter-clockwise positive).
+    /// Its moment about [`Thrust::about`], `Σ (x_j − a) × (t_n,j n_j + t_s,j τ_j) w_j`,
+    /// times the thickness (counter-clockwise positive).
     pub moment: f64,
+    /// The point the moment is taken about: the first pair's position (the origin for a
+    /// joint without pairs). Arms from it are exact differences of nearby numbers, so a
+    /// joint far from the origin keeps the digits of its moment.
+    pub about: [f64; 2],
     /// The first body's outward normal averaged over the pairs by their tributary lengths.
     pub normal_mean: [f64; 2],
 }
@@ -144,20 +148,23 @@ pub fn thrust(j: &Joint, r: &InterfaceResult, thickness: f64) -> Thrust {
         }
         lo_hi
     };
-    let (force, moment, normal_mean) = vectors(j, r);
+    let about = j.x.first().copied().unwrap_or_default();
+    let (force, moment, normal_mean) = vectors(j, r, about);
     let (lo, hi) = span(false);
     let length = if hi >= lo { hi - lo } else { 0.0 };
     let point = (magnitude > 0.0 && total != 0.0 && length > 0.0).then(|| {
         let mean = |v: &[f64]| v.iter().zip(&forces).map(|(a, p)| a * p).sum::<f64>() / total;
-        let xs: Vec<f64> = j.x.iter().map(|x| x[0]).collect();
-        let ys: Vec<f64> = j.x.iter().map(|x| x[1]).collect();
+        // Positions relative to the first pair: exact differences, whose weighted mean keeps
+        // its digits far from the origin.
+        let xs: Vec<f64> = j.x.iter().map(|x| x[0] - about[0]).collect();
+        let ys: Vec<f64> = j.x.iter().map(|x| x[1] - about[1]).collect();
         let s = mean(&j.s);
         let half = 0.5 * length;
         let e = s - 0.5 * (lo + hi);
         let slack = EDGE_TOLERANCE * length;
         let (c_lo, c_hi) = span(true);
         Application {
-            x: [mean(&xs), mean(&ys)],
+            x: [about[0] + mean(&xs), about[1] + mean(&ys)],
             s,
             e,
             e_over_half_length: e / half,
@@ -173,20 +180,22 @@ pub fn thrust(j: &Joint, r: &InterfaceResult, thickness: f64) -> Thrust {
         forces,
         force: [force[0] * thickness, force[1] * thickness],
         moment: moment * thickness,
+        about,
         normal_mean,
     }
 }
 
-/// The resultant on the first body of joint `j` in `r` and its moment about the origin (per
+/// The resultant on the first body of joint `j` in `r` and its moment about `about` (per
 /// unit thickness), and the first body's outward normal averaged by tributary length. The
 /// tangent at a pair is `(−n_y, n_x)`.
-fn vectors(j: &Joint, r: &InterfaceResult) -> ([f64; 2], f64, [f64; 2]) {
+fn vectors(j: &Joint, r: &InterfaceResult, about: [f64; 2]) -> ([f64; 2], f64, [f64; 2]) {
     let (mut f, mut m, mut n) = ([0.0; 2], 0.0, [0.0; 2]);
     for (((p, w), x), nj) in r.pairs.iter().zip(&j.weights).zip(&j.x).zip(&j.normal) {
         let [ts, tn] = p.traction;
         let fj = [(tn * nj[0] - ts * nj[1]) * w, (tn * nj[1] + ts * nj[0]) * w];
         f = [f[0] + fj[0], f[1] + fj[1]];
-        m += x[0] * fj[1] - x[1] * fj[0];
+        let arm = [x[0] - about[0], x[1] - about[1]];
+        m += arm[0] * fj[1] - arm[1] * fj[0];
         n = [n[0] + nj[0] * w, n[1] + nj[1] * w];
     }
     let len = n[0].hypot(n[1]);
@@ -289,7 +298,8 @@ pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], down: &[[f64; 2]]) ->
             continue;
         }
         let d = down[body];
-        // Force, moment and outward normal along "down" as body `body` sees joint k.
+        // Force, moment (about the joint's `about`) and outward normal along "down" as body
+        // `body` sees joint k.
         let seen = |k: usize| {
             let t = &thrusts[k];
             let sign = if bodies[k].0 == body { 1.0 } else { -1.0 };
@@ -325,30 +335,38 @@ pub fn hubs(bodies: &[(usize, usize)], thrusts: &[Thrust], down: &[[f64; 2]]) ->
 
 /// The point on the line of action of the resultant of joints `g` nearest to the centre of
 /// their normal forces (see [`hubs`]), and that resultant; `seen(k)`: joint k's force and
-/// moment on the body.
+/// moment (about its `about`) on the body. Points and moments are taken relative to the
+/// first joint's `about`, to keep their digits far from the origin.
 fn hub(
     g: &[usize],
     thrusts: &[Thrust],
     seen: &dyn Fn(usize) -> ([f64; 2], f64, f64),
 ) -> Option<([f64; 2], [f64; 2])> {
+    let o = thrusts[*g.first()?].about;
+    let rel = |p: [f64; 2]| [p[0] - o[0], p[1] - o[1]];
     let (mut r, mut m0, mut n, mut c) = ([0.0; 2], 0.0, 0.0, [0.0; 2]);
     for &k in g {
         let (f, mk, _) = seen(k);
         let nk = thrusts[k].normal;
-        let p = thrusts[k].point?.x;
+        let p = rel(thrusts[k].point?.x);
+        let a = rel(thrusts[k].about);
         r = [r[0] + f[0], r[1] + f[1]];
-        m0 += mk;
+        // The joint's moment about o.
+        m0 += mk + a[0] * f[1] - a[1] * f[0];
         n += nk;
         c = [c[0] + nk * p[0], c[1] + nk * p[1]];
     }
     let r2 = r[0] * r[0] + r[1] * r[1];
-    if g.is_empty() || n <= 0.0 || r2 == 0.0 {
+    if n <= 0.0 || r2 == 0.0 {
         return None;
     }
     let m = [c[0] / n, c[1] / n];
-    // G's moment about m: M_O − m × R.
+    // G's moment about m: M_o − (m − o) × R.
     let mm = m0 - (m[0] * r[1] - m[1] * r[0]);
-    Some(([m[0] + mm * r[1] / r2, m[1] - mm * r[0] / r2], r))
+    Some((
+        [o[0] + m[0] + mm * r[1] / r2, o[1] + m[1] - mm * r[0] / r2],
+        r,
+    ))
 }
 
 #[cfg(test)]
@@ -453,8 +471,15 @@ mod tests {
         // has no arm).
         let f = [thrusts[0].force, thrusts[1].force];
         assert_eq!(f, [[0.0, 1.0], [0.5, 3.0]]);
-        let m = thrusts[0].moment + thrusts[1].moment;
-        let about = m - (h[0].x[0] * (f[0][1] + f[1][1]) - h[0].x[1] * (f[0][0] + f[1][0]));
+        let about: f64 = (0..2)
+            .map(|k| {
+                let a = [
+                    thrusts[k].about[0] - h[0].x[0],
+                    thrusts[k].about[1] - h[0].x[1],
+                ];
+                thrusts[k].moment + a[0] * f[k][1] - a[1] * f[k][0]
+            })
+            .sum();
         assert!(about.abs() < 1e-15, "{about}");
         assert_eq!((h[0].resultant, h[0].below), ([0.5, 4.0], true));
         // A body force along +x: no joint of body 0 is within 60° of it, or of its opposite.

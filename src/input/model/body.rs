@@ -339,7 +339,7 @@ fn point_in_loop(p: [f64; 2], l: &Loop, elements: &[Element], nodes: &[[f64; 2]]
     ) != 0
 }
 
-pub(super) fn winding(p: [f64; 2], segments: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> i32 {
+pub(crate) fn winding(p: [f64; 2], segments: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> i32 {
     let mut w = 0;
     for (a, b) in segments {
         let side = cross(sub(b, a), sub(p, a));

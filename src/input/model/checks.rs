@@ -83,17 +83,22 @@ pub(super) fn check_held(
         groups.entry(r).or_default().push(b);
     }
     for members in groups.values() {
-        // Rows [d_x, d_y, d · (−(y − yc), x − xc) / scale] of every known direction.
-        let centre = {
+        // Rows [d_x, d_y, d · (−(y − yc), x − xc) / scale] of every known direction, with
+        // x − xc taken as (x − o) − (xc − o), o the first node: exact far from the origin.
+        let (o, centre) = {
             let pts: Vec<[f64; 2]> = members
                 .iter()
                 .flat_map(|&b| bodies[b].nodes.iter().copied())
                 .collect();
+            let o = pts.first().copied().unwrap_or([0.0; 2]);
             let n = pts.len().max(1) as f64;
-            [
-                pts.iter().map(|p| p[0]).sum::<f64>() / n,
-                pts.iter().map(|p| p[1]).sum::<f64>() / n,
-            ]
+            (
+                o,
+                [
+                    pts.iter().map(|p| p[0] - o[0]).sum::<f64>() / n,
+                    pts.iter().map(|p| p[1] - o[1]).sum::<f64>() / n,
+                ],
+            )
         };
         let mut basis: Vec<[f64; 3]> = Vec::new();
         'outer: for &b in members {
@@ -104,7 +109,7 @@ pub(super) fn check_held(
                         continue;
                     }
                     let dir = d.frame[k];
-                    let r = sub(body.nodes[n], centre);
+                    let r = sub(sub(body.nodes[n], o), centre);
                     let mut row = [dir[0], dir[1], (-r[1] * dir[0] + r[0] * dir[1]) / scale];
                     for q in &basis {
                         let p = row[0] * q[0] + row[1] * q[1] + row[2] * q[2];

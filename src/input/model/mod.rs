@@ -46,7 +46,8 @@ mod detect;
 mod interface;
 mod overlap;
 
-use body::{build_body, mark_traction_breaks, node_dofs, winding};
+pub(crate) use body::winding;
+use body::{build_body, mark_traction_breaks, node_dofs};
 use checks::{check_held, check_values};
 use curves::*;
 use interface::split_name;
@@ -318,18 +319,21 @@ impl Interface {
         tributary_lengths(&x, self.elements.iter().map(|e| e.pairs))
     }
 
-    /// Where B meets the rows of pair j: B's node (node pairs) or the point `Σ c_k x_k` of
-    /// B's partners (sides meshed on their own; A's node where it has none).
-    pub fn b_point(&self, b: &Body, j: usize) -> [f64; 2] {
+    /// Where B meets the rows of pair j, relative to the point `from`: B's node (node pairs)
+    /// or the point `Σ c_k x_k` of B's partners (sides meshed on their own; A's node where
+    /// it has none), summed as `Σ c_k (x_k − from)` (the coefficients sum to one) so that it
+    /// keeps its digits far from the origin.
+    pub fn b_offset(&self, b: &Body, j: usize, from: [f64; 2]) -> [f64; 2] {
         let p = &self.pairs[j];
         if !self.independent() {
-            return b.nodes[p.node_b];
+            return sub(b.nodes[p.node_b], from);
         }
         if p.partners.is_empty() {
-            return p.x;
+            return sub(p.x, from);
         }
         p.partners.iter().fold([0.0, 0.0], |acc, &(k, c)| {
-            [acc[0] + c * b.nodes[k][0], acc[1] + c * b.nodes[k][1]]
+            let d = sub(b.nodes[k], from);
+            [acc[0] + c * d[0], acc[1] + c * d[1]]
         })
     }
 }
@@ -741,8 +745,25 @@ fn list_or_none(names: &[&str]) -> String {
     }
 }
 
-/// How far from the origin the body lines lie (largest coordinate), the step with which
-/// floating point resolves coordinates there, and their shortest positive element.
+/// The spacing of floating-point numbers at magnitude `x`: the unit in the last place of
+/// `|x|` (2⁻⁵ at 2⁴⁷ = 1.4e14, 0.25 at 2⁵⁰ = 1.1e15); `x` itself where it is not finite.
+pub fn spacing(x: f64) -> f64 {
+    let x = x.abs();
+    if !x.is_finite() {
+        return x;
+    }
+    if x < f64::MIN_POSITIVE {
+        return f64::from_bits(1);
+    }
+    f64::from_bits((x.to_bits() >> 52) << 52) * f64::EPSILON
+}
+
+/// How far from the origin the body lines lie (largest coordinate), the spacing of
+/// floating-point coordinates there ([`spacing`]), and their shortest positive element.
+///
+/// The solver works in coordinates relative to each body (differences of nearby numbers,
+/// exact), so it loses nothing far from the origin; what is lost there is in the node
+/// positions themselves, which can only be multiples of that spacing.
 pub fn resolution(lines: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> (f64, f64, f64) {
     let (mut far, mut h) = (0.0f64, f64::INFINITY);
     for (a, b) in lines {
@@ -756,12 +777,13 @@ pub fn resolution(lines: impl Iterator<Item = ([f64; 2], [f64; 2])>) -> (f64, f6
             h = h.min(l);
         }
     }
-    (far, far * f64::EPSILON, h)
+    (far, if far > 0.0 { spacing(far) } else { 0.0 }, h)
 }
 
-/// Refuses a mesh so far from the origin that floating point resolves its coordinates to
-/// no better than a tenth of its shortest element (nodes then round onto one another):
-/// the reason, not a symptom (zero-length elements, "duplicate points").
+/// Refuses a mesh so far from the origin that floating-point coordinates there are spaced
+/// more than a tenth of its shortest element apart: node positions cannot hold the
+/// elements' lengths (nodes round onto one another), so the geometry is lost. The reason,
+/// not a symptom (zero-length elements, "duplicate points").
 fn check_resolution(
     mesh: &Mesh,
     body_curves: &[BTreeSet<i32>],
@@ -786,10 +808,11 @@ fn check_resolution(
         return Err(Error::input(
             mfile,
             format!(
-                "the mesh lies {} from the origin, where floating point resolves coordinates \
-                 only to {}, more than {shortest}: nodes round onto one another and the \
-                 geometry is lost; move the model near the origin (e.g. Translate in the .geo, \
-                 or subtract a reference point from the coordinates) and mesh again",
+                "the mesh lies {} from the origin, where floating-point coordinates are spaced \
+                 {} apart, more than {shortest}: node positions there hold the elements' \
+                 lengths to less than a tenth (nodes round onto one another) and the geometry \
+                 is lost; move the model near the origin (e.g. Translate in the .geo, or \
+                 subtract a reference point from the coordinates) and mesh again",
                 fmt_num(far),
                 fmt_num(step)
             ),

@@ -6,7 +6,7 @@ use std::path::Path;
 
 use crate::error::{Error, Result};
 
-use super::{cross, fmt_num, fmt_point, norm, sub, Body, Interface, Role};
+use super::{cross, fmt_num, fmt_point, norm, sub, winding, Body, Interface, Role};
 use crate::input::pairing::segment_distance;
 
 /// Elements of different bodies (or non-neighbouring elements of one body) must not cross,
@@ -222,27 +222,41 @@ fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
             )
         })
         .collect();
-    let holds =
-        |b: &[f64; 4], p: [f64; 2]| p[0] >= b[0] && p[0] <= b[2] && p[1] >= b[1] && p[1] <= b[3];
+    // Whether the box holds the point at `offset` from `p` (differences of nodes: exact).
+    let holds = |b: &[f64; 4], p: [f64; 2], offset: [f64; 2]| {
+        offset[0] >= b[0] - p[0]
+            && offset[0] <= b[2] - p[0]
+            && offset[1] >= b[1] - p[1]
+            && offset[1] <= b[3] - p[1]
+    };
     for (bi, body) in bodies.iter().enumerate() {
         let outer = match body.loops.iter().find(|l| !l.is_hole) {
             Some(l) => l,
             None => continue,
         };
+        // The probe, relative to the element's start node p: far from the origin the probe
+        // itself may not be representable (it would round onto the boundary), its offset
+        // from p is, and so are the offsets of the other body's nodes.
         let e = &body.elements[outer.elements[0]];
-        let mid = [
-            0.5 * (body.nodes[e.nodes[0]][0] + body.nodes[e.nodes[1]][0]),
-            0.5 * (body.nodes[e.nodes[0]][1] + body.nodes[e.nodes[1]][1]),
-        ];
-        let probe = [
-            mid[0] - 1e-3 * e.length * e.normal[0],
-            mid[1] - 1e-3 * e.length * e.normal[1],
+        let p = body.nodes[e.nodes[0]];
+        let chord = sub(body.nodes[e.nodes[1]], p);
+        let offset = [
+            0.5 * chord[0] - 1e-3 * e.length * e.normal[0],
+            0.5 * chord[1] - 1e-3 * e.length * e.normal[1],
         ];
         for (oi, other) in bodies.iter().enumerate() {
-            if oi == bi || !holds(&boxes[oi], probe) {
+            if oi == bi || !holds(&boxes[oi], p, offset) {
                 continue;
             }
-            let w = other.winding_number(probe);
+            let w = winding(
+                offset,
+                other.elements.iter().map(|e| {
+                    (
+                        sub(other.nodes[e.nodes[0]], p),
+                        sub(other.nodes[e.nodes[1]], p),
+                    )
+                }),
+            );
             if w != 0 {
                 return Err(Error::input(
                     mfile,
@@ -264,7 +278,15 @@ fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
 /// crossing (the two faces of a slit) are left alone.
 fn check_crossing_at_coincident_nodes(body: &Body, mfile: &Path, scale: f64) -> Result<()> {
     let eps = 1e-10 * scale;
-    let key = |p: [f64; 2]| ((p[0] / eps).round() as i64, (p[1] / eps).round() as i64);
+    // Cells relative to the first node: far from the origin, `x / eps` would saturate the
+    // integer and put every node in one cell.
+    let o = body.nodes.first().copied().unwrap_or([0.0; 2]);
+    let key = |p: [f64; 2]| {
+        (
+            ((p[0] - o[0]) / eps).round() as i64,
+            ((p[1] - o[1]) / eps).round() as i64,
+        )
+    };
     let mut neighbours: Vec<Vec<usize>> = vec![Vec::new(); body.nodes.len()];
     for e in &body.elements {
         neighbours[e.nodes[0]].push(e.nodes[1]);
