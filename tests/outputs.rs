@@ -1136,6 +1136,22 @@ fn fabricated_run(dir: &Path) -> PathBuf {
         sgbem::output::csv::thrust_table(&rows, "", ""),
     )
     .unwrap();
+    // The hubs, as `sgbem run` writes them beside thrust.csv.
+    let pairs: Vec<(usize, usize)> = model
+        .interfaces
+        .iter()
+        .map(|it| (it.body_a, it.body_b))
+        .collect();
+    let forces: Vec<Option<[f64; 2]>> = model.bodies.iter().map(|b| b.body_force).collect();
+    let down = sgbem::post::thrust::down(&forces);
+    let hubs = sgbem::post::thrust::hubs(&pairs, &thrusts, &down);
+    let named: Vec<(&str, &sgbem::post::thrust::Hub)> =
+        hubs.iter().map(|h| (name(h.body), h)).collect();
+    std::fs::write(
+        run.join("thrust_hubs.csv"),
+        sgbem::output::csv::hub_table(&named, "", ""),
+    )
+    .unwrap();
     write_archive(&run.join("archive.h5"), &rec).unwrap();
     write_vtk(&run.join("vtk"), &rec).unwrap();
     run

@@ -329,10 +329,11 @@ impl<'a> Session<'a> {
         self.model.bodies.iter().map(|b| b.body_force).collect()
     }
 
-    /// For a solver that follows Coulomb's law within the inner problem (the sparse one),
-    /// each friction row's normal row and μ where that row can open; empty for the others.
-    fn coulomb_rows(&self, method: Solver) -> Vec<Option<(usize, f64)>> {
-        if method != Solver::Sparse {
+    /// For a solver that follows Coulomb's law within the inner problem (the sparse one,
+    /// where `allowed`: not after it failed to in this step), each friction row's normal row
+    /// and μ where that row can open; empty for the others.
+    fn coulomb_rows(&self, method: Solver, allowed: bool) -> Vec<Option<(usize, f64)>> {
+        if method != Solver::Sparse || !allowed {
             return Vec::new();
         }
         let n = self.problem.n_open_rows;
@@ -599,19 +600,14 @@ impl<'a> Session<'a> {
         let mut st = start.clone();
         let mut notes = Vec::new();
         let mut edge_slip = vec![false; n];
-        let mut slipping = 0;
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
-        let mut iterations = 0;
-        let mut outer = 0;
-        let mut converged = false;
+        let (mut iterations, mut outer, mut slipping) = (0, 0, 0);
+        let (mut converged, mut mechanism) = (false, false);
         let mut failure = None;
-        let mut mechanism = false;
         let mut last: Option<(InnerState, f64)> = None;
         // The outer iterates' open rows, to find the rows of a stick edge cycle.
         let mut iterates: Vec<Vec<bool>> = Vec::new();
-        let friction = self.problem.rows[..n]
-            .iter()
-            .any(|r| r.kind == RowKind::Friction);
+        let friction = self.has_friction();
         // Slip bounds of the Tresca fixed point: from the last step's normal forces, or
         // (first step) from those with every pair closed.
         let mut bound = start.bound.clone();
@@ -627,17 +623,11 @@ impl<'a> Session<'a> {
                 bound = self.first_bounds();
             }
             let rows = self.inner_rows(&st, &bound, &edge_slip);
-            let coulomb_rows = if coulomb {
-                self.coulomb_rows(method)
-            } else {
-                Vec::new()
-            };
-            let asked_coulomb = !coulomb_rows.is_empty();
             let inner = Inner::new(&self.problem, &base, rows, bound.clone(), tol)
-                .with_coulomb(coulomb_rows);
-            let it0 = iterations;
-            lp.iterations_recorded = it0;
-            let budget = max_iterations.saturating_sub(it0);
+                .with_coulomb(self.coulomb_rows(method, coulomb));
+            let asked_coulomb = !inner.coulomb.is_empty();
+            lp.iterations_recorded = iterations;
+            let budget = max_iterations.saturating_sub(iterations);
             let solved = solve_inner(
                 &inner,
                 (&mut self.cols, &mut self.sparse),
@@ -650,16 +640,10 @@ impl<'a> Session<'a> {
                 Ok(o) => o,
                 Err((e, probe)) => {
                     lp.undecided = matches!(e, InnerFailure::StickClosure { .. });
-                    let (mut err, blocked) = self.explain(&e, &probe, &inner);
-                    if blocked {
-                        err += &motion_words(
-                            self.model,
-                            &inner,
-                            &mut self.sparse,
-                            &probe.state,
-                            &probe.blocked,
-                        );
-                    }
+                    let (err, blocked) = self.explain(&e, &probe, &inner);
+                    let shown = if blocked { &probe.blocked[..] } else { &[] };
+                    let err = err
+                        + &motion_words(self.model, &inner, &mut self.sparse, &probe.state, shown);
                     mechanism = blocked;
                     failure = Some(failed(method, load_step, &err));
                     break;
@@ -667,60 +651,37 @@ impl<'a> Session<'a> {
             };
             iterations += outcome.iterations;
             notes.extend(outcome.notes.iter().cloned());
-            // A solver that followed Coulomb's law within the inner problem hands back the
-            // bounds of its state; one that could not keeps them fixed for the rest of the
-            // step (the Tresca fixed point of the outer loop).
-            let inner = match outcome.bound.clone() {
-                Some(b) => {
-                    bound.clone_from(&b);
-                    Inner { bound: b, ..inner }
-                }
-                None => {
-                    coulomb &= !asked_coulomb;
-                    inner
-                }
-            };
+            // A solver that followed Coulomb's law hands back the bounds of its state.
+            let inner = adopt_bounds(inner, outcome.bound.clone(), &mut bound);
+            coulomb &= !(asked_coulomb && outcome.bound.is_none());
             let residual = inner.residual(&outcome.state);
             let ok = outcome.converged;
             let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {
                 mechanism = !outcome_blocked.is_empty();
-                let mut hint = self.hint(&outcome_blocked, &state, &inner);
-                if mechanism {
-                    hint += &motion_words(
+                let hint = self.hint(&outcome_blocked, &state, &inner)
+                    + &motion_words(
                         self.model,
                         &inner,
                         &mut self.sparse,
                         &state,
                         &outcome_blocked,
                     );
-                }
                 failure = Some(not_converged(method, load_step, residual, &notes, &hint));
                 last = Some((state, residual));
                 break;
             }
             // Outer update: brittle cohesion, stick ties, slip bounds.
             let mut next = self.outer_update(&st, &state, &edge_slip);
-            // The Tresca fixed point: the bounds from the new normal forces.
-            let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
-            let change = bound_change(&bound, &new_bound);
-            let settled = !friction || change <= BOUNDS_SETTLED;
-            self.show_outer(
-                load_step,
-                (outer, iterations),
-                &state,
-                friction.then_some(change),
+            let change = self.tresca_update(
+                (&base, &st, &state, tol),
+                (&mut next, &mut bound, &mut relax),
+                (load_step, outer, iterations),
+                &mut notes,
             );
+            let settled = !friction || change <= BOUNDS_SETTLED;
             bound_changes.extend(friction.then_some(change));
-            relax.update(outer, change);
-            bound = relax.next(outer, status_key(&state), &bound, new_bound);
-            if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
-                // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
-                // LCP through Lemke) and restart the fixed point from its bounds.
-                let restart = (&mut next, &mut bound);
-                notes.push(self.coulomb_restart(&base, &st, tol, restart, (outer, change)));
-            }
             iterates.push(st.open.clone());
             last = Some((state, residual));
             if self.same_statuses(&st, &next) && settled {
@@ -772,6 +733,45 @@ impl<'a> Session<'a> {
                 mechanism,
             },
         )
+    }
+
+    /// The Tresca fixed point's step after the inner solution `state` of `st`: the bounds
+    /// from its normal forces (relaxed where the fixed point oscillates), the progress line,
+    /// and after `coupled_after` unsettled outer iterations the restart from Coulomb's exact
+    /// problem (into `next` and `bound`, with a note). Returns the bounds' relative change.
+    fn tresca_update(
+        &mut self,
+        (base, st, state, tol): (&problem::Base, &StepState, &InnerState, f64),
+        (next, bound, relax): (&mut StepState, &mut Vec<f64>, &mut Relaxation),
+        (load_step, outer, iterations): (usize, usize, usize),
+        notes: &mut Vec<String>,
+    ) -> f64 {
+        let n = self.problem.n_open_rows;
+        let friction = self.has_friction();
+        let new_bound = self.bounds(&state.lambda, &base.cohesion, &state.open);
+        let change = bound_change(bound, &new_bound);
+        let settled = !friction || change <= BOUNDS_SETTLED;
+        self.show_outer(
+            load_step,
+            (outer, iterations),
+            state,
+            friction.then_some(change),
+        );
+        relax.update(outer, change);
+        *bound = relax.next(outer, status_key(state), bound, new_bound);
+        if friction && !settled && outer == self.coupled_after && n <= COUPLED_MAX_ROWS {
+            // A slow or cycling fixed point: solve Coulomb's problem exactly (Klarbring's
+            // LCP through Lemke) and restart the fixed point from its bounds.
+            notes.push(self.coulomb_restart(base, st, tol, (next, bound), (outer, change)));
+        }
+        change
+    }
+
+    /// Whether any row that can open is a friction row.
+    fn has_friction(&self) -> bool {
+        self.problem.rows[..self.problem.n_open_rows]
+            .iter()
+            .any(|r| r.kind == RowKind::Friction)
     }
 
     /// True when `next` keeps the statuses of `st` (but the friction rows' and cohesion).
@@ -1076,6 +1076,20 @@ impl<'a> Session<'a> {
              loads",
             parts.join("; ")
         )
+    }
+}
+
+/// The inner problem `inner` with the slip bounds `b` that a solver following Coulomb's law
+/// within its iteration handed back (also the outer loop's `bound`); as it is without them.
+/// One that could not follow the law leaves the bounds fixed for the rest of the step (the
+/// Tresca fixed point of the outer loop).
+fn adopt_bounds<'a>(inner: Inner<'a>, b: Option<Vec<f64>>, bound: &mut Vec<f64>) -> Inner<'a> {
+    match b {
+        Some(b) => {
+            bound.clone_from(&b);
+            Inner { bound: b, ..inner }
+        }
+        None => inner,
     }
 }
 
