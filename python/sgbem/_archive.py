@@ -419,7 +419,11 @@ class Run:
         displacement, traction, contact_status 1 closed 0 open -1 elsewhere,
         normal_traction, body) and, where the run computed the interior field (`field =
         true`, final state only), block "field" (triangles; displacement, stress xx yy xy,
-        sxx, syy, sxy, von_mises, body). Warp by `displacement` to see the strained shape."""
+        sxx, syy, sxy, von_mises, body); with interfaces, block "contact" (a vertex per pair,
+        as the VTK block `contact`: interface and pair indices, contact_status 1 closed 0
+        open, tangential_status 1 stick 2 slip 0 open -1 none, gap, normal_opening, the
+        tractions and forces, slip, displacement; the rows of `contact_points(state)`).
+        Warp by `displacement` to see the strained shape."""
         from ._mesh import boundary_grid, field_grid  # pyvista is imported on demand
 
         k = self._state(state)
@@ -431,9 +435,37 @@ class Run:
             if k == self.state_count - 1 and "interior" in f.get("solution", {}):
                 blocks["field"] = field_grid(self, f)
             a = f["states"][f"{k:04}"].attrs
-            for block in blocks:
-                block.field_data["iteration"] = [int(a["iteration"])]
-                block.field_data["load_step"] = [int(a["load_step"])]
-                block.field_data["load_factor"] = [float(a["load_factor"])]
+            meta = (int(a["iteration"]), int(a["load_step"]), float(a["load_factor"]))
+        if self._interfaces:
+            blocks["contact"] = self._contact_block(k)
+        for block in blocks:
+            block.field_data["iteration"] = [meta[0]]
+            block.field_data["load_step"] = [meta[1]]
+            block.field_data["load_factor"] = [meta[2]]
         return blocks
+
+    def _contact_block(self, k):
+        """The contact points of state `k` as a pyvista PolyData of vertices, with the VTK
+        block's integer codes."""
+        import pyvista
+
+        df = self.contact_points(k)
+        n = len(df)
+        points = np.column_stack([df["x"], df["y"], np.zeros(n)])
+        poly = pyvista.PolyData(points) if n else pyvista.PolyData()
+        index = {name: i for i, (name, _) in enumerate(self._interfaces)}
+        codes = {"closed": 1, "open": 0}
+        tcodes = {"stick": 1, "slip": 2, "open": 0, "none": -1}
+        poly.point_data["interface"] = np.array([index[v] for v in df["interface"]],
+                                                dtype=np.int32)
+        poly.point_data["pair"] = df["pair"].to_numpy(dtype=np.int32)
+        poly.point_data["contact_status"] = np.array(
+            [codes[v] for v in df["contact_status"]], dtype=np.int32)
+        poly.point_data["tangential_status"] = np.array(
+            [tcodes[v] for v in df["tangential_status"]], dtype=np.int32)
+        for name in ("gap", "normal_opening", "normal_traction", "tangential_traction",
+                     "normal_force", "tangential_force", "slip"):
+            poly.point_data[name] = df[name].to_numpy(dtype=float)
+        poly.point_data["displacement"] = np.column_stack([df["ux"], df["uy"], np.zeros(n)])
+        return poly
 

@@ -110,7 +110,7 @@ def test_states_and_unknown_names(beam):
 
 def test_to_pyvista_final_state_with_field(beam):
     blocks = beam.to_pyvista()
-    assert blocks.keys() == ["boundary", "field"]
+    assert blocks.keys() == ["boundary", "field", "contact"]
     boundary, field = blocks["boundary"], blocks["field"]
     import pyvista
     vtk = pathlib.Path(beam.folder, "vtk")
@@ -126,12 +126,21 @@ def test_to_pyvista_final_state_with_field(beam):
         np.testing.assert_allclose(field.point_data[name], ref_f.point_data[name],
                                    rtol=1e-9, atol=1e-12, err_msg=name)
     assert field.n_cells == ref_f.n_cells
+    # The contact block: the VTK file's points and arrays, exactly.
+    contact, ref_c = blocks["contact"], pyvista.read(vtk / f"contact_{last:04}.vtu")
+    assert contact.n_points == ref_c.n_points == 105
+    np.testing.assert_array_equal(contact.points, ref_c.points)
+    for name in ("interface", "pair", "contact_status", "tangential_status", "gap",
+                 "normal_opening", "normal_traction", "tangential_traction", "normal_force",
+                 "tangential_force", "slip", "displacement"):
+        np.testing.assert_array_equal(contact.point_data[name], ref_c.point_data[name],
+                                      err_msg=name)
 
 
 def test_to_pyvista_without_field(wall, beam):
-    assert wall.to_pyvista().keys() == ["boundary"]
+    assert wall.to_pyvista().keys() == ["boundary", "contact"]
     first = beam.to_pyvista(0)
-    assert first.keys() == ["boundary"]        # the field is computed at the final state only
+    assert first.keys() == ["boundary", "contact"]   # the field: at the final state only
     assert first["boundary"].field_data["iteration"][0] == beam.states["iteration"].iloc[0]
 
 
