@@ -1124,7 +1124,7 @@ fn motion_words(
     let Some(dw) = sparse::mechanism_motion(inner, sys, &open, &sign, &st.s) else {
         return String::new();
     };
-    let (motions, _) = inner.problem.rigid_motions(model, &dw);
+    let motions = inner.problem.rigid_motions(model, &dw);
     let size = model.scale.max(f64::MIN_POSITIVE);
     let amount = |m: &problem::BodyMotion| {
         m.translation[0].hypot(m.translation[1]) + m.rotation.abs() * size

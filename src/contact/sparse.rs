@@ -477,9 +477,7 @@ pub fn solve(
     max_iterations: usize,
 ) -> InnerOutcome {
     if inner.coulomb.is_empty() {
-        let mut out = iterate(inner.clone(), sys, open, sign, max_iterations, MAX_HALVINGS);
-        out.bound = None;
-        return out;
+        return iterate(inner.clone(), sys, open, sign, max_iterations, MAX_HALVINGS);
     }
     // Coulomb's law within the iteration: stopped at its first repeated status (a cycle of
     // the lagged bounds, seen with μ = 10 near collapse) or `COULOMB_ITERATIONS`; the
@@ -492,7 +490,6 @@ pub fn solve(
     }
     let budget = max_iterations.saturating_sub(first.iterations);
     let mut out = iterate(inner.clone(), sys, open, sign, budget, MAX_HALVINGS);
-    out.bound = None;
     out.iterations += first.iterations;
     let why = first.notes.join("; ");
     out.notes.insert(
@@ -544,11 +541,12 @@ fn iterate(
         };
         // Coulomb's law: the next iterate's slip bounds from this one's normal forces; the
         // statuses are checked against them.
-        let used = cur.bound.clone();
+        // The bounds this iterate was solved with (Coulomb rows only).
+        let mut used = None;
         let moved = match cur.coulomb_bounds(&st) {
             Some(b) => {
                 let moved = bound_change(&cur.bound, &b) > BOUNDS_SETTLED;
-                cur.bound = b;
+                used = Some(std::mem::replace(&mut cur.bound, b));
                 moved
             }
             None => false,
@@ -620,10 +618,11 @@ fn iterate(
     }
 }
 
-/// A solution, with the slip bounds it was solved with (its forces on slipping rows).
-fn converged(state: InnerState, iterations: usize, bound: Vec<f64>) -> InnerOutcome {
+/// A solution, with the slip bounds it was solved with (its forces on slipping rows) where
+/// they followed Coulomb's law.
+fn converged(state: InnerState, iterations: usize, bound: Option<Vec<f64>>) -> InnerOutcome {
     let mut out = InnerOutcome::converged(state, iterations);
-    out.bound = Some(bound);
+    out.bound = bound;
     out
 }
 

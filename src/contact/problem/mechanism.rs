@@ -15,14 +15,7 @@ pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[
         // seen by the rows touching body b.
         let n = ops[b].u_idx.len();
         let (lo, hi) = (dof_start[b], dof_start[b] + n);
-        let nodes = &body.nodes;
-        let c = {
-            let m = nodes.len().max(1) as f64;
-            let (sx, sy) = nodes
-                .iter()
-                .fold((0.0, 0.0), |a, p| (a.0 + p[0], a.1 + p[1]));
-            [sx / m, sy / m]
-        };
+        let c = centroid(&body.nodes);
         let scale = model.scale.max(f64::MIN_POSITIVE);
         let mut g = [[0.0f64; 3]; 3];
         let mut touched = false;
@@ -34,11 +27,7 @@ pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[
             let it = &model.interfaces[r.iface];
             let pr = &it.pairs[r.pair];
             let dir = if r.comp == 1 { pr.normal } else { pr.tangent };
-            let m = [
-                dir[0],
-                dir[1],
-                (-(pr.x[1] - c[1]) * dir[0] + (pr.x[0] - c[0]) * dir[1]) / scale,
-            ];
+            let m = rigid_row(pr.x, c, dir, scale);
             for i in 0..3 {
                 for j in 0..3 {
                     g[i][j] += m[i] * m[j];
@@ -75,6 +64,25 @@ pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[
             out.join("; ")
         )
     }
+}
+
+/// The centroid of a body's nodes.
+pub(super) fn centroid(nodes: &[[f64; 2]]) -> [f64; 2] {
+    let m = nodes.len().max(1) as f64;
+    let (sx, sy) = nodes
+        .iter()
+        .fold((0.0, 0.0), |a, p| (a.0 + p[0], a.1 + p[1]));
+    [sx / m, sy / m]
+}
+
+/// What the rigid modes (x, y translation, rotation about `c` scaled by `scale`) move a
+/// point `x` along the direction `dir`.
+pub(super) fn rigid_row(x: [f64; 2], c: [f64; 2], dir: [f64; 2], scale: f64) -> [f64; 3] {
+    [
+        dir[0],
+        dir[1],
+        (-(x[1] - c[1]) * dir[0] + (x[0] - c[0]) * dir[1]) / scale,
+    ]
 }
 
 fn body_has_support(model: &Model, b: usize) -> bool {

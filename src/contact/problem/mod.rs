@@ -337,21 +337,17 @@ impl Problem {
 
     /// The rigid motion of each body under the change `dw = (dv, ds)` of the glued
     /// displacements and the openings (a mechanism's motion): per body the least-squares
-    /// translation and rotation of its interface dofs' displacements, and the largest part of
-    /// them that no rigid motion explains (relative to the largest displacement).
-    pub fn rigid_motions(&self, model: &Model, dw: &[f64]) -> (Vec<BodyMotion>, f64) {
+    /// translation and rotation of its interface dofs' displacements.
+    pub fn rigid_motions(&self, model: &Model, dw: &[f64]) -> Vec<BodyMotion> {
         let (dv, ds) = dw.split_at(self.n_glued.min(dw.len()));
+        let scale = model.scale.max(f64::MIN_POSITIVE);
         let mut out = Vec::with_capacity(self.ops.len());
-        let (mut largest, mut misfit) = (0.0f64, 0.0f64);
         for (b, op) in self.ops.iter().enumerate() {
             let nodes = &model.bodies[b].nodes;
-            let m = nodes.len().max(1) as f64;
-            let c = nodes
-                .iter()
-                .fold([0.0, 0.0], |a, p| [a[0] + p[0] / m, a[1] + p[1] / m]);
-            let scale = model.scale.max(f64::MIN_POSITIVE);
-            // Rows of the fit: d·(t + ω k × (x − c)) = U, ω scaled by the model's size.
-            let mut rows = Vec::with_capacity(op.u_idx.len());
+            let c = mechanism::centroid(nodes);
+            // Normal equations of d·(t + ω k × (x − c)) = U over the body's dofs.
+            let mut g = [[0.0f64; 3]; 3];
+            let mut h = [0.0f64; 3];
             for l in 0..op.u_idx.len() {
                 let d = self.dof_start[b] + l;
                 let mut u: f64 = self.tmap[d].iter().map(|&(g, x)| x * dv[g]).sum();
@@ -361,18 +357,7 @@ impl Problem {
                     }
                 }
                 let (node, e) = self.dof_at[d];
-                let x = nodes.get(node).copied().unwrap_or(c);
-                let a = [
-                    e[0],
-                    e[1],
-                    (-(x[1] - c[1]) * e[0] + (x[0] - c[0]) * e[1]) / scale,
-                ];
-                rows.push((a, u));
-                largest = largest.max(u.abs());
-            }
-            let mut g = [[0.0f64; 3]; 3];
-            let mut h = [0.0f64; 3];
-            for (a, u) in &rows {
+                let a = mechanism::rigid_row(nodes.get(node).copied().unwrap_or(c), c, e, scale);
                 for i in 0..3 {
                     h[i] += a[i] * u;
                     for j in 0..3 {
@@ -386,9 +371,6 @@ impl Problem {
                 row[i] += 1e-12 * tr;
             }
             let q = crate::linalg::solve3(g, h).unwrap_or([0.0; 3]);
-            for (a, u) in &rows {
-                misfit = misfit.max((a[0] * q[0] + a[1] * q[1] + a[2] * q[2] - u).abs());
-            }
             out.push(BodyMotion {
                 body: b,
                 centroid: c,
@@ -396,7 +378,7 @@ impl Problem {
                 rotation: q[2] / scale,
             });
         }
-        (out, misfit / largest.max(f64::MIN_POSITIVE))
+        out
     }
 
     /// The number of glued unknowns v.
