@@ -148,7 +148,8 @@ pub struct ContactResult {
     /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
     pub mechanism: bool,
     /// The failure is Lemke's or the QP's that could not pose the stick law from the moment
-    /// a pair closes (`InnerFailure::StickClosure`): no verdict on the equilibrium.
+    /// a pair closes (`InnerFailure::StickClosure`), or a friction fixed point that did not
+    /// settle: no verdict on the equilibrium.
     pub undecided: bool,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
     pub info: SolverInfo,
@@ -176,7 +177,8 @@ struct StepLoop {
     tie_resolves: usize,
     /// Inner solves whose pivoting path the QP completed.
     rescues: usize,
-    /// The step failed where Lemke or the QP could not pose the stick law at closure.
+    /// The step failed where Lemke or the QP could not pose the stick law at closure, or
+    /// where the friction fixed point did not settle: no verdict on the equilibrium.
     undecided: bool,
     info: SolverInfo,
 }
@@ -527,6 +529,7 @@ impl<'a> Session<'a> {
             bound: vec![0.0; n],
             tol,
             coulomb: Vec::new(),
+            coupled: false,
         };
         let mu: Vec<f64> = self.problem.rows[..n]
             .iter()
@@ -690,6 +693,7 @@ impl<'a> Session<'a> {
                 break;
             }
             if friction && outer >= FRICTION_OUTER_LIMIT {
+                lp.undecided = true; // no verdict: the driver asks the sparse solver
                 failure = Some(unsettled(outer, load_step, change));
                 st = next;
                 break;
