@@ -1,9 +1,11 @@
-"""pyvista grids of one archived state: the bodies' boundary lines and the interior field."""
+"""pyvista grids of one archived state: the bodies' boundary lines, the interior field and
+the thrust line."""
 
 import numpy as np
 import pyvista
 
 from ._archive import _floats, _text
+from ._thrust import thrust_line
 
 
 def _grid(points2, cells, cell_type):
@@ -105,4 +107,23 @@ def field_grid(run, f):
                                                   + (szz - sxx) ** 2) + 3.0 * sxy ** 2)
     grid.point_data["body"] = np.concatenate(body)
     grid.field_data["stress_unit"] = [_text(run.units["stress"])]
+    return grid
+
+
+def thrust_grid(run, f, k):
+    """The thrust line of state `k` (`_thrust.thrust_line`): the VTK block "thrust", an
+    UnstructuredGrid of vertices (the joints' points of application, the hubs) and lines."""
+    t = thrust_line(run, f, k)
+    flat = np.array([v for c in t["cells"] for v in (len(c), *c)], dtype=np.int64)
+    grid = pyvista.UnstructuredGrid(flat, np.asarray(t["cell_types"], dtype=np.uint8),
+                                    _vec3(t["points"]))
+    t["displacement"] = _vec3(t["displacement"])
+    for name in ("N", "T", "e", "e_over_half_length", "inside", "in_closed_part", "joint",
+                 "displacement"):
+        if len(t[name]):
+            grid.point_data[name] = t[name]
+        else:
+            # No joint carries a normal force (all open, or unloaded): the arrays are there,
+            # empty, as in the VTK file (pyvista's point_data refuses empty arrays).
+            grid.GetPointData().AddArray(pyvista.convert_array(t[name], name=name))
     return grid
