@@ -451,9 +451,10 @@ fn upper_turns() -> Vec<BodyMotion> {
 
 /// A record with a mechanism: the archive keeps it (`/mechanism`, read back exactly), the
 /// VTK files draw it with the last state only (block "mechanism" of its multiblock, the
-/// rigid velocity at every node, zero on the body at rest), and `sgbem export` writes the
-/// same bytes from the archive; a mechanism naming a body the archive does not hold is an
-/// error, not a panic. A record without one has no group and no block.
+/// rigid velocity at every node, zero on the body at rest), `sgbem export` writes the same
+/// bytes from the archive and `sgbem inspect` names the moving body; a mechanism naming a
+/// body the archive does not hold is an error, not a panic. A record without one has no
+/// group and no block.
 #[test]
 fn a_mechanism_is_archived_and_drawn_with_the_last_state() {
     let dir = tmpdir("outputs-mechanism");
@@ -494,6 +495,9 @@ fn a_mechanism_is_archived_and_drawn_with_the_last_state() {
             .unwrap();
     });
     inspect_fails(&p, "mechanism refers to index 7");
+    let (code, text, err) = sgbem(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("\n  mechanism moves upper/part\n"), "{text}");
     let plain = dir.join("plain.h5");
     write_archive(&plain, &fabricated(3)).unwrap();
     assert!(!h5::File::open(&plain).unwrap().link_exists("mechanism"));

@@ -1012,6 +1012,10 @@ impl RunRecord {
                 );
             }
         }
+        if !self.mechanism.is_empty() {
+            let moving: Vec<&str> = self.mechanism.iter().map(|m| body_name(m.body)).collect();
+            let _ = writeln!(o, "  mechanism moves {}", moving.join(", "));
+        }
         let _ = writeln!(o, "\niterations ({})", self.history.rows.len());
         if !self.history.rows.is_empty() {
             let mut head = String::from("  step  factor      iter  solver      ");
