@@ -432,9 +432,17 @@ class Run:
         "contact" (a vertex per pair, as the VTK block `contact`: interface and pair
         indices, contact_status 1 closed 0 open, tangential_status 1 stick 2 slip 0 open
         -1 none, gap, normal_opening, the tractions and forces, slip, displacement; the rows
-        of `contact_points(state)`). The blocks come in the order of vtk/state_NNNN.vtm.
-        Warp by `displacement` to see the strained shape."""
-        from ._mesh import boundary_grid, field_grid, thrust_grid  # pyvista: on demand
+        of `contact_points(state)`); in the final state of a run that failed at a mechanism,
+        or of a collapse search, block "mechanism" (the boundary lines with
+        mechanism_velocity and body, as the VTK block). The blocks come in the order of
+        vtk/state_NNNN.vtm. Warp by `displacement` to see the strained shape, by
+        `mechanism_velocity` the mechanism."""
+        from ._mesh import (  # pyvista: on demand
+            boundary_grid,
+            field_grid,
+            mechanism_grid,
+            thrust_grid,
+        )
 
         k = self._state(state)
         import pyvista
@@ -448,8 +456,12 @@ class Run:
                 blocks["thrust"] = thrust_grid(self, f, k)
             a = f["states"][f"{k:04}"].attrs
             meta = (int(a["iteration"]), int(a["load_step"]), float(a["load_factor"]))
+            mechanism = mechanism_grid(self, f) if (
+                k == self.state_count - 1 and "mechanism" in f) else None
         if self._interfaces:
             blocks["contact"] = self._contact_block(k)
+        if mechanism is not None:
+            blocks["mechanism"] = mechanism
         for block in blocks:
             block.field_data["iteration"] = [meta[0]]
             block.field_data["load_step"] = [meta[1]]

@@ -192,6 +192,20 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
     failed = sgbem.open(e.value.out)
     assert failed.status == "not converged" == failed.summary["status"]
     assert len(failed.pairs("joint")) == failed.summary["interfaces"]["joint"]["pairs"]
+    # The mechanism: the upper block slides along (1, 0); its block equals the VTK one.
+    assert [(b["body"], b["kind"], b["magnitude"]) for b in failed.summary["mechanism"]] == [
+        ("upper", "translation", 1.0)]
+    last = failed.state_count - 1
+    blocks = failed.to_pyvista()
+    assert blocks.keys() == ["boundary", "field", "contact", "mechanism"]
+    assert "mechanism" not in failed.to_pyvista(0).keys()
+    pyvista = pytest.importorskip("pyvista")
+    vtk = pyvista.read(failed.folder / f"vtk/state_{last:04d}.vtm")["mechanism"]
+    for name in ("mechanism_velocity", "body"):
+        np.testing.assert_array_equal(blocks["mechanism"].point_data[name], vtk.point_data[name])
+    np.testing.assert_array_equal(blocks["mechanism"].points, vtk.points)
+    moving = blocks["mechanism"].point_data["mechanism_velocity"]
+    assert np.abs(np.linalg.norm(moving, axis=1).max() - 1.0) < 1e-12
 
 
 def test_steps_history_and_compressed_vtk(tmp_path):
