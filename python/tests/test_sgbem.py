@@ -197,7 +197,7 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
         ("upper", "translation", 1.0)]
     last = failed.state_count - 1
     blocks = failed.to_pyvista()
-    assert blocks.keys() == ["boundary", "field", "contact", "mechanism"]
+    assert blocks.keys() == ["boundary", "field", "thrust", "contact", "mechanism"]
     assert "mechanism" not in failed.to_pyvista(0).keys()
     pyvista = pytest.importorskip("pyvista")
     vtk = pyvista.read(failed.folder / f"vtk/state_{last:04d}.vtm")["mechanism"]
