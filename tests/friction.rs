@@ -922,3 +922,45 @@ fn collapse_with_very_large_friction_completes_near_stick() {
     let st = rows.iter().fold(0.0f64, |a, r| a.max(r.tt.abs()));
     coulomb_holds(&rows, &summary, 1000.0, st);
 }
+
+/// The 220-stone wall of `pipelines/stone_wall.toml` (joints found from the drawing, 401
+/// junctions) with Coulomb joints, μ = 0.7, under its own weight: the lagged slip bounds
+/// leave a stone free at every iterate, and it ended with a false mechanism (contact forces
+/// in the friction cones that balance every stone exist: a rigid-block LP, docs/formulation.md
+/// §6.5); the semismooth Newton iteration with at most 100 switches per iterate settles it.
+/// Every closed row with a friction law obeys Coulomb's law (slipping rows at μ|t_n|), some
+/// rows slip, and every stone balances.
+#[test]
+fn stone_wall_with_coulomb_joints_stands_under_its_weight() {
+    let dir = support::tmpdir("stone_wall_friction");
+    let out = dir.join("out");
+    let scene = support::root().join("pipelines/stone_wall.toml");
+    let (code, _, stderr) = support::sgbem(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--quiet",
+        "--set",
+        "defaults.interface.tangential=friction",
+        "--set",
+        "defaults.interface.friction=0.7",
+        "--set",
+        "defaults.body.body_force=[0.0, -25.0]",
+        "--set",
+        "output.vtk=false",
+    ]);
+    assert_eq!(code, 0, "{stderr}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["contact"]["converged"], true);
+    let rows = all_rows(&out);
+    let st = rows.iter().fold(0.0f64, |a, r| a.max(r.tt.abs()));
+    let slipping = coulomb_holds(&rows, &summary, 0.7, st);
+    assert!(slipping > 100, "{slipping} rows slip");
+    for (body, e) in summary["equilibrium"].as_object().unwrap() {
+        if let Some(r) = e.get("relative_imbalance").and_then(Value::as_f64) {
+            assert!(r < 1e-6, "{body}: relative imbalance {r}");
+        }
+    }
+}
