@@ -15,6 +15,17 @@ fn expect(out: &(i32, String, String), code: i32, words: &[&str]) {
     expect_exit(out, code, words)
 }
 
+/// The names in `dir` itself, sorted, hidden ones included.
+fn names_in(dir: &Path) -> Vec<String> {
+    let mut names: Vec<String> = std::fs::read_dir(dir)
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    names
+}
+
 /// The files under `dir` (relative, sorted), hidden ones included.
 fn tree(dir: &Path) -> Vec<String> {
     let mut out = Vec::new();
@@ -73,13 +84,7 @@ fn a_folder_without_the_tools_marker_is_never_replaced() {
     expect(&r, 2, &["`mesh/`", "`summary.json`"]);
     assert_eq!(tree(&out), ["mesh/beam.msh", "summary.json"]);
     // Nothing was left beside the folder either (lock, staging).
-    let mut beside: Vec<String> = std::fs::read_dir(&dir)
-        .unwrap()
-        .flatten()
-        .map(|e| e.file_name().to_string_lossy().into_owned())
-        .collect();
-    beside.sort();
-    assert_eq!(beside, ["m.msh", "out", "scene.toml"]);
+    assert_eq!(names_in(&dir), ["m.msh", "out", "scene.toml"]);
 }
 
 #[test]
@@ -133,6 +138,39 @@ fn a_run_folder_loses_only_the_files_its_marker_lists() {
     expect(&run(&sc, &msh, &out), 0, &[]);
     assert!(!out.join("vtk/boundary_0099.vtu").exists());
     assert_eq!(tree(&out), first);
+}
+
+/// `--out LINK`, a symbolic link to a run folder: the folder it points to is replaced, the
+/// link stays, and nothing is left beside either (the link was renamed aside as the "old"
+/// folder, left there as `.LINK.old-PID`, and replaced by a new folder before).
+#[test]
+fn an_output_folder_given_as_a_symbolic_link_is_followed_and_the_link_kept() {
+    let dir = tmpdir("h21-outlink");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let real = dir.join("real");
+    expect(&run(&sc, &msh, &real), 0, &[]);
+    let first = tree(&real);
+    let link = dir.join("link");
+    std::os::unix::fs::symlink("real", &link).unwrap();
+    expect(&run(&sc, &msh, &link), 0, &[]);
+    assert!(std::fs::symlink_metadata(&link)
+        .unwrap()
+        .file_type()
+        .is_symlink());
+    assert_eq!(tree(&real), first);
+    assert_eq!(names_in(&dir), ["link", "m.msh", "real", "scene.toml"]);
+    // A user's file in the folder the link points to: refused, kept.
+    std::fs::write(real.join("mine.txt"), "mine").unwrap();
+    expect(&run(&sc, &msh, &link), 2, &["`mine.txt`", "did not write"]);
+    assert!(real.join("mine.txt").is_file());
+    // A link that leads nowhere, or to a file: refused, the link left as it was.
+    for (name, to) in [("dangling", "nowhere"), ("to_file", "scene.toml")] {
+        let l = dir.join(name);
+        std::os::unix::fs::symlink(to, &l).unwrap();
+        expect(&run(&sc, &msh, &l), 1, &[name, "symbolic link"]);
+        assert_eq!(std::fs::read_link(&l).unwrap(), Path::new(to));
+    }
+    assert!(dir.join("scene.toml").is_file() && !dir.join("nowhere").exists());
 }
 
 #[test]
@@ -301,6 +339,92 @@ fn a_set_key_of_many_parts_is_refused_without_overflowing_the_stack() {
     );
     let r = sgbem(&["check", s(&sc), "--mesh", s(&msh), "--set", &nested]);
     expect(&r, 2, &["load_factors"]);
+}
+
+/// Long or deeply nested input gives a message and a `check` report of bounded size, that
+/// still say where and what: the TOML parser's error quoted the whole line (200 kB for
+/// arrays nested 100 000 deep), a `--set` value was quoted whole in the type error (80 kB),
+/// and `check` printed every load step (1.9 MB for 200 000 steps) and every `--set`
+/// (0.9 MB for 50 000).
+#[test]
+fn long_or_deeply_nested_input_gives_messages_and_reports_of_bounded_size() {
+    let dir = tmpdir("h21-bounded");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let deep =
+        |open: &str, close: &str, n: usize| format!("{}1{}", open.repeat(n), close.repeat(n));
+    let scenes = [
+        (
+            format!(
+                "{STACKED_SCENE}[solve]\nload_factors = {}\n",
+                deep("[", "]", 100_000)
+            ),
+            vec!["not valid TOML at line 17, column 96", "17 | …[[[["],
+        ),
+        (
+            format!("extra = {}\n{STACKED_SCENE}", deep("{a=", "}", 100_000)),
+            vec!["not valid TOML at line 1, column", "1 | …{a={a="],
+        ),
+        (
+            format!("{STACKED_SCENE}[{}]\n", vec!["a"; 50_000].join(".")),
+            vec!["nested deeper than sgbem reads"],
+        ),
+    ];
+    for (text, words) in &scenes {
+        let deep_sc = write(&dir, "deep.toml", text);
+        let r = sgbem(&["check", s(&deep_sc), "--mesh", s(&msh)]);
+        expect(&r, 2, &[&["deep.toml"], &words[..]].concat());
+        assert!(r.2.len() < 1000, "{} bytes: {}", r.2.len(), &r.2[..300]);
+    }
+    // A sweep file is read the same way.
+    let sweep = write(
+        &dir,
+        "sweep.toml",
+        &format!(
+            "scene = \"scene.toml\"\nset = {}\n",
+            deep("[", "]", 100_000)
+        ),
+    );
+    let r = sgbem(&["sweep", "--file", s(&sweep)]);
+    expect(&r, 2, &["sweep.toml", "not valid TOML at line 2"]);
+    assert!(r.2.len() < 1000, "{} bytes", r.2.len());
+    // A --set value nested too deep to read is quoted shortened.
+    let set = format!(
+        "solve={{{}}}",
+        deep("a={", "}", 20_000).replacen('1', "b=1", 1)
+    );
+    let r = sgbem(&["check", s(&sc), "--mesh", s(&msh), "--set", &set]);
+    expect(
+        &r,
+        2,
+        &["scene.toml", "--set solve=", "characters left out"],
+    );
+    assert!(r.2.len() < 2000, "{} bytes", r.2.len());
+    // check lists 20 000 load steps and 5 000 --set by their first and last ones.
+    let steps: Vec<String> = (1..=20_000)
+        .map(|i| format!("{}", i as f64 / 20_000.0))
+        .collect();
+    let long = write(
+        &dir,
+        "long.toml",
+        &format!("{STACKED_SCENE}[solve]\ntime = [{}]\n", steps.join(", ")),
+    );
+    let mut args = vec![
+        "check".to_string(),
+        s(&long).into(),
+        "--mesh".into(),
+        s(&msh).into(),
+    ];
+    for i in 1..=5000 {
+        args.extend(["--set".to_string(), format!("title=t{i}")]);
+    }
+    let args: Vec<&str> = args.iter().map(String::as_str).collect();
+    let r = sgbem(&args);
+    expect(&r, 0, &[]);
+    assert!(r.1.len() < 6000, "{} bytes", r.1.len());
+    for words in ["1, (20000 in all)", "--set title=t5000 (5000 in all)"] {
+        let (a, b) = words.split_once(", ").unwrap_or((words, ""));
+        assert!(r.1.contains(a) && r.1.contains(b), "{words}: {}", r.1);
+    }
 }
 
 // --- 11. Messages ----------------------------------------------------------------------------

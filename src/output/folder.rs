@@ -11,7 +11,8 @@
 //! releases it whenever the process ends) refuses a second run into the same folder while
 //! the first is alive; the staging folders a killed run left are removed by the next one.
 //! SIGINT and SIGTERM remove the staging folder and the lock file before the process ends
-//! (exit 130).
+//! (exit 130). A symbolic link given as the folder is followed: the folder it points to is
+//! the one replaced, and the link stays.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -191,6 +192,7 @@ impl RunFolder {
         } else {
             target.to_path_buf()
         };
+        let target = through_link(target)?;
         if target.exists() && !target.is_dir() {
             return Err(Error::io(
                 &target,
@@ -303,6 +305,34 @@ impl RunFolder {
             owned::remove_listed(&old, &listed);
         }
         Ok(())
+    }
+}
+
+/// The folder a symbolic link given as the output folder points to (the run is staged
+/// beside that folder and swapped in there, the link kept); a link that leads nowhere is
+/// refused, since the run would replace the link itself.
+fn through_link(target: PathBuf) -> Result<PathBuf> {
+    let is_link = std::fs::symlink_metadata(&target).is_ok_and(|m| m.file_type().is_symlink());
+    if !is_link {
+        return Ok(target);
+    }
+    match std::fs::canonicalize(&target) {
+        Ok(real) if real.is_dir() => Ok(real),
+        Ok(real) => Err(Error::io(
+            &target,
+            format!(
+                "the output path is a symbolic link to {}, which is not a folder: give --out \
+                 a folder",
+                real.display()
+            ),
+        )),
+        Err(e) => Err(Error::io(
+            &target,
+            format!(
+                "the output path is a symbolic link that leads nowhere ({e}): create the \
+                 folder it points to, or give --out another folder"
+            ),
+        )),
     }
 }
 
