@@ -684,6 +684,48 @@ fn implausible_results_and_inputs_are_noted_and_still_succeed() {
     assert!(!err.contains("note"), "{err}");
 }
 
+/// Odd units: one note per implausible modulus however many bodies share it (a note per
+/// body before: 17 for the wall of `wall_collapse` at young = 0.5 kN/m², 410 for its larger
+/// wall), a unit written in the wrong case named with the unit meant, micro-newtons known.
+#[test]
+fn odd_units_give_one_note_per_modulus_and_suggest_the_unit_meant() {
+    let dir = tmpdir("h21-units");
+    let units = |u: &str| {
+        STACKED_SCENE.replace("young = 1.0", "young = 0.5").replace(
+            "plane = \"strain\"",
+            &format!("plane = \"strain\"\nunits = {{ {u} }}"),
+        )
+    };
+    let (sc, msh) = scene_of(&dir, &units("length = \"m\", force = \"kN\""));
+    let c = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+    expect(&c, 0, &[]);
+    let young: Vec<&str> = c.1.lines().filter(|l| l.contains("young = 0.5")).collect();
+    assert_eq!(young.len(), 1, "{}", c.1);
+    assert!(
+        young[0].contains("bodies \"lower\", \"upper\": young = 0.5 kN/m² is 500 Pa"),
+        "{}",
+        young[0]
+    );
+    for (u, words) in [
+        (
+            "length = \"M\", force = \"kN\"",
+            "`units.length` = \"M\" is not a unit sgbem knows (did you mean \"m\"?)",
+        ),
+        (
+            "length = \"mm\", force = \"KN\"",
+            "`units.force` = \"KN\" is not a unit sgbem knows (did you mean \"kN\"?)",
+        ),
+    ] {
+        let (sc, msh) = scene_of(&dir, &units(u));
+        let c = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+        assert!(c.0 == 0 && c.1.contains(words), "{u}: {}", c.1);
+    }
+    // 0.5 µN/µm² is 5e5 Pa, plausible: no note at all.
+    let (sc, msh) = scene_of(&dir, &units("length = \"µm\", force = \"µN\""));
+    let c = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+    assert!(c.0 == 0 && !c.1.contains("advice"), "{}", c.1);
+}
+
 /// `geo/two_blocks.geo` meshed with `n` elements per unit length.
 fn two_blocks_mesh(dir: &Path, n: usize) -> PathBuf {
     let n = n.to_string();
