@@ -857,16 +857,18 @@ fn processes_with(needle: &str) -> Vec<u32> {
         .collect()
 }
 
+/// The stacked blocks' scene with `mesh = ...` in it (a sweep gives no --mesh).
+fn scene_naming_its_mesh(dir: &Path) -> (PathBuf, PathBuf) {
+    let (sc, msh) = stacked_scene(dir, "");
+    let text = std::fs::read_to_string(&sc).unwrap();
+    let text = format!("mesh = \"{}\"\n{text}", s(&msh));
+    (write(dir, "scene.toml", &text), msh)
+}
+
 #[test]
 fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
     let dir = tmpdir("h21-sweep-labels");
-    let (sc, msh) = stacked_scene(&dir, "");
-    let text = std::fs::read_to_string(&sc).unwrap();
-    let sc = write(
-        &dir,
-        "scene.toml",
-        &format!("mesh = \"{}\"\n{text}", s(&msh)),
-    );
+    let (sc, _) = scene_naming_its_mesh(&dir);
     let out = dir.join("sw");
     let sweep = |values: &str| sgbem(&["sweep", s(&sc), "--set", values, "--out", s(&out)]);
     let r = sweep("title=\"α\",\"β\",\"γ\"");
@@ -901,6 +903,50 @@ fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
     let lock = std::fs::File::create(dir.join(".sw.lock")).unwrap();
     lock.lock().unwrap();
     expect(&sweep("title=c"), 1, &["another sgbem run", ".sw.lock"]);
+}
+
+/// Long values give point folders whose names fit a file name (each value's first 40
+/// characters, at most 160 in all, repeats numbered): every point failed before, its lock
+/// file's name too long (os error 36). A run folder whose name cannot fit the staging
+/// folder's beside it is refused, naming the limit.
+#[test]
+fn long_values_give_folder_names_that_fit_the_file_system() {
+    let dir = tmpdir("h21-sweep-long");
+    let (sc, msh) = scene_naming_its_mesh(&dir);
+    let long = "x".repeat(300);
+    let out = dir.join("sw");
+    let r = sgbem(&[
+        "sweep",
+        s(&sc),
+        "--set",
+        &format!("title=\"{long}\",\"{long}y\""),
+        "--set",
+        "thickness=1,2",
+        "--out",
+        s(&out),
+    ]);
+    expect(&r, 0, &[]);
+    let cut = format!("title=_{}", "x".repeat(39));
+    let points: Vec<String> = names_in(&out)
+        .into_iter()
+        .filter(|n| n.starts_with("title"))
+        .collect();
+    assert_eq!(
+        points,
+        [
+            format!("{cut}_thickness=1"),
+            format!("{cut}_thickness=1~2"),
+            format!("{cut}_thickness=2"),
+            format!("{cut}_thickness=2~2"),
+        ]
+    );
+    let csv = std::fs::read_to_string(out.join("sweep.csv")).unwrap();
+    assert_eq!(csv.matches(",0,converged,").count(), 4, "{csv}");
+    // --out with a name of 240 bytes: refused before anything is written.
+    let name = "o".repeat(240);
+    let r = run(&sc, &msh, &dir.join(&name));
+    expect(&r, 1, &["240 bytes", "at most 238 bytes", "--out"]);
+    assert_eq!(names_in(&dir), ["m.msh", "scene.toml", "sw"]);
 }
 
 #[test]

@@ -93,6 +93,10 @@ fn remove_leftovers(target: &Path, parent: &Path) {
     }
 }
 
+/// The longest name of an output folder: `.NAME.staging-PID` (PID up to 7 digits) must fit
+/// in the 255 bytes of a file name.
+const MAX_NAME: usize = 255 - ".".len() - ".staging-".len() - 7;
+
 /// A run folder being written.
 pub struct RunFolder {
     target: PathBuf,
@@ -193,6 +197,17 @@ impl RunFolder {
             target.to_path_buf()
         };
         let target = through_link(target)?;
+        let name_len = target.file_name().map_or(0, |n| n.len());
+        if name_len > MAX_NAME {
+            return Err(Error::io(
+                &target,
+                format!(
+                    "the output folder's name has {name_len} bytes: sgbem writes \
+                     `.NAME.staging-PID` beside it, and a file name has at most 255 bytes; give \
+                     --out a name of at most {MAX_NAME} bytes"
+                ),
+            ));
+        }
         if target.exists() && !target.is_dir() {
             return Err(Error::io(
                 &target,

@@ -4,7 +4,8 @@
 //! Place in the flow: above the pipeline; each point is `sgbem run SCENE --set ... --out
 //! DIR/<point> --quiet`, so that a point that fails (exit 3) leaves the others alone.
 //!
-//! Point folders have unique names (values that clean to the same text get `~2`, `~3`).
+//! Point folders have unique names (values that clean to the same text get `~2`, `~3`), of
+//! at most 160 characters (each value's first 40).
 //! A lock (`.DIR.lock`, flock) refuses a second sweep into the same folder. The children
 //! run in process groups of their own and end with the sweep: SIGINT or SIGTERM to the
 //! sweep ends them (SIGTERM to each group), writes the table of the points that finished
@@ -94,8 +95,14 @@ fn labels(axes: &[Axis]) -> Vec<String> {
         .collect()
 }
 
+/// The longest cleaned value in a point's folder name, and the longest name: a file name
+/// has at most 255 bytes, and the run writes `.NAME.staging-PID` beside its folder.
+const VALUE_CHARS: usize = 40;
+const NAME_CHARS: usize = 160;
+
 fn clean(v: &str) -> String {
     v.chars()
+        .take(VALUE_CHARS)
         .map(|c| {
             if c.is_ascii_alphanumeric() || "._+-".contains(c) {
                 c
@@ -130,10 +137,15 @@ pub fn points(axes: &[Axis]) -> Vec<Point> {
         }
         pts = next;
     }
-    // Distinct values may clean to the same text (`α`, `β` → `_`): number the repeats
-    // (`~` is never in a cleaned value, so the names stay distinct).
+    // Distinct values may clean to the same text (`α`, `β` → `_`, long values cut to their
+    // start): number the repeats (`~` is never in a cleaned value, so the names stay
+    // distinct).
     let mut seen = std::collections::HashMap::new();
     for p in &mut pts {
+        if p.name.len() > NAME_CHARS {
+            // Cleaned names are ASCII: any byte is a character boundary.
+            p.name.truncate(NAME_CHARS);
+        }
         let n = seen.entry(p.name.clone()).or_insert(0usize);
         *n += 1;
         if *n > 1 {
