@@ -245,6 +245,38 @@ fn export_into_a_longer_earlier_export_leaves_no_stale_file() {
     assert_eq!(tree(&short.join("vtk")), run_files);
 }
 
+/// A command never replaces the folder that holds its own input: `export A/archive.h5
+/// --vtk A` replaced the run folder A by VTK files, deleting the archive it read and every
+/// result (exit 0); a run given `--mesh A/mesh/x.msh` (the mesh an earlier run of a .geo
+/// kept) with `--out A` removed that mesh with the old run.
+#[test]
+fn a_folder_holding_the_commands_own_input_is_not_replaced() {
+    let dir = tmpdir("h21-own-input");
+    let (sc, msh) = stacked_scene(&dir, "");
+    let out = dir.join("out");
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    let before = tree(&out);
+    let archive = out.join("archive.h5");
+    let r = sgbem(&["export", s(&archive), "--vtk", s(&out)]);
+    expect(&r, 2, &["archive.h5", "input of the command", "--vtk"]);
+    assert_eq!(tree(&out), before);
+    // Its vtk/ folder is no input: exported into as before.
+    expect(
+        &sgbem(&["export", s(&archive), "--vtk", s(&out.join("vtk"))]),
+        0,
+        &[],
+    );
+    // A mesh inside the output folder.
+    let inner = out.join("vtk").join("m.msh");
+    let marker = std::fs::read_to_string(out.join(".sgbem-run.json")).unwrap();
+    let marker = marker.replace("\"vtk/\",", "\"vtk/\",\n    \"vtk/m.msh\",");
+    std::fs::write(out.join(".sgbem-run.json"), marker).unwrap();
+    std::fs::copy(&msh, &inner).unwrap();
+    let r = run(&sc, &inner, &out);
+    expect(&r, 2, &["m.msh", "input of the command", "--out"]);
+    assert!(inner.is_file());
+}
+
 // --- 7. Locks the kernel releases -----------------------------------------------------------
 
 #[test]

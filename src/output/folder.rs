@@ -187,9 +187,9 @@ impl Drop for Lock {
 
 impl RunFolder {
     /// Takes the lock of `target`, checks that the tool may replace it (new, empty, or
-    /// holding only what its marker lists: [`super::owned`]), and creates an empty staging
-    /// folder beside it.
-    pub fn acquire(target: &Path) -> Result<RunFolder> {
+    /// holding only what its marker lists: [`super::owned`], and none of the command's
+    /// `inputs`), and creates an empty staging folder beside it.
+    pub fn acquire(target: &Path, inputs: &[&Path]) -> Result<RunFolder> {
         let target = if target.file_name().is_none() {
             // "out/" or "." : name the folder itself.
             std::path::absolute(target).map_err(|e| Error::io(target, e))?
@@ -214,6 +214,7 @@ impl RunFolder {
                 "the output path is a file, not a folder: remove it or choose another --out",
             ));
         }
+        check_inputs(&target, inputs)?;
         check_replaceable(&target)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
@@ -349,6 +350,29 @@ fn through_link(target: PathBuf) -> Result<PathBuf> {
             ),
         )),
     }
+}
+
+/// Refuses (input error) a `target` that holds one of the command's own input files: the
+/// archive an export reads (`--vtk` given the run folder itself), a mesh an earlier run
+/// wrote into its `mesh/`. Replacing the folder would delete the input with the results.
+fn check_inputs(target: &Path, inputs: &[&Path]) -> Result<()> {
+    let Ok(real) = std::fs::canonicalize(target) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if std::fs::canonicalize(input).is_ok_and(|f| f.starts_with(&real)) {
+            return Err(Error::input(
+                input,
+                format!(
+                    "this input of the command lies in the output folder {}, which the \
+                     command replaces whole: give --out (or --vtk) another folder, or copy the \
+                     file out of it first",
+                    target.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses (input error, naming them) a `target` holding entries its marker does not
