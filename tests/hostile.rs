@@ -486,6 +486,40 @@ fn duplicate_nodes_are_named_as_duplicates() {
     expect(&r, 2, &["gap.msh", "is open"]);
 }
 
+/// Messages about many bodies speak of them in the plural and name five (they said "bodies
+/// ... is not held: it has" and named all 17 bricks of a wall); a path through a file says
+/// so (it said "File exists").
+#[test]
+fn messages_about_groups_of_bodies_and_impossible_paths_say_what_is_wrong() {
+    let dir = tmpdir("h21-plural");
+    let free = STACKED_SCENE.replace("ux = 0.0\nuy = 0.0", "tx = 0.0");
+    let (sc, msh) = scene_of(&dir, &free);
+    let r = sgbem(&["check", s(&sc), "--mesh", s(&msh)]);
+    expect(
+        &r,
+        2,
+        &[
+            "bodies \"lower\", \"upper\" (joined by interfaces) are not held: they have no",
+            "join them",
+        ],
+    );
+    let wall = root().join("pipelines/wall_collapse.toml");
+    let r = sgbem(&["check", s(&wall), "--set", "boundary.base={tx=0.0}"]);
+    expect(
+        &r,
+        2,
+        &["\"brick_5\" and 12 more (joined by interfaces) are not held"],
+    );
+    assert!(!r.2.contains("brick_6"), "{}", r.2);
+    let (sc, msh) = stacked_scene(&dir, "");
+    let r = run(&sc, &msh, &dir.join("scene.toml/out"));
+    expect(
+        &r,
+        1,
+        &["scene.toml", "a part of the path is a file, not a folder"],
+    );
+}
+
 #[test]
 fn expression_errors_name_the_key_and_never_the_evaluator() {
     let dir = tmpdir("h21-expr");

@@ -220,8 +220,14 @@ impl RunFolder {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        std::fs::create_dir_all(&parent)
-            .map_err(|e| Error::io(&parent, format!("cannot create the folder: {e}")))?;
+        std::fs::create_dir_all(&parent).map_err(|e| {
+            let why = if parent.ancestors().any(|a| a.is_file()) {
+                ": a part of the path is a file, not a folder; give --out a path of folders"
+            } else {
+                ""
+            };
+            Error::io(&parent, format!("cannot create the folder: {e}{why}"))
+        })?;
         install_signal_cleanup();
         let lock_path = beside(&target, "lock");
         let lock = Lock::take(&lock_path, &target)?;
