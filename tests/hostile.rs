@@ -298,6 +298,37 @@ fn a_lock_file_of_a_live_unrelated_process_does_not_block_the_folder() {
     expect(&run(&sc, &msh, &out), 0, &[]);
 }
 
+/// A lock path that is a symbolic link to a user's file is refused, never written through:
+/// the run truncated the file it points to and wrote its process id there (exit 0). A
+/// folder there is named as one.
+#[test]
+fn a_lock_path_that_is_a_link_or_a_folder_is_refused_and_never_written_through() {
+    let dir = tmpdir("h21-lock-link");
+    let (sc, msh) = scene_naming_its_mesh(&dir);
+    std::fs::write(dir.join("precious.txt"), "precious data").unwrap();
+    for (lock, out) in [(".out.lock", "out"), (".sw.lock", "sw")] {
+        let path = dir.join(lock);
+        std::os::unix::fs::symlink("precious.txt", &path).unwrap();
+        let r = if out == "out" {
+            run(&sc, &msh, &dir.join(out))
+        } else {
+            let o = dir.join(out);
+            sgbem(&["sweep", s(&sc), "--set", "thickness=1,2", "--out", s(&o)])
+        };
+        expect(&r, 1, &[lock, "a symbolic link", "remove it"]);
+        assert_eq!(
+            std::fs::read_to_string(dir.join("precious.txt")).unwrap(),
+            "precious data"
+        );
+        std::fs::remove_file(&path).unwrap();
+        std::fs::create_dir(&path).unwrap();
+        let r = run(&sc, &msh, &dir.join(out));
+        assert!(r.0 == 1 && r.2.contains("a folder"), "{}", r.2);
+        std::fs::remove_dir(&path).unwrap();
+    }
+    assert!(!dir.join("out").exists() && !dir.join("sw").exists());
+}
+
 // --- 2. Never hang: a collapse tolerance below floating-point resolution --------------------
 
 #[test]

@@ -117,7 +117,8 @@ pub(crate) fn beside(target: &Path, suffix: &str) -> PathBuf {
 /// The lock of a folder: `.NAME.lock` beside it, locked with `flock` (the kernel releases
 /// it when the process ends, however it ends). The file holds the process id, for the
 /// message of a refused run only; the holder removes it before unlocking, so a run that
-/// locked a file no longer at the path tries again.
+/// locked a file no longer at the path tries again. A symbolic link, folder or special file
+/// at the path is refused, never written through.
 pub(crate) struct Lock {
     path: PathBuf,
     file: Option<std::fs::File>,
@@ -127,6 +128,25 @@ impl Lock {
     pub(crate) fn take(path: &Path, target: &Path) -> Result<Lock> {
         use std::os::unix::fs::MetadataExt;
         for _ in 0..100 {
+            // The file is written (the process id): never through a link to another file.
+            if let Ok(m) = std::fs::symlink_metadata(path) {
+                if !m.is_file() {
+                    return Err(Error::io(
+                        path,
+                        format!(
+                            "the lock file is {}, not a file sgbem wrote: sgbem writes its \
+                             process id there; remove it, or give this run another --out",
+                            if m.file_type().is_symlink() {
+                                "a symbolic link"
+                            } else if m.is_dir() {
+                                "a folder"
+                            } else {
+                                "a special file"
+                            }
+                        ),
+                    ));
+                }
+            }
             let file = std::fs::OpenOptions::new()
                 .read(true)
                 .write(true)
@@ -154,7 +174,7 @@ impl Lock {
                 }
             }
             // The file locked must still be the one at the path (a holder removes it).
-            let same = match (file.metadata(), std::fs::metadata(path)) {
+            let same = match (file.metadata(), std::fs::symlink_metadata(path)) {
                 (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
                 _ => false,
             };

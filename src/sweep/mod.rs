@@ -251,10 +251,15 @@ pub fn sweep(
         }
         Mode::All => {}
     }
-    std::fs::create_dir_all(out)
-        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
+    // The lock beside the folder first: a refused sweep creates nothing.
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .map_err(|e| Error::io(parent, format!("cannot create the folder: {e}")))?;
+    }
     let lock_path = crate::output::folder::beside(out, "lock");
     let _lock = crate::output::folder::Lock::take(&lock_path, out)?;
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
     remove_stale_points(out, &pts);
     let marker = SweepMarker {
