@@ -1148,6 +1148,35 @@ fn archives_carry_checksummed_metadata_and_damage_ends_within_a_bound_of_their_s
     assert!(refused >= 6, "{refused} of {cases}");
 }
 
+/// A folder, a pipe or a device given as the archive is named as such (each was "no such
+/// archive"), and a pipe is not waited on.
+#[test]
+fn an_archive_path_that_is_no_file_is_named_for_what_it_is() {
+    let dir = tmpdir("h21-archive-kind");
+    std::fs::create_dir(dir.join("folder.h5")).unwrap();
+    let fifo = std::process::Command::new("mkfifo")
+        .arg(dir.join("pipe.h5"))
+        .status()
+        .unwrap();
+    assert!(fifo.success());
+    std::os::unix::fs::symlink("/dev/zero", dir.join("zero.h5")).unwrap();
+    for (name, words) in [
+        ("folder.h5", "this is a folder, not an archive"),
+        ("pipe.h5", "a special file (a pipe or a device)"),
+        ("zero.h5", "a special file (a pipe or a device)"),
+        ("missing.h5", "no such archive"),
+    ] {
+        let a = dir.join(name);
+        for cmd in [
+            vec!["inspect", s(&a)],
+            vec!["export", s(&a), "--vtk", s(&dir.join("v"))],
+        ] {
+            expect(&sgbem(&cmd), 1, &[name, words, "archive.h5 of a run"]);
+        }
+    }
+    assert!(!dir.join("v").exists());
+}
+
 // --- 9. Far from the origin ------------------------------------------------------------------
 
 #[test]
