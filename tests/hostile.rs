@@ -1183,7 +1183,7 @@ fn an_archive_path_that_is_no_file_is_named_for_what_it_is() {
 fn a_model_far_from_the_origin_is_noted_or_refused_with_the_reason() {
     let dir = tmpdir("h21-far");
     let sc = write(&dir, "scene.toml", STACKED_SCENE);
-    for (offset, code) in [(1e12, 0), (1e15, 2), (3e15, 2)] {
+    for (offset, code) in [(1e12, 0), (1e15, 2), (3e15, 2), (1e16, 2), (-1e16, 2)] {
         let mut m = stacked_blocks(4);
         for p in m.nodes.iter_mut() {
             p[0] += offset;

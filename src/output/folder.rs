@@ -234,8 +234,8 @@ impl RunFolder {
                 "the output path is a file, not a folder: remove it or choose another --out",
             ));
         }
-        check_inputs(&target, inputs)?;
         check_replaceable(&target)?;
+        check_inputs(&target, inputs)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
