@@ -904,6 +904,42 @@ fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
     }
 }
 
+/// `SGBEM_MEMORY_LIMIT` that is no positive number of bytes is said to be ignored (it was
+/// ignored without a word: a typo left the user believing the limit applied).
+#[test]
+fn a_memory_limit_that_is_no_number_is_said_to_be_ignored() {
+    let dir = tmpdir("h21-limit-typo");
+    let (sc, msh) = stacked_scene(&dir, "");
+    for v in ["8GB", "-1", "0", "nan"] {
+        let out = dir.join("out");
+        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sgbem"))
+            .args([
+                "run",
+                s(&sc),
+                "--mesh",
+                s(&msh),
+                "--out",
+                s(&out),
+                "--quiet",
+            ])
+            .env("SGBEM_MEMORY_LIMIT", v)
+            .output()
+            .unwrap();
+        let err = String::from_utf8_lossy(&o.stderr);
+        assert_eq!(o.status.code(), Some(0), "{v}: {err}");
+        let words = format!("SGBEM_MEMORY_LIMIT = \"{v}\" is not a positive number of bytes");
+        assert!(
+            err.contains(&words) && err.contains("ignored"),
+            "{v}: {err}"
+        );
+        let summary = std::fs::read_to_string(out.join("summary.json")).unwrap();
+        assert!(
+            summary.contains(&words.replace('"', "\\\"")),
+            "{v}: {summary}"
+        );
+    }
+}
+
 /// The allocations of the C libraries (libhdf5, the `hdf5` crate's strings) fail under the
 /// same limits: the archive's writer copied a string into memory that `malloc` did not
 /// give, and the run ended in SIGSEGV (exit 139; measured before the fix: 1 run in 10 at

@@ -121,6 +121,7 @@ pub(crate) fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
         notes.extend(young_notes(model, f / (l * l), len, force));
     }
     notes.extend(far_note(model));
+    notes.extend(crate::estimate::memory_limit_note());
     if !loaded(model) {
         notes.push(
             "nothing loads the model: every prescribed displacement and traction is zero, no \
