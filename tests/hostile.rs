@@ -830,14 +830,16 @@ fn two_blocks_mesh(dir: &Path, n: usize) -> PathBuf {
     gmsh(&geo, dir, "mid.msh", false, &["-setnumber", "n", &n])
 }
 
-/// `sgbem run` under `ulimit -v kb` (and `SGBEM_MEMORY_LIMIT`, if given) with two threads.
-fn run_under_ulimit(
-    kb: u64,
+/// `sgbem run` under `ulimit -v kb` (if given) and `SGBEM_MEMORY_LIMIT` (if given), with
+/// two threads.
+fn run_with_limit(
+    kb: Option<u64>,
     limit: Option<&str>,
     sc: &Path,
     msh: &Path,
     out: &Path,
 ) -> std::process::Output {
+    let kb = kb.map_or("unlimited".to_string(), |k| k.to_string());
     let mut cmd = std::process::Command::new("sh");
     cmd.arg("-c")
         .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
@@ -870,7 +872,7 @@ fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
         (1_500_000, None, 0),
     ];
     for (kb, limit, want) in cases {
-        let o = run_under_ulimit(kb, limit, &sc, &msh, &out);
+        let o = run_with_limit(Some(kb), limit, &sc, &msh, &out);
         let code = o.status.code().unwrap_or(-1);
         let err = String::from_utf8_lossy(&o.stderr);
         eprintln!(
@@ -912,19 +914,7 @@ fn a_memory_limit_that_is_no_number_is_said_to_be_ignored() {
     let (sc, msh) = stacked_scene(&dir, "");
     for v in ["8GB", "-1", "0", "nan"] {
         let out = dir.join("out");
-        let o = std::process::Command::new(env!("CARGO_BIN_EXE_sgbem"))
-            .args([
-                "run",
-                s(&sc),
-                "--mesh",
-                s(&msh),
-                "--out",
-                s(&out),
-                "--quiet",
-            ])
-            .env("SGBEM_MEMORY_LIMIT", v)
-            .output()
-            .unwrap();
+        let o = run_with_limit(None, Some(v), &sc, &msh, &out);
         let err = String::from_utf8_lossy(&o.stderr);
         assert_eq!(o.status.code(), Some(0), "{v}: {err}");
         let words = format!("SGBEM_MEMORY_LIMIT = \"{v}\" is not a positive number of bytes");
@@ -957,7 +947,7 @@ fn a_failed_allocation_of_a_c_library_ends_in_a_message_never_a_crash() {
     for kb in [560_000u64, 600_000, 640_000] {
         for _ in 0..4 {
             // Past the estimate, so that the allocations themselves fail.
-            let o = run_under_ulimit(kb, Some("1e12"), &sc, &msh, &out);
+            let o = run_with_limit(Some(kb), Some("1e12"), &sc, &msh, &out);
             let code = o.status.code().unwrap_or(-1);
             let err = String::from_utf8_lossy(&o.stderr);
             assert!(
