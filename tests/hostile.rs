@@ -72,16 +72,16 @@ fn a_folder_without_the_tools_marker_is_never_replaced() {
     std::fs::create_dir_all(out.join("mesh")).unwrap();
     std::fs::write(out.join("mesh/beam.msh"), "user mesh").unwrap();
     let r = run(&sc, &msh, &out);
-    expect(
-        &r,
-        2,
-        &["`mesh/`", ".sgbem-run.json", "move these files away"],
-    );
+    expect(&r, 2, &["`mesh/`", ".sgbem-run.json", "move it away"]);
     assert_eq!(tree(&out), ["mesh/beam.msh"]);
     // Files named like a run's outputs but without a marker: kept as well.
     std::fs::write(out.join("summary.json"), "{}").unwrap();
     let r = run(&sc, &msh, &out);
-    expect(&r, 2, &["`mesh/`", "`summary.json`"]);
+    expect(
+        &r,
+        2,
+        &["`mesh/`", "`summary.json`", "move these files away"],
+    );
     assert_eq!(tree(&out), ["mesh/beam.msh", "summary.json"]);
     // Nothing was left beside the folder either (lock, staging).
     assert_eq!(names_in(&dir), ["m.msh", "out", "scene.toml"]);
@@ -125,7 +125,16 @@ fn a_run_folder_loses_only_the_files_its_marker_lists() {
         make(&out);
         let before = tree(&out);
         let r = run(&sc, &msh, &out);
-        expect(&r, 2, &[&format!("`{name}`"), "did not write", "--out"]);
+        expect(
+            &r,
+            2,
+            &[
+                &format!("`{name}`"),
+                "did not write",
+                "does not list it)",
+                "--out",
+            ],
+        );
         assert_eq!(tree(&out), before, "{name}");
     }
     // A stale file an earlier (longer) run listed is removed by the next run.
@@ -991,7 +1000,7 @@ fn scene_naming_its_mesh(dir: &Path) -> (PathBuf, PathBuf) {
 #[test]
 fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
     let dir = tmpdir("h21-sweep-labels");
-    let (sc, _) = scene_naming_its_mesh(&dir);
+    let (sc, msh) = scene_naming_its_mesh(&dir);
     let out = dir.join("sw");
     let sweep = |values: &str| sgbem(&["sweep", s(&sc), "--set", values, "--out", s(&out)]);
     let r = sweep("title=\"α\",\"β\",\"γ\"");
@@ -1026,6 +1035,22 @@ fn sweep_labels_are_unique_and_a_resweep_leaves_no_stale_point() {
     let lock = std::fs::File::create(dir.join(".sw.lock")).unwrap();
     lock.lock().unwrap();
     expect(&sweep("title=c"), 1, &["another sgbem run", ".sw.lock"]);
+    drop(lock);
+    // A run's folder is no sweep folder: refused, left as it was (it was filled with the
+    // sweep's points, and the next run there refused them).
+    let run_folder = dir.join("run");
+    expect(&run(&sc, &msh, &run_folder), 0, &[]);
+    let before = tree(&run_folder);
+    let r = sgbem(&[
+        "sweep",
+        s(&sc),
+        "--set",
+        "title=a,b",
+        "--out",
+        s(&run_folder),
+    ]);
+    expect(&r, 2, &["folder of a run", ".sgbem-run.json", "--out"]);
+    assert_eq!(tree(&run_folder), before);
 }
 
 /// Long values give point folders whose names fit a file name (each value's first 40

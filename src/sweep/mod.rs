@@ -258,6 +258,17 @@ pub fn sweep(
     }
     let lock_path = crate::output::folder::beside(out, "lock");
     let _lock = crate::output::folder::Lock::take(&lock_path, out)?;
+    if out.join(crate::output::owned::MARKER).exists() {
+        return Err(Error::input(
+            out,
+            format!(
+                "this is the folder of a run or an export (it holds {}): a sweep writes its \
+                 points into a folder of its own, and the run's next rerun would refuse the \
+                 folder then; give --out another folder",
+                crate::output::owned::MARKER
+            ),
+        ));
+    }
     std::fs::create_dir_all(out)
         .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
