@@ -10,7 +10,10 @@ boundary's `iteration` field data increases with time; the times increase. Then 
 the same times, at each a multiblock with a block named "boundary", only in a state
 that has its interior field (the final one, where computed) a block named "field", and
 where the run has interfaces a block named "thrust" (the thrust line: a vertex per joint
-that carries a normal force, with N, T and e, and lines through the bodies).
+that carries a normal force, with N, T and e, and lines through the bodies), and where the
+run failed at a mechanism or its collapse search found one (a file mechanism_NNNN.vtu), in
+the last state only a block named "mechanism": the boundary's points with the 3-component
+`mechanism_velocity`, whose largest magnitude is 1.
 Prints one line per check group; exits 1 on the first failure.
 """
 import os
@@ -61,9 +64,24 @@ def leaves(obj):
     return [b for _, b in named_leaves(obj)]
 
 
-def check_states(run, times, with_field, with_thrust):
+def check_mechanism(pvd, t, named):
+    """The mechanism block: as many points as the boundary, `mechanism_velocity` a vector
+    whose largest magnitude is 1."""
+    blocks = dict(named)
+    v = blocks["mechanism"].GetPointData().GetArray("mechanism_velocity")
+    if v is None or v.GetNumberOfComponents() != 3:
+        fail(f"{pvd} at time {t}: the mechanism block has no 3-component mechanism_velocity")
+    if blocks["mechanism"].GetNumberOfPoints() != blocks["boundary"].GetNumberOfPoints():
+        fail(f"{pvd} at time {t}: the mechanism block's points are not the boundary's")
+    top = float((vtk_to_numpy(v) ** 2).sum(axis=1).max() ** 0.5)
+    if abs(top - 1.0) > 1e-12:
+        fail(f"{pvd} at time {t}: the largest mechanism_velocity is {top}, not 1")
+
+
+def check_states(run, times, with_field, with_thrust, with_mechanism):
     """states.pvd: one multiblock per time, named blocks, the field only at the last time,
-    the thrust line and the contact rows at every time where the run has interfaces."""
+    the thrust line and the contact rows at every time where the run has interfaces, the
+    mechanism at the last time where the run has one."""
     pvd = os.path.join(run, "vtk", "states.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -74,6 +92,7 @@ def check_states(run, times, with_field, with_thrust):
         named = named_leaves(servermanager.Fetch(reader))
         want = ["boundary", "field"] if with_field and k == len(times) - 1 else ["boundary"]
         want += ["thrust", "contact"] if with_thrust else []
+        want += ["mechanism"] if with_mechanism and k == len(times) - 1 else []
         if [n for n, _ in named] != want:
             fail(f"{pvd} at time {t}: blocks {[n for n, _ in named]}, want {want}")
         for n, b in named:
@@ -83,10 +102,13 @@ def check_states(run, times, with_field, with_thrust):
                 fail(f"{pvd} at time {t}: the thrust block has no N")
             if n == "contact" and b.GetPointData().GetArray("contact_status") is None:
                 fail(f"{pvd} at time {t}: the contact block has no contact_status")
+            if n == "mechanism":
+                check_mechanism(pvd, t, named)
     print(f"check_pvd_paraview: {pvd}: {len(times)} multiblocks, block boundary at every "
           f"time, field {'at the last time only' if with_field else 'nowhere'}, thrust "
           f"{'at every time' if with_thrust else 'nowhere (no interfaces)'}, contact rows "
-          f"{'at every time' if with_thrust else 'nowhere'}: ok")
+          f"{'at every time' if with_thrust else 'nowhere'}, mechanism "
+          f"{'at the last time only' if with_mechanism else 'nowhere'}: ok")
 
 
 def main():
@@ -94,6 +116,7 @@ def main():
     files = os.listdir(os.path.join(run, "vtk"))
     with_field = any(f.startswith("field_") for f in files)
     with_thrust = any(f.startswith("thrust_") for f in files)
+    with_mechanism = any(f.startswith("mechanism_") for f in files)
     pvd = os.path.join(run, "vtk", "history.pvd")
     reader = PVDReader(FileName=pvd)
     reader.UpdatePipelineInformation()
@@ -146,7 +169,7 @@ def main():
             if with_field else "the boundary at every time (no interior field)")
     print(f"check_pvd_paraview: {pvd}: {len(times)} times from {times[0]:g} to {times[-1]:g}, "
           f"{what}: ok")
-    check_states(run, times, with_field, with_thrust)
+    check_states(run, times, with_field, with_thrust, with_mechanism)
 
 
 main()

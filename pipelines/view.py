@@ -1,8 +1,10 @@
 """Renders a run's final state off-screen in ParaView: the interior field (where the run
 computed one) warped by the displacement and coloured by von Mises stress, with the boundary
 lines on top (black over a field, else coloured by contact status), and the thrust line
-(where the run has interfaces: the joints' points of application, in blue); saves the same
-view as a ParaView state file for the GUI.
+(where the run has interfaces: the joints' points of application, in blue), and where the
+run failed at a mechanism or its collapse search found one, the mechanism (the boundary
+lines of the moving bodies warped by `mechanism_velocity`, the fastest node by 10 % of the
+model size, in orange: where they go); saves the same view as a ParaView state file for the GUI.
 
 Contact status as named categories: the colour maps of `contact_status` (-1 not an
 interface, 0 open, 1 closed) and `tangential_status` (-1 no friction, 0 open, 1 stick,
@@ -13,7 +15,8 @@ files keep integers: a string array would make meshio refuse the whole file.)
 Usage: xvfb-run -a pvpython pipelines/view.py RUN_DIR OUT.png   (what `make view` runs)
 
 Reads RUN_DIR/vtk/states.pvd (one multiblock per time, blocks "boundary", where computed
-"field", where the run has interfaces "thrust" and "contact"), or history.pvd of older runs; either may come back from ParaView's
+"field", where the run has interfaces "thrust" and "contact", at the last time where it
+has one "mechanism"), or history.pvd of older runs; either may come back from ParaView's
 reader as a multiblock or, with a single part, as a plain grid: both are handled. The view
 is set at the last time step. The warp factor comes from the results: 5 % of the model size
 (the larger side of its bounding box) over the largest displacement magnitude, rounded to
@@ -25,10 +28,10 @@ import os
 import sys
 
 from paraview import servermanager
-from paraview.simple import (ColorBy, ExtractBlock, GetActiveViewOrCreate,
+from paraview.simple import (Calculator, ColorBy, ExtractBlock, GetActiveViewOrCreate,
                              GetAnimationScene, GetColorTransferFunction, GetScalarBar,
                              PVDReader, Render, SaveScreenshot, SaveState, Show, Text,
-                             WarpByVector)
+                             Threshold, WarpByVector)
 from vtkmodules.util.numpy_support import vtk_to_numpy
 from vtkmodules.vtkCommonDataModel import vtkCompositeDataSet
 
@@ -151,10 +154,11 @@ def main():
     thrust = [(s, b) for s, b in blocks if s is not None and s.endswith("/thrust")]
     # The contact rows' points are for colouring by their own arrays in the GUI, not drawn.
     contact = [(s, b) for s, b in blocks if s is not None and s.endswith("/contact")]
+    mechanism = [(s, b) for s, b in blocks if s is not None and s.endswith("/mechanism")]
     field = [(s, b) for s, b in blocks if b.GetPointData().GetArray("stress") is not None]
     boundary = [(s, b) for s, b in blocks
                 if b.GetPointData().GetArray("stress") is None and (s, b) not in thrust
-                and (s, b) not in contact]
+                and (s, b) not in contact and (s, b) not in mechanism]
     if not boundary:
         sys.exit(f"view: {run}: the series has no boundary block at time {t:g}")
     show = field[0][1] if field else boundary[0][1]
@@ -165,7 +169,7 @@ def main():
     factor = nice(0.05 * size / umax) if umax > 0 else 1.0
     print(f"view: {run}: model size {size:g}, max |u| {umax:.4g}, warp factor {factor:g}, "
           f"time {t:g}, blocks: {'boundary and field' if field else 'boundary only'}"
-          f"{', thrust line' if thrust else ''}")
+          f"{', thrust line' if thrust else ''}{', mechanism' if mechanism else ''}")
 
     view = GetActiveViewOrCreate("RenderView")
     view.ViewTime = t
@@ -191,6 +195,18 @@ def main():
         d.LineWidth = 3.0
         d.PointSize = 9.0
         d.RenderPointsAsSpheres = 1
+    if mechanism:
+        # The moving bodies' lines (every point with a velocity), warped so that the fastest
+        # node of the mechanism (at 1) moves by 10 % of the model size.
+        speed = Calculator(Input=part(reader, mechanism[0][0]), ResultArrayName="speed",
+                           Function="mag(mechanism_velocity)")
+        moving = Threshold(Input=speed, Scalars=["POINTS", "speed"], LowerThreshold=1e-9,
+                           UpperThreshold=1e300, ThresholdMethod="Between", AllScalars=1)
+        d = Show(WarpByVector(Input=moving, Vectors=["POINTS", "mechanism_velocity"],
+                              ScaleFactor=0.1 * size), view)
+        ColorBy(d, None)
+        d.AmbientColor = d.DiffuseColor = [1.0, 0.5, 0.0]
+        d.LineWidth = 2.0
     title = text_field(show, "title") or os.path.basename(run.rstrip("/"))
     label = Text(Text=f"{title}: final state, displacement x{factor:g}")
     ld = Show(label, view)

@@ -433,12 +433,18 @@ fn record_solution(
         .with_body_force(&solved.body_force, &rec.bodies),
     );
     rec.states = states;
+    // The mechanism drawn with the last state: the failure's, or the collapse search's.
+    rec.mechanism = (solved.mechanism.as_ref())
+        .or(solved.collapse_mechanism.as_ref())
+        .cloned()
+        .unwrap_or_default();
     // The archive's thread gets the states' fields shared, not copied (IterateRecord); the
     // history goes there alone (the VTK files do not need it).
     archive.send(ArchivePart::Solved {
         contact_operators,
         history: solved.history.clone(),
         states: rec.states.clone(),
+        mechanism: rec.mechanism.clone(),
     });
     timings.add("write", t1.elapsed().as_secs_f64());
     if let Some(where_) = non_finite(model, solved) {
@@ -808,6 +814,10 @@ fn summary_of(
             depends_on_t: crate::plan::time_dependent(scene),
             time: ts.clone(),
         }),
+        mechanism: solved
+            .mechanism
+            .as_ref()
+            .map(|m| crate::contact::mechanism::mechanism_bodies(model, m)),
         method: if plan.problem == crate::plan::ContactProblem::None {
             "linear"
         } else {

@@ -279,6 +279,9 @@ pub struct CollapseSummary {
     pub max: f64,
     /// Why the smallest multiplier without an equilibrium has none (`null` if none).
     pub mechanism: Option<String>,
+    /// The motion of that mechanism, body by body (left out where `max` stands).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub motion: Option<Vec<MechanismBody>>,
     /// The largest multiplier with an equilibrium: the run's.
     pub multiplier: f64,
     /// Which state the results are, in words.
@@ -293,4 +296,51 @@ pub struct CollapseSummary {
 pub struct CollapseTrial {
     pub stands: bool,
     pub t: f64,
+}
+
+/// The rigid motion of one body in a mechanism: the velocity `translation` of the point
+/// `centroid` (the centroid of the body's nodes) and the angular velocity `rotation`
+/// (anticlockwise positive), so that a point x moves at `t + ω k × (x − c)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BodyMotion {
+    pub body: usize,
+    pub centroid: [f64; 2],
+    pub translation: [f64; 2],
+    pub rotation: f64,
+}
+
+impl BodyMotion {
+    /// The velocity of the point `x` of the body.
+    pub fn velocity(&self, x: [f64; 2]) -> [f64; 2] {
+        let (c, t, w) = (self.centroid, self.translation, self.rotation);
+        [t[0] - w * (x[1] - c[1]), t[1] + w * (x[0] - c[0])]
+    }
+
+    /// The largest speed of the points `nodes` (0 without any).
+    pub fn top_speed(&self, nodes: &[[f64; 2]]) -> f64 {
+        nodes.iter().fold(0.0f64, |a, &x| {
+            let v = self.velocity(x);
+            a.max(v[0].hypot(v[1]))
+        })
+    }
+}
+
+/// One moving body of a mechanism in `summary.json` (`mechanism`, and
+/// `contact.collapse.motion`): a translation along the unit vector `direction`, or a
+/// rotation about the point `centre` (the point that does not move) in the `sense` given;
+/// `magnitude` is the largest speed of its boundary nodes, the fastest body's being 1 (the
+/// VTK block "mechanism" draws the same velocities).
+#[derive(Debug, Clone, Serialize)]
+pub struct MechanismBody {
+    pub body: String,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub centre: Option<[f64; 2]>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub direction: Option<[f64; 2]>,
+    /// "translation" or "rotation".
+    pub kind: &'static str,
+    pub magnitude: f64,
+    /// "clockwise" or "anticlockwise" (rotations only).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub sense: Option<&'static str>,
 }

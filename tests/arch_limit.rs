@@ -139,6 +139,40 @@ field = false
     );
     // The reported state is the standing one at the multiplier.
     assert_eq!(s["status"], "converged");
+    // The mechanism as data: the block turns clockwise about its toe (1, 0.5), its corner
+    // farthest from the toe, (0, 1) at √1.25, the fastest node; the VTK block "mechanism" of
+    // the reported state draws that rigid velocity to 1e-6, the base at rest.
+    let motion = c["motion"].as_array().expect("collapse.motion");
+    assert_eq!(motion.len(), 1, "{motion:?}");
+    let b = &motion[0];
+    assert_eq!(
+        (&b["body"], &b["kind"], &b["sense"]),
+        (&"upper".into(), &"rotation".into(), &"clockwise".into())
+    );
+    let centre = [
+        b["centre"][0].as_f64().unwrap(),
+        b["centre"][1].as_f64().unwrap(),
+    ];
+    assert!(
+        (centre[0] - 1.0).hypot(centre[1] - 0.5) <= 1e-6,
+        "{centre:?}"
+    );
+    assert!(
+        (b["magnitude"].as_f64().unwrap() - 1.0).abs() <= 1e-12,
+        "{b}"
+    );
+    let w = -1.0 / 1.25f64.sqrt();
+    let nodes = support::mechanism_block(&dir.join("out")).expect("a mechanism block");
+    let upper = nodes.iter().find(|n| n.x[1] > 0.75).unwrap().body;
+    for n in nodes {
+        let want = if n.body == upper {
+            [-w * (n.x[1] - 0.5), w * (n.x[0] - 1.0)]
+        } else {
+            [0.0, 0.0]
+        };
+        let off = (n.v[0] - want[0]).hypot(n.v[1] - want[1]);
+        assert!(off <= 1e-6, "at {:?}: {:?} against {want:?}", n.x, n.v);
+    }
 }
 
 /// The same for a pier of two blocks on a clamped one (`pipelines/wall.toml`, 3 courses of

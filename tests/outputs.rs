@@ -15,8 +15,10 @@ use sgbem::output::record::{
     RunRecord, FORMAT_VERSION,
 };
 use sgbem::output::vtk::{export, write_vtk};
-use sgbem::solution::{BodyField, HistoryRow, InterfaceResult, PairResult, PairStatus};
-use support::{sgbem, stacked_blocks, tmpdir, STACKED_SCENE};
+use sgbem::solution::{BodyField, BodyMotion, HistoryRow, InterfaceResult, PairResult, PairStatus};
+use support::{
+    mechanism_block, read_summary, run_shipped, sgbem, stacked_blocks, tmpdir, STACKED_SCENE,
+};
 
 /// A deterministic "random" value in [-1, 1).
 fn val(k: usize) -> f64 {
@@ -400,7 +402,8 @@ fn an_archive_written_part_by_part_is_the_archive_written_at_once() {
     // The run hands its archive over in three parts (model and operators, contact results,
     // the end) to a writer thread; what it reads back must be what write_archive writes.
     let dir = tmpdir("outputs-parts");
-    let rec = fabricated(80);
+    let mut rec = fabricated(80);
+    rec.mechanism = upper_turns();
     assert!(rec.states.len() > 1 && rec.states.last().is_some_and(|s| !s.interior.is_empty()));
     write_archive(&dir.join("whole.h5"), &rec).expect("write");
     let mut model = rec.clone();
@@ -412,6 +415,7 @@ fn an_archive_written_part_by_part_is_the_archive_written_at_once() {
         contact_operators: rec.contact_operators.clone(),
         history: rec.history.clone(),
         states,
+        mechanism: rec.mechanism.clone(),
     });
     writer.send(ArchivePart::Finished {
         interior,
@@ -432,6 +436,169 @@ fn an_archive_written_part_by_part_is_the_archive_written_at_once() {
         files(&dir).into_keys().collect::<Vec<_>>(),
         ["parts.h5", "whole.h5"]
     );
+}
+
+/// The upper block of [`fabricated`] turning anticlockwise about its centre node
+/// (0.5, 1.5), its farthest nodes at 1.
+fn upper_turns() -> Vec<BodyMotion> {
+    vec![BodyMotion {
+        body: 1,
+        centroid: [0.5, 1.5],
+        translation: [0.0, 0.0],
+        rotation: 2f64.sqrt(),
+    }]
+}
+
+/// A record with a mechanism: the archive keeps it (`/mechanism`, read back exactly), the
+/// VTK files draw it with the last state only (block "mechanism" of its multiblock, the
+/// rigid velocity at every node, zero on the body at rest), `sgbem export` writes the same
+/// bytes from the archive and `sgbem inspect` names the moving body; a mechanism naming a
+/// body the archive does not hold is an error, not a panic. A record without one has no
+/// group and no block.
+#[test]
+fn a_mechanism_is_archived_and_drawn_with_the_last_state() {
+    let dir = tmpdir("outputs-mechanism");
+    let mut rec = fabricated(3);
+    rec.mechanism = upper_turns();
+    let path = dir.join("run").join("archive.h5");
+    write_archive(&path, &rec).expect("write");
+    let back = read_archive(&path).expect("read");
+    assert_eq!(back.mechanism, rec.mechanism);
+    write_vtk(&dir.join("run").join("vtk"), &rec).expect("vtk");
+    let nodes = mechanism_block(&dir.join("run")).expect("a mechanism block");
+    assert_eq!(nodes.len(), 8);
+    for n in &nodes {
+        let (dx, dy) = (n.x[0] - 0.5, n.x[1] - 1.5);
+        let want = if n.body == 1 {
+            [-2f64.sqrt() * dy, 2f64.sqrt() * dx, 0.0]
+        } else {
+            [0.0; 3]
+        };
+        assert_eq!(n.v, want, "at {:?}", n.x);
+    }
+    let top = nodes
+        .iter()
+        .map(|n| n.v[0].hypot(n.v[1]))
+        .fold(0.0, f64::max);
+    assert!((top - 1.0).abs() < 1e-15, "{top}");
+    export(&path, &dir.join("export")).expect("export");
+    let exported = files(&dir.join("export"));
+    for (name, bytes) in files(&dir.join("run").join("vtk")) {
+        assert_eq!(Some(&bytes), exported.get(&name), "{name}");
+    }
+    let p = damaged_copy(&path, &dir, "body.h5", |f| {
+        let g = f.group("mechanism").unwrap();
+        g.unlink("body").unwrap();
+        g.new_dataset_builder()
+            .with_data(&ndarray::arr1(&[7i64]))
+            .create("body")
+            .unwrap();
+    });
+    inspect_fails(&p, "mechanism refers to index 7");
+    let (code, text, err) = sgbem(&["inspect", path.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(text.contains("\n  mechanism moves upper/part\n"), "{text}");
+    let plain = dir.join("plain.h5");
+    write_archive(&plain, &fabricated(3)).unwrap();
+    assert!(!h5::File::open(&plain).unwrap().link_exists("mechanism"));
+    write_vtk(&dir.join("plain").join("vtk"), &fabricated(3)).unwrap();
+    assert!(mechanism_block(&dir.join("plain")).is_none());
+}
+
+/// The shipped collapse search (`wall_collapse`): `contact.collapse.motion` lists the
+/// bodies that the mechanism's message names, in its order and kinds (the message names the
+/// first four and counts the others), each moving as the VTK block "mechanism" of the state
+/// at the multiplier draws it: at every node of a listed body the velocity of its summary
+/// record (a translation: `magnitude` along `direction`; a rotation: about `centre`, its
+/// fastest node at `magnitude`) to 1e-9, zero on every other body, the fastest node at 1;
+/// no top-level `mechanism` (the run converged at the multiplier).
+#[test]
+fn wall_collapse_names_and_draws_its_mechanism() {
+    let out = tmpdir("outputs-wall-collapse").join("out");
+    let (code, err) = run_shipped("wall_collapse", &out);
+    assert_eq!(code, 0, "{err}");
+    let s = read_summary(&out);
+    assert!(s.get("mechanism").is_none());
+    let c = &s["contact"]["collapse"];
+    let message = c["mechanism"].as_str().unwrap();
+    let motion = c["motion"].as_array().expect("collapse.motion");
+    let words = message.split("; the motion: ").nth(1).expect("the motion");
+    let (named, more) = match words.split_once(" and ") {
+        Some((named, more)) => (named, more.split(' ').next().unwrap().parse().unwrap()),
+        None => (words, 0usize),
+    };
+    let named: Vec<(&str, &str)> = named
+        .split(", body ")
+        .map(|w| {
+            let name = w.split('"').nth(1).unwrap();
+            (
+                name,
+                if w.contains(" turns ") {
+                    "rotation"
+                } else {
+                    "translation"
+                },
+            )
+        })
+        .collect();
+    assert_eq!(motion.len(), named.len() + more, "{message}");
+    for (b, (name, kind)) in motion.iter().zip(&named) {
+        assert_eq!(
+            (b["body"].as_str().unwrap(), b["kind"].as_str().unwrap()),
+            (*name, *kind)
+        );
+    }
+    let names: Vec<String> = read_archive(&out.join("archive.h5"))
+        .unwrap()
+        .bodies
+        .iter()
+        .map(|b| b.name.clone())
+        .collect();
+    let nodes = mechanism_block(&out).expect("a mechanism block");
+    let mut top = 0.0f64;
+    for b in motion {
+        let name = b["body"].as_str().unwrap();
+        let body = names.iter().position(|n| n == name).unwrap() as i32;
+        let mine: Vec<_> = nodes.iter().filter(|n| n.body == body).collect();
+        let pair = |k: &str| [b[k][0].as_f64().unwrap(), b[k][1].as_f64().unwrap()];
+        let magnitude = b["magnitude"].as_f64().unwrap();
+        let velocity: Box<dyn Fn([f64; 2]) -> [f64; 2]> = if b["kind"] == "translation" {
+            let d = pair("direction");
+            Box::new(move |_| [magnitude * d[0], magnitude * d[1]])
+        } else {
+            let c = pair("centre");
+            let far = mine
+                .iter()
+                .map(|n| (n.x[0] - c[0]).hypot(n.x[1] - c[1]))
+                .fold(0.0, f64::max);
+            let w = if b["sense"] == "clockwise" { -1.0 } else { 1.0 } * magnitude / far;
+            Box::new(move |x| [-w * (x[1] - c[1]), w * (x[0] - c[0])])
+        };
+        for n in mine {
+            let want = velocity(n.x);
+            let off = (n.v[0] - want[0]).hypot(n.v[1] - want[1]);
+            assert!(
+                off <= 1e-9,
+                "{name} at {:?}: {:?} against {want:?}",
+                n.x,
+                n.v
+            );
+            top = top.max(n.v[0].hypot(n.v[1]));
+        }
+    }
+    let moving: Vec<i32> = motion
+        .iter()
+        .map(|b| {
+            names
+                .iter()
+                .position(|n| n == b["body"].as_str().unwrap())
+                .unwrap() as i32
+        })
+        .collect();
+    for n in nodes.iter().filter(|n| !moving.contains(&n.body)) {
+        assert_eq!(n.v, [0.0; 3], "body {} at {:?}", n.body, n.x);
+    }
+    assert!((top - 1.0).abs() <= 1e-12, "fastest node {top}");
 }
 
 #[test]

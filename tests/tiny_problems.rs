@@ -543,6 +543,134 @@ fn infeasible_a_push_beyond_the_tipping_limit_tips() {
     }
 }
 
+/// The motion of a mechanism in closed form: the upper block's rigid velocity at a point.
+#[derive(Debug, Clone, Copy)]
+enum Rigid {
+    /// A translation along the unit vector.
+    Along([f64; 2]),
+    /// A rotation about the point, clockwise where `true`.
+    About([f64; 2], bool),
+}
+
+/// (3) The mechanism as data and as a picture: the block that tips about its toe (1, 0.5) and
+/// the block that slides along (1, 0), with every method and VTK on. summary.json's
+/// `mechanism` names the upper block alone, with the closed-form motion (direction or centre
+/// to 1e-6 of the block's size 1, the sense, magnitude 1); the last state's multiblock has the
+/// block "mechanism" (no other state has one) whose `mechanism_velocity` is the rigid
+/// velocity field of that motion at every node of the upper block to 1e-6, scaled so that the
+/// fastest node moves at 1 (the tipping block's farthest node from the toe: its heel's top
+/// (0, 1), at √1.25), and exactly zero on the clamped lower block; `sgbem export` writes the
+/// block again from the archive alone, byte for byte.
+#[test]
+fn infeasible_mechanisms_are_drawn_as_their_rigid_motions() {
+    let cases = [
+        (
+            "tiny-tips-drawn",
+            pushed(6.0),
+            STICK,
+            Rigid::About([1.0, 0.5], true),
+        ),
+        (
+            "tiny-slides-drawn",
+            pushed(1.2),
+            FRICTION,
+            Rigid::Along([1.0, 0.0]),
+        ),
+    ];
+    for (name, loads, joint, want) in cases {
+        let scene = blocks_scene(0.3, &loads, joint).replace("vtk = false", "vtk = true");
+        for r in run_all(&tmpdir(name), &scene, &blocks_mesh(8)) {
+            let m = r.method;
+            assert_eq!(r.code, 3, "{m}: {}", r.err);
+            let bodies = r.summary()["mechanism"].as_array().expect("mechanism");
+            assert_eq!(bodies.len(), 1, "{m}: {bodies:?}");
+            let b = &bodies[0];
+            assert_eq!(b["body"], "upper", "{m}");
+            assert!(
+                (b["magnitude"].as_f64().unwrap() - 1.0).abs() <= 1e-12,
+                "{m}: {b}"
+            );
+            let pair = |k: &str| [b[k][0].as_f64().unwrap(), b[k][1].as_f64().unwrap()];
+            let speed = match want {
+                Rigid::Along(d) => {
+                    assert_eq!(b["kind"], "translation", "{m}: {b}");
+                    assert!(
+                        b.get("centre").is_none() && b.get("sense").is_none(),
+                        "{m}: {b}"
+                    );
+                    let got = pair("direction");
+                    assert!(dist(got, d) <= 1e-6, "{m}: direction {got:?}");
+                    1.0
+                }
+                Rigid::About(c, clockwise) => {
+                    assert_eq!(b["kind"], "rotation", "{m}: {b}");
+                    assert!(b.get("direction").is_none(), "{m}: {b}");
+                    let sense = if clockwise {
+                        "clockwise"
+                    } else {
+                        "anticlockwise"
+                    };
+                    assert_eq!(b["sense"], sense, "{m}: {b}");
+                    let got = pair("centre");
+                    assert!(dist(got, c) <= 1e-6, "{m}: centre {got:?}");
+                    // The fastest node: the upper block's corner farthest from the centre.
+                    let far = [[0.0, 0.5], [1.0, 0.5], [0.0, 1.0], [1.0, 1.0]]
+                        .iter()
+                        .map(|&x| dist(x, c))
+                        .fold(0.0, f64::max);
+                    1.0 / far
+                }
+            };
+            let nodes = mechanism_block(&r.out).expect("a mechanism block");
+            // The upper block: the body whose nodes lie above the joint.
+            let upper = nodes.iter().find(|n| n.x[1] > 0.75).unwrap().body;
+            let mut top = 0.0f64;
+            for n in &nodes {
+                let v = [n.v[0], n.v[1]];
+                top = top.max(v[0].hypot(v[1]));
+                assert_eq!(n.v[2], 0.0);
+                if n.body != upper {
+                    assert_eq!(v, [0.0, 0.0], "{m}: the lower block at {:?}", n.x);
+                    continue;
+                }
+                let exact = match want {
+                    Rigid::Along(d) => d,
+                    Rigid::About(c, clockwise) => {
+                        let w = if clockwise { -speed } else { speed };
+                        [-w * (n.x[1] - c[1]), w * (n.x[0] - c[0])]
+                    }
+                };
+                assert!(
+                    dist(v, exact) <= 1e-6,
+                    "{m}: at {:?} {v:?} against {exact:?}",
+                    n.x
+                );
+            }
+            assert!((top - 1.0).abs() <= 1e-12, "{m}: fastest node {top}");
+            // The archive holds the mechanism: `sgbem export` draws the same block.
+            let again = r.out.with_file_name(format!("{m}-export"));
+            let archive = r.out.join("archive.h5");
+            let (code, _, err) = sgbem(&[
+                "export",
+                archive.to_str().unwrap(),
+                "--vtk",
+                again.to_str().unwrap(),
+            ]);
+            assert_eq!(code, 0, "{m}: {err}");
+            for f in std::fs::read_dir(r.out.join("vtk")).unwrap() {
+                let f = f.unwrap().file_name();
+                let same = std::fs::read(r.out.join("vtk").join(&f)).unwrap()
+                    == std::fs::read(again.join(&f)).unwrap_or_default();
+                assert!(same, "{m}: {f:?} differs after export");
+            }
+        }
+    }
+}
+
+fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
+    (a[0] - b[0]).hypot(a[1] - b[1])
+}
+
 /// The nodal normal forces of an interface's pairs: each traction times its pair's
 /// tributary length (half of each adjacent interface element; README, "Interface
 /// tractions").

@@ -8,7 +8,8 @@
     run.thrust()                                 # DataFrame: one row per joint (thrust line)
     run.hubs()                                   # DataFrame: one row per hub (thrust_hubs.csv)
     run.contact_points(state=-1)                 # DataFrame: every pair (the VTK block "contact")
-    run.to_pyvista(state=-1)                     # pyvista MultiBlock: boundary (+ field, + contact)
+    run.to_pyvista(state=-1)                     # MultiBlock: boundary (+ field, + thrust, contact,
+                                                 # + mechanism)
     sgbem.run("pipelines/x.toml", out="out/x", set={"interface.joint.cohesion": 2.0})
 
 Everything but `hubs()` (thrust_hubs.csv, not archived) is read from `archive.h5` (h5py),

@@ -7,7 +7,9 @@ children's group names in run order, each child a `name` attribute with its real
 interfaces' pairs concatenated, sliced by `/states/node_offset`, `element_offset` and
 `pair_offset`; `/solution/interior/<body>` holds the interior field of the final state.
 The hubs of the thrust line are not archived: `Run.hubs` reads the run folder's
-thrust_hubs.csv.
+thrust_hubs.csv. The thrust block of `to_pyvista` (hubs included) is computed from the
+states' tractions and the interfaces' `x`, `s`, `normal` and tributary lengths, with the
+bodies' `body_force` (a state's own where it has one) for "down" (`_thrust.py`).
 """
 
 import json
@@ -419,12 +421,28 @@ class Run:
         displacement, traction, contact_status 1 closed 0 open -1 elsewhere,
         normal_traction, body) and, where the run computed the interior field (`field =
         true`, final state only), block "field" (triangles; displacement, stress xx yy xy,
-        sxx, syy, sxy, von_mises, body); with interfaces, block "contact" (a vertex per pair,
-        as the VTK block `contact`: interface and pair indices, contact_status 1 closed 0
-        open, tangential_status 1 stick 2 slip 0 open -1 none, gap, normal_opening, the
-        tractions and forces, slip, displacement; the rows of `contact_points(state)`).
-        Warp by `displacement` to see the strained shape."""
-        from ._mesh import boundary_grid, field_grid  # pyvista is imported on demand
+        sxx, syy, sxy, von_mises, body); with interfaces, block "thrust" (the thrust line,
+        as the VTK block `thrust`, vtk/thrust_NNNN.vtu: a vertex at each loaded joint's
+        point of application with N, T, e, e_over_half_length, inside and in_closed_part
+        (1 yes 0 no), joint (the interface's index in `interfaces`) and displacement (the
+        first body's at the point); a line through each body between its two loaded joints;
+        for a body with more a vertex at its hub, joint -1, NaN and -1 there, and a line
+        from each of its joints' points to it; computed from the state's tractions in the
+        archive, any state; empty where no joint carries a normal force) and block
+        "contact" (a vertex per pair, as the VTK block `contact`: interface and pair
+        indices, contact_status 1 closed 0 open, tangential_status 1 stick 2 slip 0 open
+        -1 none, gap, normal_opening, the tractions and forces, slip, displacement; the rows
+        of `contact_points(state)`); in the final state of a run that failed at a mechanism,
+        or of a collapse search, block "mechanism" (the boundary lines with
+        mechanism_velocity and body, as the VTK block). The blocks come in the order of
+        vtk/state_NNNN.vtm. Warp by `displacement` to see the strained shape, by
+        `mechanism_velocity` the mechanism."""
+        from ._mesh import (  # pyvista: on demand
+            boundary_grid,
+            field_grid,
+            mechanism_grid,
+            thrust_grid,
+        )
 
         k = self._state(state)
         import pyvista
@@ -434,10 +452,16 @@ class Run:
             blocks["boundary"] = boundary_grid(self, f, k)
             if k == self.state_count - 1 and "interior" in f.get("solution", {}):
                 blocks["field"] = field_grid(self, f)
+            if self._interfaces:
+                blocks["thrust"] = thrust_grid(self, f, k)
             a = f["states"][f"{k:04}"].attrs
             meta = (int(a["iteration"]), int(a["load_step"]), float(a["load_factor"]))
+            mechanism = mechanism_grid(self, f) if (
+                k == self.state_count - 1 and "mechanism" in f) else None
         if self._interfaces:
             blocks["contact"] = self._contact_block(k)
+        if mechanism is not None:
+            blocks["mechanism"] = mechanism
         for block in blocks:
             block.field_data["iteration"] = [meta[0]]
             block.field_data["load_step"] = [meta[1]]

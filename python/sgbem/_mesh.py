@@ -1,9 +1,11 @@
-"""pyvista grids of one archived state: the bodies' boundary lines and the interior field."""
+"""pyvista grids of one archived state: the bodies' boundary lines, the interior field and
+the thrust line."""
 
 import numpy as np
 import pyvista
 
 from ._archive import _floats, _text
+from ._thrust import thrust_line
 
 
 def _grid(points2, cells, cell_type):
@@ -22,12 +24,9 @@ def _vec3(v2):
     return v
 
 
-def boundary_grid(run, f, k):
+def _boundary_lines(run, f):
     """Every body's boundary nodes (one point per body and node: an interface node appears
-    for both of its bodies, so that an opening shows as a gap) and elements."""
-    st = f["states"][f"{k:04}"]
-    u = _floats(st["u"]).reshape(-1, 2)
-    t = _floats(st["t"]).reshape(-1, 2, 2)
+    for both of its bodies, so that an opening shows as a gap), elements and body index."""
     points, lines, body = [], [], []
     for b, (_, gname) in enumerate(run._bodies):
         g = f["bodies"][gname]
@@ -38,6 +37,15 @@ def boundary_grid(run, f, k):
         body.append(np.full(len(nodes), b, dtype=np.int32))
     points = np.vstack(points) if points else np.zeros((0, 2))
     lines = np.vstack(lines) if lines else np.zeros((0, 2), dtype=np.int64)
+    return points, lines, np.concatenate(body) if body else np.zeros(0, np.int32)
+
+
+def boundary_grid(run, f, k):
+    """The boundary lines of every body in state `k`."""
+    st = f["states"][f"{k:04}"]
+    u = _floats(st["u"]).reshape(-1, 2)
+    t = _floats(st["t"]).reshape(-1, 2, 2)
+    points, lines, body = _boundary_lines(run, f)
     grid = _grid(points, lines, pyvista.CellType.LINE)
     grid.point_data["displacement"] = _vec3(u)
     # Traction at a node: the average of the element-end values there.
@@ -49,7 +57,27 @@ def boundary_grid(run, f, k):
     status, tn = _interface_nodes(run, f, st, len(points))
     grid.point_data["contact_status"] = status
     grid.point_data["normal_traction"] = tn
-    grid.point_data["body"] = np.concatenate(body) if body else np.zeros(0, np.int32)
+    grid.point_data["body"] = body
+    return grid
+
+
+def mechanism_grid(run, f):
+    """The mechanism drawn with the final state (/mechanism): every body's boundary lines
+    with mechanism_velocity, each moving body's rigid velocity t + w k x (x - c) at its
+    nodes (zero on the bodies at rest, the fastest node at 1), as the VTK block."""
+    g = f["mechanism"]
+    points, lines, body = _boundary_lines(run, f)
+    velocity = np.zeros((len(points), 2))
+    c = _floats(g["centroid"]).reshape(-1, 2)
+    t = _floats(g["translation"]).reshape(-1, 2)
+    w = _floats(g["rotation"])
+    for i, b in enumerate(np.asarray(g["body"], dtype=np.int64)):
+        x = points[body == b]
+        velocity[body == b] = np.column_stack([t[i, 0] - w[i] * (x[:, 1] - c[i, 1]),
+                                               t[i, 1] + w[i] * (x[:, 0] - c[i, 0])])
+    grid = _grid(points, lines, pyvista.CellType.LINE)
+    grid.point_data["mechanism_velocity"] = _vec3(velocity)
+    grid.point_data["body"] = body
     return grid
 
 
@@ -105,4 +133,23 @@ def field_grid(run, f):
                                                   + (szz - sxx) ** 2) + 3.0 * sxy ** 2)
     grid.point_data["body"] = np.concatenate(body)
     grid.field_data["stress_unit"] = [_text(run.units["stress"])]
+    return grid
+
+
+def thrust_grid(run, f, k):
+    """The thrust line of state `k` (`_thrust.thrust_line`): the VTK block "thrust", an
+    UnstructuredGrid of vertices (the joints' points of application, the hubs) and lines."""
+    t = thrust_line(run, f, k)
+    flat = np.array([v for c in t["cells"] for v in (len(c), *c)], dtype=np.int64)
+    grid = pyvista.UnstructuredGrid(flat, np.asarray(t["cell_types"], dtype=np.uint8),
+                                    _vec3(t["points"]))
+    t["displacement"] = _vec3(t["displacement"])
+    for name in ("N", "T", "e", "e_over_half_length", "inside", "in_closed_part", "joint",
+                 "displacement"):
+        if len(t[name]):
+            grid.point_data[name] = t[name]
+        else:
+            # No joint carries a normal force (all open, or unloaded): the arrays are there,
+            # empty, as in the VTK file (pyvista's point_data refuses empty arrays).
+            grid.GetPointData().AddArray(pyvista.convert_array(t[name], name=name))
     return grid

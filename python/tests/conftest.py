@@ -3,7 +3,9 @@
 The scenes are the shipped ones, meshed here with gmsh into a temporary folder:
 clamped_beam_joint (the paper's example 2: one joint, interior field) and a running-bond
 wall of 3 courses of 4 bricks (13 bodies, friction, no interior field, 26 split interfaces
-whose run order is not the alphabetical order h5py lists them in: brick_10 before brick_2)."""
+whose run order is not the alphabetical order h5py lists them in: brick_10 before brick_2);
+the collapse search on a wall of 3 courses of 3 bricks (one archived state, whose body forces,
+20 t sideways at the multiplier t found, differ from the bodies' own)."""
 
 import pathlib
 import subprocess
@@ -38,3 +40,11 @@ def wall(tmp_path_factory):
                      set={"mesh.courses": 3, "mesh.bricks": 4})
 
 
+
+
+@pytest.fixture(scope="session")
+def collapse(tmp_path_factory):
+    d = tmp_path_factory.mktemp("collapse")
+    return sgbem.run(ROOT / "pipelines/wall_collapse.toml", out=d / "run",
+                     set={"mesh.courses": 3, "mesh.bricks": 3,
+                          "solve.collapse.tolerance": 0.01})

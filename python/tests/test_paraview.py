@@ -14,7 +14,8 @@ import numpy as np
 import pytest
 from PIL import Image  # pillow, installed with matplotlib
 
-from conftest import ROOT
+import sgbem
+from conftest import ROOT, mesh
 
 pytestmark = pytest.mark.skipif(
     not (shutil.which("pvpython") and shutil.which("xvfb-run")),
@@ -101,3 +102,21 @@ def test_paraview_reads_the_series(beam, wall):
         assert "states.pvd" in out and out.count(": ok") == 2
     assert "field at the last time only" in pvpython(
         ROOT / "pipelines/check_pvd_paraview.py", beam.folder)
+
+
+def test_paraview_draws_a_mechanism(tmp_path):
+    """A run that ends at a mechanism (the block on an incline above its friction angle, exit
+    3): ParaView finds the block "mechanism" in the last state only, its largest
+    `mechanism_velocity` 1; view.py draws the sliding block moved along it, in orange."""
+    with pytest.raises(sgbem.SgbemError) as e:
+        sgbem.run(ROOT / "pipelines/incline_block_slides.toml", out=tmp_path / "slides",
+                  mesh=mesh("geo/two_blocks.geo", tmp_path))
+    assert e.value.returncode == 3
+    out = pvpython(ROOT / "pipelines/check_pvd_paraview.py", e.value.out)
+    assert "mechanism at the last time only: ok" in out and out.count(": ok") == 2
+    png = tmp_path / "slides.png"
+    view = pvpython(ROOT / "pipelines/view.py", e.value.out, png)
+    assert ", mechanism" in view
+    px = picture(png)
+    orange = (px[:, :, 0] > 230) & (abs(px[:, :, 1] - 128) < 40) & (px[:, :, 2] < 60)
+    assert int(orange.sum()) > 500

@@ -38,6 +38,11 @@ def test_mistakes_are_marked(schema):
     ok = copy.deepcopy(good)
     ok["output"].update(history="full", every=3, vtk="compressed", vtk_fields=["displacement"])
     jsonschema.validate(ok, schema)
+    # The mesh may come from --mesh; `between` in a named interface table.
+    ok = copy.deepcopy(good)
+    ok.pop("mesh")
+    ok["interface"] = {"joint": {"model": "unilateral", "between": ["a_face", "b_face"]}}
+    jsonschema.validate(ok, schema)
     bad = []
     for change in (
         lambda s: s["defaults"]["interface"].update(frition=0.8),   # unknown key
@@ -50,6 +55,10 @@ def test_mistakes_are_marked(schema):
         lambda s: s["output"].update(history="steps", every=0),
         lambda s: s["output"].update(vtk="zip"),
         lambda s: s["output"].update(vtk_fields=["displacment"]),
+        lambda s: s.pop("plane"),
+        lambda s: s["defaults"]["interface"].update(between=["a_face", "b_face"]),
+        lambda s: s.update(interface={"joint_*": {"model": "unilateral",
+                                                  "between": ["a_face", "b_face"]}}),
     ):
         s = copy.deepcopy(good)
         change(s)

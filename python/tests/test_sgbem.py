@@ -110,7 +110,7 @@ def test_states_and_unknown_names(beam):
 
 def test_to_pyvista_final_state_with_field(beam):
     blocks = beam.to_pyvista()
-    assert blocks.keys() == ["boundary", "field", "contact"]
+    assert blocks.keys() == ["boundary", "field", "thrust", "contact"]
     boundary, field = blocks["boundary"], blocks["field"]
     import pyvista
     vtk = pathlib.Path(beam.folder, "vtk")
@@ -138,9 +138,9 @@ def test_to_pyvista_final_state_with_field(beam):
 
 
 def test_to_pyvista_without_field(wall, beam):
-    assert wall.to_pyvista().keys() == ["boundary", "contact"]
+    assert wall.to_pyvista().keys() == ["boundary", "thrust", "contact"]
     first = beam.to_pyvista(0)
-    assert first.keys() == ["boundary", "contact"]   # the field: at the final state only
+    assert first.keys() == ["boundary", "thrust", "contact"]   # the field: at the final state only
     assert first["boundary"].field_data["iteration"][0] == beam.states["iteration"].iloc[0]
 
 
@@ -178,7 +178,10 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
     assert len(lame.history) == 0 and list(lame.history.columns) == [
         "load_step", "iteration", "load_factor", "solver"]
     blocks = lame.to_pyvista()
+    # No interfaces: neither a thrust line nor contact points, as in vtk/state_0000.vtm.
     assert blocks.keys() == ["boundary", "field"] and blocks["field"].n_points > 0
+    import pyvista
+    assert pyvista.read(lame.folder / "vtk/state_0000.vtm").keys() == ["boundary", "field"]
     assert len(lame.contact_points()) == 0 and len(lame.hubs()) == 0
     assert list(lame.hubs().columns) == ["body", "x", "y", "R_x", "R_y", "group", "joints"]
     # A sliding mechanism: exit 3, every output written; the error names the folder.
@@ -189,6 +192,20 @@ def test_a_run_without_interfaces_and_a_failed_run(tmp_path):
     failed = sgbem.open(e.value.out)
     assert failed.status == "not converged" == failed.summary["status"]
     assert len(failed.pairs("joint")) == failed.summary["interfaces"]["joint"]["pairs"]
+    # The mechanism: the upper block slides along (1, 0); its block equals the VTK one.
+    assert [(b["body"], b["kind"], b["magnitude"]) for b in failed.summary["mechanism"]] == [
+        ("upper", "translation", 1.0)]
+    last = failed.state_count - 1
+    blocks = failed.to_pyvista()
+    assert blocks.keys() == ["boundary", "field", "thrust", "contact", "mechanism"]
+    assert "mechanism" not in failed.to_pyvista(0).keys()
+    pyvista = pytest.importorskip("pyvista")
+    vtk = pyvista.read(failed.folder / f"vtk/state_{last:04d}.vtm")["mechanism"]
+    for name in ("mechanism_velocity", "body"):
+        np.testing.assert_array_equal(blocks["mechanism"].point_data[name], vtk.point_data[name])
+    np.testing.assert_array_equal(blocks["mechanism"].points, vtk.points)
+    moving = blocks["mechanism"].point_data["mechanism_velocity"]
+    assert np.abs(np.linalg.norm(moving, axis=1).max() - 1.0) < 1e-12
 
 
 def test_steps_history_and_compressed_vtk(tmp_path):
@@ -269,6 +286,11 @@ def patch_nonmatching(tmp_path):
     return sgbem.run(scene, out=tmp_path / "patch")
 
 
+@pytest.fixture(scope="module")
+def patch(tmp_path_factory):
+    return patch_nonmatching(tmp_path_factory.mktemp("patch"))
+
+
 def check_contact_points(run):
     """contact_points() of the final state against the interface tables, pairs() and
     thrust(), interface by interface."""
@@ -316,12 +338,11 @@ def test_contact_points_equal_the_interface_tables_and_the_thrust(beam, wall):
     assert negative_zeros(w.select_dtypes("float")) == 0
 
 
-def test_contact_points_equal_the_vtk_contact_block(beam, wall, tmp_path):
+def test_contact_points_equal_the_vtk_contact_block(beam, wall, patch):
     """Every column, bit for bit, against block "contact" of the state's multiblock
     (vtk/state_NNNN.vtm, read by pyvista), at the first and the last state; also where the
     sides were meshed on their own (the pairs' tributary lengths from the pairing)."""
     pyvista = pytest.importorskip("pyvista")
-    patch = patch_nonmatching(tmp_path)
     with h5py.File(patch.archive, "r") as f:
         assert "pairing" in f["interfaces"][patch.interfaces[0]]
     check_contact_points(patch)
@@ -406,3 +427,58 @@ def test_hubs_equal_thrust_hubs_csv(beam, wall, tmp_path):
     with pytest.raises(FileNotFoundError, match="thrust_hubs.csv"):
         run.hubs()
     pd.testing.assert_frame_equal(run.contact_points(), wall.contact_points())
+
+
+def test_to_pyvista_thrust_block_equals_the_vtk_thrust_block(beam, wall, collapse, patch):
+    """Block "thrust" of every archived state against vtk/thrust_NNNN.vtu read by pyvista,
+    exactly: points, cells and every point array (NaN at the hubs); the blocks in the order
+    of the state's multiblock. At the final state its joints' points are thrust()'s and its
+    hubs hubs()'s. The collapse search's state has body forces of its own (sideways 20 t):
+    the hubs' "down" is theirs, not the bodies' attribute's. The patch test (sides meshed on
+    their own, initially open) starts without a loaded joint: an empty block, as its file."""
+    pyvista = pytest.importorskip("pyvista")
+    for run in (beam, wall, collapse, patch):
+        vtk = pathlib.Path(run.folder, "vtk")
+        for k in range(run.state_count):
+            blocks = run.to_pyvista(k)
+            assert blocks.keys() == pyvista.read(vtk / f"state_{k:04d}.vtm").keys()
+            ours, ref = blocks["thrust"], pyvista.read(vtk / f"thrust_{k:04d}.vtu")
+            assert ours.n_points == ref.n_points and ours.n_cells == ref.n_cells, k
+            np.testing.assert_array_equal(ours.points, ref.points)
+            np.testing.assert_array_equal(ours.cells, ref.cells)
+            np.testing.assert_array_equal(ours.celltypes, ref.celltypes)
+            assert list(ours.point_data) == list(ref.point_data) == [
+                "N", "T", "e", "e_over_half_length", "inside", "in_closed_part", "joint",
+                "displacement"]
+            for name in ref.point_data:
+                assert ours.point_data[name].dtype == ref.point_data[name].dtype, name
+                np.testing.assert_array_equal(ours.point_data[name], ref.point_data[name],
+                                              err_msg=f"state {k}: {name}")
+            assert ours.field_data["iteration"][0] == run.states["iteration"].iloc[k]
+        # The final state: a point per loaded joint (thrust(), from the summary), then the
+        # hubs (hubs(), from thrust_hubs.csv).
+        d = ours.point_data
+        at = d["joint"] >= 0
+        loaded = run.thrust().dropna(subset=["x"])
+        assert [run.interfaces[j] for j in d["joint"][at]] == list(loaded["joint"])
+        for col in ("N", "T", "e", "e_over_half_length"):
+            np.testing.assert_array_equal(d[col][at], loaded[col].to_numpy(), err_msg=col)
+        np.testing.assert_array_equal(ours.points[at, :2], loaded[["x", "y"]].to_numpy())
+        assert list(d["inside"][at]) == [int(v) for v in loaded["inside"]]
+        assert list(d["in_closed_part"][at]) == [int(v) for v in loaded["in_closed_part"]]
+        hubs = run.hubs()
+        np.testing.assert_array_equal(ours.points[~at, :2], hubs[["x", "y"]].to_numpy())
+        assert (d["inside"][~at] == -1).all() and np.isnan(d["N"][~at]).all()
+        # A vertex per point; a line through each body with two loaded joints and from each
+        # hub to each of its joints' points.
+        types = list(ours.celltypes)
+        per_body = pd.concat([loaded["body_a"], loaded["body_b"]]).value_counts()
+        assert types.count(pyvista.CellType.VERTEX) == ours.n_points
+        assert types.count(pyvista.CellType.LINE) == (per_body == 2).sum() + hubs["joints"].sum()
+    assert beam.to_pyvista()["thrust"].n_points == 1               # one joint, no hub
+    assert patch.to_pyvista(0)["thrust"].n_points == 0 < patch.to_pyvista()["thrust"].n_points
+    assert len(wall.hubs()) == 12 and len(collapse.hubs()) == 8
+    with h5py.File(collapse.archive, "r") as f:
+        own = np.asarray(f["states/0000/body_force"])
+        brick = np.asarray(f["bodies"][collapse._bodies[0][1]].attrs["body_force"])
+    assert own[0, 1] == brick[1] == -20.0 and 0 < own[0, 0] < brick[0] == 20.0

@@ -15,14 +15,19 @@ use crate::contact::Session;
 use crate::error::{Error, Result};
 use crate::input::model::fmt_num;
 use crate::input::scene::Collapse;
-use crate::solution::{CollapseSummary, CollapseTrial};
+use crate::solution::{BodyMotion, CollapseSummary, CollapseTrial};
 use crate::timings::Timings;
 
-/// What the search found: the multiplier and the summary's `contact.collapse` block.
+/// What the search found: the multiplier, the summary's `contact.collapse` block and the
+/// motion of the mechanism at `collapses_at`, where it was found.
 pub(super) struct Found {
     pub(super) multiplier: f64,
     pub(super) info: CollapseSummary,
+    pub(super) motion: Option<Vec<BodyMotion>>,
 }
+
+/// A trial without an equilibrium: why, and the motion of its mechanism where found.
+type Collapsed = (Error, Option<Vec<BodyMotion>>);
 
 /// The trials of one search.
 struct Search<'a, 'b> {
@@ -32,15 +37,15 @@ struct Search<'a, 'b> {
 }
 
 impl Search<'_, '_> {
-    /// One trial at `t`: `Some(mechanism)` when no equilibrium exists, an error when the
-    /// solver fails otherwise.
+    /// One trial at `t`: `Some((mechanism, motion))` when no equilibrium exists, an error
+    /// when the solver fails otherwise.
     fn trial(
         &mut self,
         t: f64,
         session: &mut Session,
         timings: &mut Timings,
         reassembled: &mut Option<Operators>,
-    ) -> Result<Option<Error>> {
+    ) -> Result<Option<Collapsed>> {
         let mut st = session.initial();
         let mut a = StepAcc::default();
         let t0 = Instant::now();
@@ -60,7 +65,7 @@ impl Search<'_, '_> {
         timings.add_within("collapse_search", t0.elapsed().as_secs_f64(), inner);
         let outcome = match a.failure {
             None => None,
-            Some(e) if a.mechanism => Some(e),
+            Some(e) if a.mechanism => Some((e, a.motion)),
             Some(e) => {
                 return Err(Error::numerical(format!(
                     "the collapse search failed at t = {}: {}",
@@ -91,7 +96,7 @@ pub(super) fn search(
         ctx,
         trials: Vec::new(),
     };
-    if let Some(e) = s.trial(0.0, session, timings, reassembled)? {
+    if let Some((e, _)) = s.trial(0.0, session, timings, reassembled)? {
         return Err(Error::numerical(format!(
             "the collapse search found no equilibrium at t = 0 (before any load \
              multiplier): {}",
@@ -115,16 +120,21 @@ pub(super) fn search(
         }
     }
     let collapses = mechanism.is_some();
+    let (message, motion) = mechanism.map_or((None, None), |(e, m)| (Some(e), m));
     Ok(Found {
         multiplier: lo,
         info: CollapseSummary {
             collapses_at: collapses.then_some(hi),
             max: c.max,
-            mechanism: mechanism.map(|e| e.message().to_string()),
+            mechanism: message.map(|e| e.message().to_string()),
+            motion: motion
+                .as_ref()
+                .map(|m| super::mechanism::mechanism_bodies(session.model, m)),
             multiplier: lo,
             state: "the results are those of the largest multiplier with an equilibrium",
             tolerance: c.tolerance,
             trials: s.trials,
         },
+        motion,
     })
 }

@@ -21,9 +21,9 @@ use crate::input::scene::{HistoryLevel, Method, Scene};
 use crate::output::progress::{ContactTick, Progress, Stage};
 use crate::plan::{ContactProblem, Plan};
 use crate::solution::{
-    BodyField, CollapseSummary, ContactSolveSummary, ContactSummary, CrossCheck, History,
-    ImpliedComponent, ImpliedSlipping, InterfaceResult, Junctions, LinearSummary, PairStatus,
-    RunStatus, SlippingPair, SolverInfo,
+    BodyField, BodyMotion, CollapseSummary, ContactSolveSummary, ContactSummary, CrossCheck,
+    History, ImpliedComponent, ImpliedSlipping, InterfaceResult, Junctions, LinearSummary,
+    PairStatus, RunStatus, SlippingPair, SolverInfo,
 };
 use crate::timings::Timings;
 
@@ -57,6 +57,11 @@ pub struct ContactRun {
     pub qp: Option<QpCheck>,
     pub notes: Vec<String>,
     pub failure: Option<Error>,
+    /// Where the run failed at a mechanism whose motion was found: the moving bodies' rigid
+    /// motions (fastest boundary node at 1).
+    pub mechanism: Option<Vec<BodyMotion>>,
+    /// The motion of the collapse search's mechanism at `collapses_at`, where it found one.
+    pub collapse_mechanism: Option<Vec<BodyMotion>>,
     /// The bodies' operators at the final pseudo-time where they were assembled again
     /// there (loads that depend on t); otherwise those the stage was given hold.
     pub operators: Option<Operators>,
@@ -128,7 +133,7 @@ pub fn solve(
                 timings,
                 &mut reassembled,
             )?;
-            (vec![(1.0, found.multiplier)], Some(found.info))
+            (vec![(1.0, found.multiplier)], Some(found))
         }
     };
     let acc = load_path(
@@ -140,7 +145,9 @@ pub fn solve(
         &mut reassembled,
     )?;
     stage.finish();
-    let mut run = finish(&session, main, steps.len(), acc, collapse)?;
+    let (info, motion) = collapse.map_or((None, None), |f| (Some(f.info), f.motion));
+    let mut run = finish(&session, main, steps.len(), acc, info)?;
+    run.collapse_mechanism = motion;
     run.operators = reassembled;
     Ok(run)
 }
@@ -237,6 +244,8 @@ fn solve_linear(
         qp: None,
         notes: Vec::new(),
         failure: None,
+        mechanism: None,
+        collapse_mechanism: None,
         operators: at.map(|(_, p)| p),
     })
 }
@@ -296,6 +305,7 @@ fn finish(
         history,
         states,
         failure,
+        motion,
         ..
     } = acc;
     let converged = failure.is_none();
@@ -342,6 +352,8 @@ fn finish(
         qp: qp_block,
         notes,
         failure,
+        mechanism: motion,
+        collapse_mechanism: None,
         operators: None,
     })
 }
@@ -639,6 +651,7 @@ impl StepAcc {
         self.recorded = m.recorded;
         self.failure = None;
         self.mechanism = false;
+        self.motion = None;
     }
 }
 
@@ -659,6 +672,8 @@ pub(super) struct StepAcc {
     pub(super) failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium): no substeps help.
     pub(super) mechanism: bool,
+    /// The motion of that mechanism, where found.
+    pub(super) motion: Option<Vec<BodyMotion>>,
     /// Substeps solved since the last load step that was subdivided.
     substeps: usize,
 }
@@ -754,6 +769,7 @@ fn contact_step(
     if let Some(e) = r.failure {
         acc.failure = Some(e);
         acc.mechanism = r.mechanism;
+        acc.motion = r.motion;
     }
 }
 

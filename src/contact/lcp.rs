@@ -258,6 +258,10 @@ pub struct Inner<'a> {
     /// follows it takes each iterate's slip bounds from the normal forces of the last
     /// ([`Inner::coulomb_bounds`]).
     pub coulomb: Vec<Option<(usize, f64)>>,
+    /// Coulomb's law in the solve itself (semismooth Newton): a slipping Coulomb row's force
+    /// is −σ μ (λ_n − c) of its pair's normal force in the same solve, not a bound from the
+    /// last iterate ([`Inner::coupled_form`]).
+    pub coupled: bool,
 }
 
 /// A solution of the inner problem for one open set.
@@ -324,6 +328,7 @@ impl<'a> Inner<'a> {
             bound,
             tol,
             coulomb: Vec::new(),
+            coupled: false,
         }
     }
 
@@ -345,6 +350,33 @@ impl<'a> Inner<'a> {
             }
         }
         c
+    }
+
+    /// The problem under Coulomb's law with each slipping row's force tied to its pair's
+    /// normal force within the solve ([`Inner::coupled`]).
+    pub fn coupled_form(&self) -> Inner<'a> {
+        Inner {
+            coupled: true,
+            ..self.coulomb_form()
+        }
+    }
+
+    /// The Coulomb coupling of row `r` in the status `open`: its pair's closed normal row and
+    /// μ, where `r` slips under Coulomb's law within the solve ([`Inner::coupled`]).
+    pub fn coupling(&self, r: usize, open: &[bool]) -> Option<(usize, f64)> {
+        if !self.coupled || !open[r] || !self.is_friction(r) {
+            return None;
+        }
+        self.coulomb
+            .get(r)
+            .copied()
+            .flatten()
+            .filter(|&(k, _)| !open[k])
+    }
+
+    /// Whether the Coulomb row `r`'s pair's normal row is open in `open`.
+    pub fn pair_open(&self, r: usize, open: &[bool]) -> bool {
+        matches!(self.coulomb.get(r), Some(Some((k, _))) if open[*k])
     }
 
     /// The slip bounds μ·max(λ_n − c, 0) of the Coulomb rows from the normal forces of
@@ -633,6 +665,10 @@ impl<'a> Inner<'a> {
         let mut v = Vec::new();
         for r in 0..self.n() {
             let (size, sign) = if self.is_friction(r) {
+                if self.coupled && st.open[r] && self.pair_open(r, &st.open) {
+                    // An open pair's friction row slips freely, either way.
+                    continue;
+                }
                 let ds = st.s[r] - self.base.offset[r];
                 if st.open[r] {
                     (-st.sign[r] * ds / ss, 0.0)

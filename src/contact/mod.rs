@@ -36,6 +36,7 @@ mod inner;
 pub mod interface;
 pub mod lcp;
 pub mod lemke;
+pub mod mechanism;
 pub mod problem;
 pub mod qp;
 pub mod sparse;
@@ -46,7 +47,7 @@ use crate::bem::Operators;
 use crate::error::Error;
 use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
-use crate::solution::{BodyField, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
+use crate::solution::{BodyField, BodyMotion, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
 use inner::*;
 use lcp::{
     bound_change, status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses,
@@ -147,8 +148,11 @@ pub struct ContactResult {
     pub failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium exists), not a solver's trouble.
     pub mechanism: bool,
+    /// The mechanism's moving bodies, where its motion was found (`mechanism::Motion`).
+    pub motion: Option<Vec<BodyMotion>>,
     /// The failure is Lemke's or the QP's that could not pose the stick law from the moment
-    /// a pair closes (`InnerFailure::StickClosure`): no verdict on the equilibrium.
+    /// a pair closes (`InnerFailure::StickClosure`), or a friction fixed point that did not
+    /// settle: no verdict on the equilibrium.
     pub undecided: bool,
     /// Extra figures of the solver (QP: iterations, status; Lemke: pivots).
     pub info: SolverInfo,
@@ -176,7 +180,8 @@ struct StepLoop {
     tie_resolves: usize,
     /// Inner solves whose pivoting path the QP completed.
     rescues: usize,
-    /// The step failed where Lemke or the QP could not pose the stick law at closure.
+    /// The step failed where Lemke or the QP could not pose the stick law at closure, or
+    /// where the friction fixed point did not settle: no verdict on the equilibrium.
     undecided: bool,
     info: SolverInfo,
 }
@@ -213,6 +218,7 @@ struct StepEnd {
     converged: bool,
     failure: Option<Error>,
     mechanism: bool,
+    motion: Option<Vec<BodyMotion>>,
 }
 
 /// A contact run: the problem and the columns of its opening stiffness, shared by every
@@ -527,6 +533,7 @@ impl<'a> Session<'a> {
             bound: vec![0.0; n],
             tol,
             coulomb: Vec::new(),
+            coupled: false,
         };
         let mu: Vec<f64> = self.problem.rows[..n]
             .iter()
@@ -603,7 +610,7 @@ impl<'a> Session<'a> {
         let mut seen: HashSet<Vec<bool>> = HashSet::new();
         let (mut iterations, mut outer, mut slipping) = (0, 0, 0);
         let (mut converged, mut mechanism) = (false, false);
-        let mut failure = None;
+        let (mut failure, mut motion) = (None, None);
         let mut last: Option<(InnerState, f64)> = None;
         // The outer iterates' open rows, to find the rows of a stick edge cycle.
         let mut iterates: Vec<Vec<bool>> = Vec::new();
@@ -641,11 +648,10 @@ impl<'a> Session<'a> {
                 Err((e, probe)) => {
                     lp.undecided = matches!(e, InnerFailure::StickClosure { .. });
                     let (err, blocked) = self.explain(&e, &probe, &inner);
-                    let shown = if blocked { &probe.blocked[..] } else { &[] };
-                    let err = err
-                        + &motion_words(self.model, &inner, &mut self.sparse, &probe.state, shown);
-                    mechanism = blocked;
-                    failure = Some(failed(method, load_step, &err));
+                    let at = (&probe.state, if blocked { &probe.blocked[..] } else { &[] });
+                    let (said, found) = mechanism::motion(self.model, &inner, &mut self.sparse, at);
+                    (mechanism, motion) = (blocked, found);
+                    failure = Some(failed(method, load_step, &(err + &said)));
                     break;
                 }
             };
@@ -659,15 +665,10 @@ impl<'a> Session<'a> {
             let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {
-                mechanism = !outcome_blocked.is_empty();
-                let hint = self.hint(&outcome_blocked, &state, &inner)
-                    + &motion_words(
-                        self.model,
-                        &inner,
-                        &mut self.sparse,
-                        &state,
-                        &outcome_blocked,
-                    );
+                let at = (&state, &outcome_blocked[..]);
+                let (said, found) = mechanism::motion(self.model, &inner, &mut self.sparse, at);
+                let hint = self.hint(&outcome_blocked, &state, &inner) + &said;
+                (mechanism, motion) = (!outcome_blocked.is_empty(), found);
                 failure = Some(not_converged(method, load_step, residual, &notes, &hint));
                 last = Some((state, residual));
                 break;
@@ -690,6 +691,7 @@ impl<'a> Session<'a> {
                 break;
             }
             if friction && outer >= FRICTION_OUTER_LIMIT {
+                lp.undecided = true; // no verdict: the driver asks the sparse solver
                 failure = Some(unsettled(outer, load_step, change));
                 st = next;
                 break;
@@ -731,6 +733,7 @@ impl<'a> Session<'a> {
                 converged,
                 failure,
                 mechanism,
+                motion,
             },
         )
     }
@@ -804,6 +807,7 @@ impl<'a> Session<'a> {
             converged,
             failure,
             mechanism,
+            motion,
         } = end;
         let n = self.problem.n_open_rows;
         let record = lp.record;
@@ -901,6 +905,7 @@ impl<'a> Session<'a> {
             notes,
             failure,
             mechanism,
+            motion,
             undecided: lp.undecided,
             info: lp.info,
             recorded: lp.compact,
@@ -943,140 +948,6 @@ impl<'a> Session<'a> {
             });
         }
     }
-
-    /// The body of interface k that nothing else holds (no displacement condition), if
-    /// exactly one of its two bodies is such.
-    fn free_body(&self, k: usize) -> Option<usize> {
-        let it = &self.model.interfaces[k];
-        let held = |b: usize| self.model.bodies[b].dof_counts()[0] > 0;
-        match (held(it.body_a), held(it.body_b)) {
-            (true, false) => Some(it.body_b),
-            (false, true) => Some(it.body_a),
-            _ => None,
-        }
-    }
-
-    /// "; " and the mechanism of the rows `blocked`, or nothing where none is.
-    fn hint(&self, blocked: &[usize], st: &InnerState, inner: &Inner) -> String {
-        if blocked.is_empty() {
-            String::new()
-        } else {
-            format!("; {}", self.mechanism(blocked, st, inner))
-        }
-    }
-
-    /// Names the bodies and the motion that opening (or letting slip) the `blocked` rows
-    /// would leave free, with the resultants of the last state `st`.
-    fn mechanism(&self, blocked: &[usize], st: &InnerState, inner: &Inner) -> String {
-        let n = self.problem.n_open_rows;
-        // Sliding: a friction row that cannot slip without a rigid motion.
-        if let Some(&r) = blocked
-            .iter()
-            .find(|&&r| self.problem.rows[r].kind == RowKind::Friction && !inner.free[r])
-        {
-            let k = self.problem.rows[r].iface;
-            let it = &self.model.interfaces[k];
-            // Resultants of the last state: normal force, the tangential force the loads
-            // ask of the interface, and the friction it can hold (Σ μ N per pair).
-            let (mut t, mut nf, mut hold) = (0.0, 0.0, 0.0);
-            for q in 0..n {
-                let row = self.problem.rows[q];
-                if row.iface != k {
-                    continue;
-                }
-                match row.kind {
-                    RowKind::Normal if !st.open[q] => {
-                        let f = st.lambda[q] - inner.base.cohesion[q];
-                        nf += f;
-                        hold += self.model.interfaces[k].pairs[row.pair].friction * f.max(0.0);
-                    }
-                    RowKind::Friction => t += st.lambda[q],
-                    _ => {}
-                }
-            }
-            let mu = if nf > 0.0 { hold / nf } else { 0.0 };
-            let ratio = if nf > 0.0 {
-                t.abs() / nf
-            } else {
-                f64::INFINITY
-            };
-            let body = self.free_body(k).map_or("a body".to_string(), |b| {
-                format!("body \"{}\"", self.model.bodies[b].name)
-            });
-            if ratio > mu {
-                return format!(
-                    "no equilibrium exists (a sliding mechanism): {body} slides on interface \
-                     \"{}\": the tangential force it needs exceeds what friction holds, \
-                     tangential/normal resultant {ratio:.3} > mu = {mu:.3}; reduce the \
-                     tangential load or raise the friction coefficient",
-                    it.spec.name,
-                );
-            }
-            // The interface as a whole holds: the mechanism slides part of it and opens
-            // other joints (a wedge of blocks, a rocking block that slides at its toe).
-            let pr = &it.pairs[self.problem.rows[r].pair];
-            let open: Vec<usize> = (0..n)
-                .filter(|&q| self.problem.rows[q].kind == RowKind::Normal && st.open[q])
-                .collect();
-            let mut ifaces: Vec<&str> = open
-                .iter()
-                .map(|&q| {
-                    self.model.interfaces[self.problem.rows[q].iface]
-                        .spec
-                        .name
-                        .as_str()
-                })
-                .collect();
-            ifaces.sort_unstable();
-            ifaces.dedup();
-            let shown: Vec<String> = ifaces.iter().take(4).map(|s| format!("\"{s}\"")).collect();
-            return format!(
-                "no equilibrium exists (a mechanism of sliding and opening): interface \"{}\" \
-                 cannot slip at ({}, {}) without leaving {body} free, while {} pairs are open \
-                 on {} interfaces ({}{}); the interface as a whole is below its friction limit \
-                 (tangential/normal resultant {ratio:.3}, mu = {mu:.3}): the blocks move as a \
-                 mechanism that combines sliding with the open joints; reduce the load or raise \
-                 the friction coefficient",
-                it.spec.name,
-                crate::input::model::fmt_num(pr.x[0]),
-                crate::input::model::fmt_num(pr.x[1]),
-                open.len(),
-                ifaces.len(),
-                shown.join(", "),
-                if ifaces.len() > 4 { ", ..." } else { "" },
-            );
-        }
-        let mut parts = Vec::new();
-        for &r in blocked.iter().take(3) {
-            let row = self.problem.rows[r];
-            let it = &self.model.interfaces[row.iface];
-            let pr = &it.pairs[row.pair];
-            let dir = if row.comp == 1 { pr.normal } else { pr.tangent };
-            let who = match self.free_body(row.iface) {
-                Some(b) => format!("body \"{}\"", self.model.bodies[b].name),
-                None => format!(
-                    "body \"{}\" or body \"{}\"",
-                    self.model.bodies[it.body_b].name, self.model.bodies[it.body_a].name
-                ),
-            };
-            parts.push(format!(
-                "interface \"{}\" at ({}, {}) cannot open without leaving {who} free: the free \
-                 motion is a translation or rotation (tipping about the last closed point) \
-                 that opens it along ({:.3}, {:.3})",
-                it.spec.name,
-                crate::input::model::fmt_num(pr.x[0]),
-                crate::input::model::fmt_num(pr.x[1]),
-                dir[0],
-                dir[1],
-            ));
-        }
-        format!(
-            "no equilibrium exists (a mechanism): the loads pull the bodies apart where nothing \
-             else holds them: {}; hold the body with a displacement condition or change the \
-             loads",
-            parts.join("; ")
-        )
-    }
 }
 
 /// The inner problem `inner` with the slip bounds `b` that a solver following Coulomb's law
@@ -1091,94 +962,6 @@ fn adopt_bounds<'a>(inner: Inner<'a>, b: Option<Vec<f64>>, bound: &mut Vec<f64>)
         }
         None => inner,
     }
-}
-
-/// The motion of the mechanism that the rows `blocked` open from the state `st`: each
-/// moving body's rigid motion, from the sparse system's null direction under the loads
-/// ([`sparse::mechanism_motion`]), in words — translation along a unit vector, or rotation
-/// about a point (the instantaneous centre) and its sense; empty where it cannot be found.
-fn motion_words(
-    model: &Model,
-    inner: &Inner,
-    system: &mut Option<sparse::SparseSystem>,
-    st: &InnerState,
-    blocked: &[usize],
-) -> String {
-    if blocked.is_empty() {
-        return String::new();
-    }
-    if system.is_none() {
-        *system = sparse::SparseSystem::new(inner.problem).ok();
-    }
-    let Some(sys) = system.as_mut() else {
-        return String::new();
-    };
-    let (mut open, mut sign) = (st.open.clone(), st.sign.clone());
-    for &r in blocked {
-        open[r] = true;
-        if inner.is_friction(r) {
-            // A sticking row slips against its excess force.
-            sign[r] = -st.lambda[r].signum();
-        }
-    }
-    let Some(dw) = sparse::mechanism_motion(inner, sys, &open, &sign, &st.s) else {
-        return String::new();
-    };
-    let motions = inner.problem.rigid_motions(model, &dw);
-    let size = model.scale.max(f64::MIN_POSITIVE);
-    let amount = |m: &problem::BodyMotion| {
-        m.translation[0].hypot(m.translation[1]) + m.rotation.abs() * size
-    };
-    let largest = motions.iter().map(amount).fold(0.0f64, f64::max);
-    let mut moving: Vec<&problem::BodyMotion> = motions
-        .iter()
-        .filter(|m| amount(m) > 1e-3 * largest)
-        .collect();
-    moving.sort_by(|a, b| amount(b).total_cmp(&amount(a)));
-    if moving.is_empty() {
-        return String::new();
-    }
-    let fmt = crate::input::model::fmt_num;
-    let words: Vec<String> = moving
-        .iter()
-        .take(4)
-        .map(|m| {
-            let name = &model.bodies[m.body].name;
-            let t = m.translation;
-            let tl = t[0].hypot(t[1]);
-            if m.rotation.abs() * size <= 1e-6 * tl {
-                // Components that print as zero print without a sign.
-                let c = |v: f64| if v.abs() < 5e-4 { 0.0 } else { v };
-                format!(
-                    "body \"{name}\" moves along ({:.3}, {:.3})",
-                    c(t[0] / tl),
-                    c(t[1] / tl)
-                )
-            } else {
-                // The point that does not move: c + k × t / ω.
-                let p = [
-                    m.centroid[0] - t[1] / m.rotation,
-                    m.centroid[1] + t[0] / m.rotation,
-                ];
-                let sense = if m.rotation > 0.0 {
-                    "anticlockwise"
-                } else {
-                    "clockwise"
-                };
-                format!(
-                    "body \"{name}\" turns {sense} about ({}, {})",
-                    fmt((p[0] * 1e6).round() / 1e6),
-                    fmt((p[1] * 1e6).round() / 1e6)
-                )
-            }
-        })
-        .collect();
-    let more = if moving.len() > 4 {
-        format!(" and {} more bodies", moving.len() - 4)
-    } else {
-        String::new()
-    };
-    format!("; the motion: {}{more}", words.join(", "))
 }
 
 /// A history row of a state.

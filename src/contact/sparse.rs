@@ -38,11 +38,15 @@
 //! where the pair is open), and an iterate whose statuses hold while its bounds still moved
 //! is solved again with the new bounds — the same factor, two triangular solves. The outer
 //! Tresca fixed point then finds its bounds settled after one pass instead of refactoring
-//! for every outer iteration (64 × 64 wall: 79 → 32 iterations).
+//! for every outer iteration (64 × 64 wall: 79 → 32 iterations). Where the lagged bounds do
+//! not settle, the iteration starts again with each slipping row's force tied to its pair's
+//! normal force within the solve, `λ_r = −σ μ (λ_k − c_k)` (semismooth Newton: H's row r plus
+//! σμ times row k, not symmetric, one sparse LU per status; docs/formulation.md §6.5).
 
 use std::collections::HashSet;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
+use faer::linalg::solvers::SolveCore;
 use faer::sparse::linalg::cholesky;
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, Mat, Par, Side};
@@ -350,13 +354,11 @@ impl SparseSystem {
             }
         }
         let hx = self.apply(&x);
-        let target = |r: usize| {
-            if inner.is_friction(r) {
-                -sg[r] * inner.bound[r]
-            } else {
-                0.0
-            }
-        };
+        let target = |r: usize| open_target(inner, r, &open, &sg);
+        if (0..n).any(|r| inner.coupling(r, &open).is_some()) {
+            let w = self.solve_coupled(inner, c, (&open, &sg), (&x, &hx), prox)?;
+            return Some((open, sg, w));
+        }
         let rhs: Vec<f64> = (0..ng + n)
             .map(|k| {
                 if k >= ng && !open[k - ng] {
@@ -406,6 +408,104 @@ impl SparseSystem {
         Some((open, sg, w))
     }
 
+    /// The unknowns `w` of the status `open` where slipping rows follow Coulomb's law within
+    /// the solve ([`Inner::coupling`]): row r of such a row's equation is
+    /// `(H w)_r + σ μ (H w)_k = σ μ c_k' − c_r − σ μ c_k` for its pair's closed normal row k
+    /// (λ_r = −σ μ (λ_k − c_k'), c' the cohesion) — H plus μ-weighted normal rows, not
+    /// symmetric: one sparse LU with partial pivoting per status. The closed rows' openings
+    /// are fixed in `x` (`hx = H x`); `prox` as for [`SparseSystem::solve_w`]. None where
+    /// the matrix is singular (a body left free) or the memory cannot be had.
+    fn solve_coupled(
+        &self,
+        inner: &Inner,
+        c: &[f64],
+        (open, sg): (&[bool], &[f64]),
+        (x, hx): (&[f64], &[f64]),
+        prox: Option<(f64, &[f64])>,
+    ) -> Option<Vec<f64>> {
+        let (ng, n) = (self.n_glued, self.n);
+        let size = ng + n;
+        let mut index = vec![usize::MAX; size];
+        let mut m = 0;
+        for k in (0..size).filter(|&k| k < ng || open[k - ng]) {
+            index[k] = m;
+            m += 1;
+        }
+        let mut rhs = vec![0.0; m];
+        for k in (0..size).filter(|&k| index[k] != usize::MAX) {
+            let t = if k < ng {
+                0.0
+            } else {
+                open_target(inner, k - ng, open, sg)
+            };
+            rhs[index[k]] = t - c[k] - hx[k];
+        }
+        // The slipping rows tied to each closed normal row, with σ μ.
+        let mut tied: Vec<Vec<(usize, f64)>> = vec![Vec::new(); n];
+        for r in 0..n {
+            if let Some((k, mu)) = inner.coupling(r, open) {
+                let f = sg[r] * mu;
+                tied[k].push((index[ng + r], f));
+                rhs[index[ng + r]] = f * inner.base.cohesion[k]
+                    - c[ng + r]
+                    - hx[ng + r]
+                    - f * (c[ng + k] + hx[ng + k]);
+            }
+        }
+        let ord = &self.ordered;
+        let sym = ord.h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), ord.h.val());
+        let mut trip = Vec::with_capacity(2 * val.len());
+        // H_ij = v: in row i's equation where i is free, in the tied rows' where i is a
+        // closed normal row; column j where j is free.
+        let mut add = |i: usize, j: usize, v: f64| {
+            let col = index[j];
+            if col == usize::MAX {
+                return;
+            }
+            if index[i] != usize::MAX {
+                trip.push(Triplet::new(index[i], col, v));
+            }
+            if i >= ng {
+                for &(row, f) in &tied[i - ng] {
+                    trip.push(Triplet::new(row, col, f * v));
+                }
+            }
+        };
+        for p in 0..size {
+            for q in cp[p]..cp[p + 1] {
+                let (a, b) = (ord.unknown[ri[q]], ord.unknown[p]);
+                add(a, b, val[q]);
+                if a != b {
+                    add(b, a, val[q]);
+                }
+            }
+        }
+        if let Some((eps, centre)) = prox {
+            for r in (0..n).filter(|&r| open[r]) {
+                let d = eps * self.diag[ng + r].abs().max(f64::MIN_POSITIVE);
+                let i = index[ng + r];
+                trip.push(Triplet::new(i, i, d));
+                rhs[i] += d * centre[r];
+            }
+        }
+        let mat = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trip).ok()?;
+        drop(trip);
+        let lu = mat.sp_lu().ok()?;
+        let mut sol = Mat::<f64>::from_fn(m, 1, |i, _| rhs[i]);
+        lu.solve_in_place_with_conj(Conj::No, sol.as_mut());
+        let mut w = x.to_vec();
+        for k in (0..size).filter(|&k| index[k] != usize::MAX) {
+            w[k] = sol[(index[k], 0)];
+        }
+        let big = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let reference = big(&inner.base.v0).max(big(&inner.base.offset));
+        if !w.iter().all(|v| v.is_finite()) || (prox.is_none() && big(&w) > SINGULAR * reference) {
+            return None;
+        }
+        Some(w)
+    }
+
     /// The state of the status `open` (free rows open whatever `open` says) with the slip
     /// directions `sign` of slipping friction rows; None when the status leaves a body free.
     /// With a proximal term `(ε, s̄)` every open row r gets the spring `ε H_rr (s_r − s̄_r)`:
@@ -422,18 +522,15 @@ impl SparseSystem {
     ) -> Option<InnerState> {
         let (ng, n) = (self.n_glued, self.n);
         let (open, sg, w) = self.solve_w(inner, c, open, sign, prox)?;
-        let target = |r: usize| {
-            if inner.is_friction(r) {
-                -sg[r] * inner.bound[r]
-            } else {
-                0.0
-            }
-        };
         let grad = self.apply(&w);
         let mut lambda: Vec<f64> = (0..n).map(|r| grad[ng + r] + c[ng + r]).collect();
         for r in 0..n {
             if open[r] {
-                lambda[r] = target(r);
+                lambda[r] = match inner.coupling(r, &open) {
+                    // −σ μ (λ_n − c) of the closed normal row, as solved.
+                    Some((k, mu)) => -sg[r] * mu * (lambda[k] - inner.base.cohesion[k]),
+                    None => open_target(inner, r, &open, &sg),
+                };
             }
         }
         Some(InnerState {
@@ -442,6 +539,21 @@ impl SparseSystem {
             s: w[ng..].to_vec(),
             lambda,
         })
+    }
+}
+
+/// The force an open row `r` holds in the status `open` with slip directions `sg`: −σ g on a
+/// slipping friction row (zero where its bound follows Coulomb's law within the solve and its
+/// pair is open), 0 elsewhere; a row tied to its normal force within the solve
+/// ([`Inner::coupling`]) gets its force from the solve instead.
+fn open_target(inner: &Inner, r: usize, open: &[bool], sg: &[f64]) -> f64 {
+    if !inner.is_friction(r) {
+        return 0.0;
+    }
+    if inner.coupled && inner.pair_open(r, open) {
+        0.0
+    } else {
+        -sg[r] * inner.bound[r]
     }
 }
 
@@ -480,14 +592,38 @@ pub fn solve(
         return iterate(inner.clone(), sys, open, sign, max_iterations, MAX_HALVINGS);
     }
     // Coulomb's law within the iteration: stopped at its first repeated status (a cycle of
-    // the lagged bounds, seen with μ = 10 near collapse) or `COULOMB_ITERATIONS`; the
-    // iteration with the bounds held fixed (Tresca, the outer loop's fixed point) then
-    // starts again from the same statuses.
+    // the lagged bounds, seen with μ = 10 near collapse) or `COULOMB_ITERATIONS`; then the
+    // semismooth Newton iteration with the slip forces tied to the normal forces, and where
+    // that does not settle either, the iteration with the bounds held fixed (Tresca, the
+    // outer loop's fixed point) starts again from the same statuses.
     let limit = max_iterations.min(COULOMB_ITERATIONS);
     let first = iterate(inner.coulomb_form(), sys, open, sign, limit, 0);
     if !first.stalled {
         return first;
     }
+    // The lagged bounds cycle where a sliding body wedges itself (its normal forces rise as
+    // it slides): the semismooth Newton iteration with each slipping row's force tied to its
+    // normal force within the solve follows that.
+    let second = iterate(inner.coupled_form(), sys, open, sign, limit, MAX_HALVINGS);
+    if !second.stalled {
+        let mut out = second;
+        out.notes.insert(
+            0,
+            format!(
+                "Coulomb's law with each iterate's slip bounds from the last did not settle in \
+                 {} iterations; with the slipping rows' forces tied to their normal forces \
+                 within each solve (semismooth Newton) it settled in {}",
+                first.iterations, out.iterations
+            ),
+        );
+        out.iterations += first.iterations;
+        return out;
+    }
+    let first = InnerOutcome {
+        iterations: first.iterations + second.iterations,
+        notes: [first.notes, second.notes].concat(),
+        ..first
+    };
     let budget = max_iterations.saturating_sub(first.iterations);
     let mut out = iterate(inner.clone(), sys, open, sign, budget, MAX_HALVINGS);
     out.iterations += first.iterations;
@@ -544,6 +680,12 @@ fn iterate(
         // The bounds this iterate was solved with (Coulomb rows only).
         let mut used = None;
         let moved = match cur.coulomb_bounds(&st) {
+            // Coupled within the solve, the state's own bounds are those it was solved with.
+            Some(b) if cur.coupled => {
+                cur.bound.clone_from(&b);
+                used = Some(b);
+                false
+            }
             Some(b) => {
                 let moved = bound_change(&cur.bound, &b) > BOUNDS_SETTLED;
                 used = Some(std::mem::replace(&mut cur.bound, b));

@@ -17,6 +17,7 @@ pub mod owned;
 pub mod progress;
 pub mod record;
 pub mod size;
+mod stamp;
 pub mod summary;
 pub mod vtk;
 

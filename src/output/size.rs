@@ -23,14 +23,20 @@
 //!   per kept state a thrust file: about 2.75 kB and 270 B per interface (measured 3.0 kB
 //!   for 1 joint, 8.4 kB for the arch's 21), and a contact file: about 3 kB, 30 B per
 //!   interface and 4/3 of 137 B per pair (measured 4.9 kB for two_blocks' 9 pairs, 359 kB
-//!   for the 1 925 pairs of the 105-brick wall).
+//!   for the 1 925 pairs of the 105-brick wall). With `[solve] collapse`, once the file
+//!   of the mechanism (block "mechanism" of the last state; a run that fails at a mechanism
+//!   writes it too, but that is not known before): 4/3 of 52 B per node (points,
+//!   `mechanism_velocity`, `body`), 13 B per element and about 2.5 kB (measured 34.6 kB
+//!   for `wall_collapse`'s 17 bricks, 35.1 kB estimated).
 //! * **CSV**: `interfaces/*.csv` about 105 B per pair, sections 115 B per point and, with
 //!   a history, 145 B per point and kept state (`sections/NAME_path.csv`); `thrust.csv`
 //!   about 120 B and 215 B per interface; `thrust_hubs.csv` 50 B and 95 B per body with
 //!   more than two interfaces (measured 9.0 kB for the 96 hubs of the 105-brick wall).
 //! * **mesh/**: the mesh file, where the scene meshes a `.geo`.
 //! * **summary.json** and **timings.json**: about 2.5 kB, 1.3 kB per interface and 1.5 kB per
-//!   further load step of a contact run.
+//!   further load step of a contact run; with `[solve] collapse` the mechanism's motion,
+//!   about 150 B per body that moves (taken as every body; the archive keeps 48 B each in
+//!   four datasets).
 //!
 //! A full history's number of states is the contact estimate's count of switches (every
 //! pair once per load step; measured: 91 states where it says 106 on the clamped beam, 240
@@ -198,6 +204,11 @@ pub fn output_size(
         vtk += s * (2750.0 + 270.0 * ni);
         vtk += s * (3000.0 + 30.0 * ni + 4.0 / 3.0 * zip * 137.0 * pairs);
     }
+    let collapse = scene.solve.collapse.is_some() && contact.is_some();
+    if collapse {
+        vtk += 4.0 / 3.0 * zip * (52.0 * nodes + 13.0 * elements) + 2500.0;
+        archive += 48.0 * nb + PER_DATASET * 4.0;
+    }
     if scene.output.field {
         let field_arrays = [
             ("displacement", 24.0),
@@ -251,6 +262,6 @@ pub fn output_size(
         vtk,
         csv,
         mesh: if geo { mesh_file } else { 0.0 },
-        summary: summary + 1500.0,
+        summary: summary + 1500.0 + if collapse { 150.0 * nb } else { 0.0 },
     }
 }

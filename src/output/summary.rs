@@ -16,7 +16,9 @@ use crate::contact::driver::QpCheck;
 use crate::input::model::Interface;
 use crate::post::equilibrium::{BodyBalance, Wrench};
 use crate::post::thrust::Thrust;
-use crate::solution::{ContactSummary, InterfaceResult, PairStatus, RunStatus, SolverInfo};
+use crate::solution::{
+    ContactSummary, InterfaceResult, MechanismBody, PairStatus, RunStatus, SolverInfo,
+};
 
 /// The whole of `summary.json`.
 #[derive(Debug, Clone, Serialize)]
@@ -40,6 +42,10 @@ pub struct Summary {
     /// With `[solve] time`: every step's pseudo-time and what depends on it.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub load_path: Option<LoadPath>,
+    /// Where the run found no equilibrium and the motion of the mechanism: each moving
+    /// body's rigid motion, as the message says it and the VTK block "mechanism" draws it.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub mechanism: Option<Vec<MechanismBody>>,
     /// "linear" without a unilateral interface, else the scene's method.
     pub method: &'static str,
     pub notes: Vec<String>,
@@ -509,6 +515,28 @@ mod tests {
         }
     }
 
+    /// A mechanism of a rotating and a sliding body (every key of a body's record).
+    fn mechanism() -> Vec<MechanismBody> {
+        vec![
+            MechanismBody {
+                body: "upper".into(),
+                centre: Some([1.0, 0.5]),
+                direction: None,
+                kind: "rotation",
+                magnitude: 1.0,
+                sense: Some("clockwise"),
+            },
+            MechanismBody {
+                body: "lower".into(),
+                centre: None,
+                direction: Some([1.0, 0.0]),
+                kind: "translation",
+                magnitude: 0.5,
+                sense: None,
+            },
+        ]
+    }
+
     /// A contact block with every key (collapse search, cross-checks, junctions).
     fn contact_block() -> ContactSummary {
         ContactSummary::Contact(Box::new(ContactSolveSummary {
@@ -516,6 +544,7 @@ mod tests {
                 collapses_at: Some(0.75),
                 max: 1.0,
                 mechanism: Some("a mechanism".into()),
+                motion: Some(mechanism()),
                 multiplier: 0.5,
                 state: "largest",
                 tolerance: 0.25,
@@ -648,6 +677,7 @@ mod tests {
                 depends_on_t: vec!["boundary.top.ty".into()],
                 time: vec![0.5, 1.0],
             }),
+            mechanism: Some(mechanism()),
             method: "lcp",
             notes: vec!["a note".into()],
             overrides: vec![],

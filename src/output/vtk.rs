@@ -10,7 +10,11 @@
 //!
 //! `states.pvd` lists one multiblock per time, `state_NNNN.vtm`, with named blocks:
 //! `boundary` (the boundary file of the state) and `field` only in the states that have their
-//! interior field (the final one): the series to open in ParaView.
+//! interior field (the final one): the series to open in ParaView. Where the run failed at a
+//! mechanism, or its collapse search found one, the last state's multiblock ends with the
+//! block `mechanism` (`mechanism_NNNN.vtu`): the boundary lines of every body with the point
+//! array `mechanism_velocity`, each moving body's rigid velocity `t + ω k × (x − c)` (zero
+//! on the bodies at rest, the fastest node at 1), for Warp By Vector.
 //!
 //! `history.pvd` lists two parts at every time: part 0 the boundary file of the state,
 //! part 1 the field file of the latest state at or before that time that has one (the
@@ -94,6 +98,11 @@ pub(crate) fn contact_name(k: usize) -> String {
     format!("contact_{k:04}.vtu")
 }
 
+/// File name of the mechanism drawn with state `k` (the last one).
+pub(crate) fn mechanism_name(k: usize) -> String {
+    format!("mechanism_{k:04}.vtu")
+}
+
 /// File name of the multiblock of state `k` (`states.pvd`'s entry).
 pub(crate) fn state_name(k: usize) -> String {
     format!("state_{k:04}.vtm")
@@ -136,9 +145,11 @@ enum File {
     Field(usize),
     Thrust(usize),
     Contact(usize),
-    /// The multiblock of a state: its boundary file, where it has one its field file, and
-    /// where the run has interfaces its thrust line and its contact rows.
-    State(usize, bool, bool),
+    Mechanism(usize),
+    /// The multiblock of a state: its boundary file, where it has one its field file,
+    /// where the run has interfaces its thrust line and its contact rows, and where it is
+    /// drawn with the state the mechanism.
+    State(usize, bool, bool, bool),
     StatesPvd,
     Pvd,
 }
@@ -164,7 +175,12 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
             files.push(File::Thrust(k));
             files.push(File::Contact(k));
         }
-        files.push(File::State(k, field, thrust));
+        // The mechanism is drawn with the last state.
+        let mechanism = !rec.mechanism.is_empty() && k + 1 == rec.states.len();
+        if mechanism {
+            files.push(File::Mechanism(k));
+        }
+        files.push(File::State(k, field, thrust, mechanism));
         field_of.push(field.then_some(k));
     }
     files.push(File::StatesPvd);
@@ -176,7 +192,8 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
             File::Field(k) => dir.join(field_name(k)),
             File::Thrust(k) => dir.join(thrust_name(k)),
             File::Contact(k) => dir.join(contact_name(k)),
-            File::State(k, _, _) => dir.join(state_name(k)),
+            File::Mechanism(k) => dir.join(mechanism_name(k)),
+            File::State(k, ..) => dir.join(state_name(k)),
             File::StatesPvd => dir.join("states.pvd"),
             File::Pvd => dir.join("history.pvd"),
         })
@@ -212,7 +229,17 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
                 };
                 grid_xml(contact_grid(rec, k), &meta, &style)
             }
-            File::State(k, field, thrust) => state_vtm(k, field, thrust).into_bytes(),
+            File::Mechanism(k) => {
+                // Every array, as for the thrust line.
+                let style = VtkStyle {
+                    compressed: rec.vtk.compressed,
+                    fields: None,
+                };
+                grid_xml(mechanism_grid(rec), &state_meta(rec, k, times[k]), &style)
+            }
+            File::State(k, field, thrust, mechanism) => {
+                state_vtm(k, field, thrust, mechanism).into_bytes()
+            }
             File::StatesPvd => states_pvd(&times).into_bytes(),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
         })
@@ -221,9 +248,9 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
 }
 
 /// `state_NNNN.vtm`: the state as one multiblock with named blocks, `boundary`, where the
-/// state has its interior field `field` (nowhere else), and where the run has interfaces
-/// `thrust`.
-fn state_vtm(k: usize, field: bool, thrust: bool) -> String {
+/// state has its interior field `field` (nowhere else), where the run has interfaces
+/// `thrust` and `contact`, and where the mechanism is drawn with it `mechanism`.
+fn state_vtm(k: usize, field: bool, thrust: bool, mechanism: bool) -> String {
     let mut o = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" \
          byte_order=\"LittleEndian\">\n  <vtkMultiBlockDataSet>\n",
@@ -252,6 +279,14 @@ fn state_vtm(k: usize, field: bool, thrust: bool) -> String {
             "    <DataSet index=\"{}\" name=\"contact\" file=\"{}\"/>",
             2 + usize::from(field),
             contact_name(k)
+        );
+    }
+    if mechanism {
+        let _ = writeln!(
+            o,
+            "    <DataSet index=\"{}\" name=\"mechanism\" file=\"{}\"/>",
+            1 + usize::from(field) + 2 * usize::from(thrust),
+            mechanism_name(k)
         );
     }
     o.push_str("  </vtkMultiBlockDataSet>\n</VTKFile>\n");
@@ -764,6 +799,44 @@ fn boundary_grid(rec: &RunRecord, k: usize) -> Grid {
         connectivity: conn,
         point_data,
         active: ["contact_status", "displacement", ""],
+    }
+}
+
+/// The boundary lines of every body with the rigid velocity of the mechanism at their
+/// nodes (`mechanism_velocity`: zero on the bodies at rest) and `body`.
+fn mechanism_grid(rec: &RunRecord) -> Grid {
+    let (mut pts, mut velocity, mut body, mut conn) =
+        (Vec::new(), Vec::new(), Vec::new(), Vec::new());
+    let mut motion = vec![None; rec.bodies.len()];
+    for m in &rec.mechanism {
+        if let Some(slot) = motion.get_mut(m.body) {
+            *slot = Some(m);
+        }
+    }
+    let mut offset = 0u64;
+    for (bi, (b, motion)) in rec.bodies.iter().zip(motion).enumerate() {
+        pts.extend(vec3(&b.nodes));
+        for &x in &b.nodes {
+            let v = motion.map_or([0.0; 2], |m| m.velocity(x));
+            velocity.extend([v[0], v[1], 0.0]);
+        }
+        body.extend(std::iter::repeat_n(bi as i32, b.nodes.len()));
+        conn.extend(
+            b.elements
+                .iter()
+                .flat_map(|e| [offset + e[0] as u64, offset + e[1] as u64]),
+        );
+        offset += b.nodes.len() as u64;
+    }
+    Grid {
+        points: pts,
+        cell_types: vec![VTK_LINE; conn.len() / 2],
+        connectivity: conn,
+        point_data: vec![
+            array("mechanism_velocity", 3, Values::F64(velocity)),
+            array("body", 1, Values::I32(body)),
+        ],
+        active: ["body", "mechanism_velocity", ""],
     }
 }
 

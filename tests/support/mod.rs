@@ -439,3 +439,89 @@ pub fn binary_arrays(xml: &str, compressed: bool) -> Vec<(String, Vec<u8>)> {
     }
     out
 }
+
+/// One boundary node of the VTK block "mechanism": its body, position and
+/// `mechanism_velocity`.
+#[derive(Debug, Clone, Copy)]
+pub struct MechanismNode {
+    pub body: i32,
+    pub x: [f64; 2],
+    pub v: [f64; 3],
+}
+
+/// The VTK block "mechanism" of a run folder `out`: where the last state's multiblock
+/// (`vtk/state_NNNN.vtm`) names it, its nodes; none where it has no such block. Asserts that
+/// no other state's multiblock names one and that the file is the only `mechanism_*.vtu`.
+pub fn mechanism_block(out: &Path) -> Option<Vec<MechanismNode>> {
+    let vtk = out.join("vtk");
+    let mut states: Vec<String> = std::fs::read_dir(&vtk)
+        .expect("vtk folder")
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.starts_with("state_") && n.ends_with(".vtm"))
+        .collect();
+    states.sort();
+    let last = states.pop().expect("a state multiblock");
+    for s in &states {
+        let text = std::fs::read_to_string(vtk.join(s)).unwrap();
+        assert!(
+            !text.contains("\"mechanism\""),
+            "{s} names a mechanism block"
+        );
+    }
+    let vtm = std::fs::read_to_string(vtk.join(&last)).unwrap();
+    let file = vtm
+        .split("name=\"mechanism\" file=\"")
+        .nth(1)?
+        .split('"')
+        .next()
+        .unwrap();
+    assert_eq!(
+        file,
+        last.replace("state_", "mechanism_").replace(".vtm", ".vtu")
+    );
+    let files = std::fs::read_dir(&vtk).unwrap().filter(|e| {
+        let n = e.as_ref().unwrap().file_name();
+        n.to_string_lossy().starts_with("mechanism_")
+    });
+    assert_eq!(files.count(), 1, "one mechanism file");
+    let xml = std::fs::read_to_string(vtk.join(file)).unwrap();
+    let arrays = binary_arrays(&xml, xml.contains("vtkZLibDataCompressor"));
+    let get = |n: &str| &arrays.iter().find(|(k, _)| k == n).expect(n).1;
+    let f64s = |n: &str| -> Vec<f64> {
+        get(n)
+            .chunks(8)
+            .map(|c| f64::from_le_bytes(c.try_into().unwrap()))
+            .collect()
+    };
+    let (points, velocity) = (f64s("Points"), f64s("mechanism_velocity"));
+    let body: Vec<i32> = get("body")
+        .chunks(4)
+        .map(|c| i32::from_le_bytes(c.try_into().unwrap()))
+        .collect();
+    assert_eq!(points.len(), 3 * body.len());
+    assert_eq!(velocity.len(), 3 * body.len());
+    Some(
+        (0..body.len())
+            .map(|i| MechanismNode {
+                body: body[i],
+                x: [points[3 * i], points[3 * i + 1]],
+                v: [velocity[3 * i], velocity[3 * i + 1], velocity[3 * i + 2]],
+            })
+            .collect(),
+    )
+}
+
+/// `sgbem run pipelines/NAME.toml --out OUT --quiet` (a shipped scene): the exit code and
+/// stderr.
+pub fn run_shipped(name: &str, out: &Path) -> (i32, String) {
+    let scene = root().join("pipelines").join(format!("{name}.toml"));
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let (code, _, err) = sgbem(&["run", scene, "--out", out, "--quiet"]);
+    (code, err)
+}
+
+/// A run folder's summary.json.
+pub fn read_summary(out: &Path) -> serde_json::Value {
+    let text = std::fs::read_to_string(out.join("summary.json")).expect("summary.json");
+    serde_json::from_str(&text).expect("summary.json is JSON")
+}

@@ -69,7 +69,7 @@ use crate::bem::operators::Operators;
 use crate::error::{Error, Result};
 use crate::input::model::Model;
 use crate::linalg::matvec;
-use crate::solution::{BodyField, InterfaceResult};
+use crate::solution::{BodyField, BodyMotion, InterfaceResult};
 
 pub use mechanism::mechanism_hint;
 pub use opening::Opening;
@@ -163,16 +163,6 @@ pub struct Problem {
     factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
     /// Each global dof's node (body-local) and direction.
     dof_at: Vec<(usize, [f64; 2])>,
-}
-
-/// The rigid motion of one body in a mechanism: translation of its centroid and rotation
-/// (radians per unit of the motion's scale), with the body's node coordinates' centroid.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct BodyMotion {
-    pub body: usize,
-    pub centroid: [f64; 2],
-    pub translation: [f64; 2],
-    pub rotation: f64,
 }
 
 /// The all-closed state for one load factor and cohesion: glued displacements v⁰ and row

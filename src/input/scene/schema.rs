@@ -86,47 +86,48 @@ fn boundary() -> Value {
     table("conditions on a Physical Curve", &props, &[])
 }
 
-fn interface() -> Value {
-    table(
-        "an interface between two bodies",
-        &[
-            (
-                "model",
-                choice(&["bonded", "unilateral"], "bonded, or unilateral contact"),
+/// An interface table; `between` only in a named one (the reader refuses it in a pattern
+/// or default table).
+fn interface(named: bool) -> Value {
+    let mut props = vec![
+        (
+            "model",
+            choice(&["bonded", "unilateral"], "bonded, or unilateral contact"),
+        ),
+        (
+            "initial",
+            choice(&["closed", "open"], "the status at the start"),
+        ),
+        (
+            "cohesion",
+            scalar("tensile strength (F/L²), lost where the joint opens"),
+        ),
+        (
+            "gap",
+            scalar("initial normal gap (L), added to the drawn one"),
+        ),
+        (
+            "tangential",
+            choice(
+                &["stick", "slide", "friction"],
+                "tangential law of a unilateral interface",
             ),
-            (
-                "initial",
-                choice(&["closed", "open"], "the status at the start"),
-            ),
-            (
-                "cohesion",
-                scalar("tensile strength (F/L²), lost where the joint opens"),
-            ),
-            (
-                "gap",
-                scalar("initial normal gap (L), added to the drawn one"),
-            ),
-            (
-                "tangential",
-                choice(
-                    &["stick", "slide", "friction"],
-                    "tangential law of a unilateral interface",
-                ),
-            ),
-            (
-                "friction",
-                scalar("Coulomb coefficient μ, with tangential = \"friction\""),
-            ),
-            (
-                "between",
-                json!({
-                    "type": "array", "items": { "type": "string" }, "minItems": 2, "maxItems": 2,
-                    "description": "the two bodies, where the interface is not a shared curve",
-                }),
-            ),
-        ],
-        &["model"],
-    )
+        ),
+        (
+            "friction",
+            scalar("Coulomb coefficient μ, with tangential = \"friction\""),
+        ),
+    ];
+    if named {
+        props.push((
+            "between",
+            json!({
+                "type": "array", "items": { "type": "string" }, "minItems": 2, "maxItems": 2,
+                "description": "two Physical Curves, one on each body, drawn on their own",
+            }),
+        ));
+    }
+    table("an interface between two bodies", &props, &["model"])
 }
 
 fn solve() -> Value {
@@ -284,13 +285,18 @@ pub fn schema() -> Value {
         ),
         (
             "interface",
-            named("interfaces by Physical Curve name", interface()),
+            json!({
+                "type": "object",
+                "description": "interfaces by Physical Curve name or pattern (* and ?)",
+                "patternProperties": { "[*?]": interface(false) },
+                "additionalProperties": interface(true),
+            }),
         ),
         (
             "defaults",
             table(
                 "what bodies and interfaces without a table of their own take",
-                &[("body", body()), ("interface", interface())],
+                &[("body", body()), ("interface", interface(false))],
                 &[],
             ),
         ),
@@ -311,7 +317,8 @@ pub fn schema() -> Value {
         ("solve", solve()),
         ("output", output()),
     ];
-    let mut s = table("an sgbem scene (docs/scene.md)", &props, &["mesh"]);
+    // The mesh may come from the command line (--mesh) instead.
+    let mut s = table("an sgbem scene (docs/scene.md)", &props, &["plane"]);
     s["$schema"] = json!("http://json-schema.org/draft-07/schema#");
     s["title"] = json!("sgbem scene");
     s
@@ -357,8 +364,15 @@ mod tests {
         assert_eq!(keys(b), sorted(&BOUNDARY_KEYS));
         let i = &p["interface"]["additionalProperties"];
         assert_eq!(keys(i), sorted(&INTERFACE_KEYS));
+        // `between` only in a named interface table.
+        let unnamed: Vec<&str> = INTERFACE_KEYS
+            .into_iter()
+            .filter(|&k| k != "between")
+            .collect();
+        let pattern = &p["interface"]["patternProperties"]["[*?]"];
+        assert_eq!(keys(pattern), sorted(&unnamed));
         let d = &p["defaults"]["properties"]["interface"];
-        assert_eq!(keys(d), sorted(&INTERFACE_KEYS));
+        assert_eq!(keys(d), sorted(&unnamed));
         assert_eq!(keys(&p["defaults"]), sorted(&DEFAULTS_KEYS));
         assert_eq!(keys(&p["units"]), sorted(&UNITS_KEYS));
         assert_eq!(keys(&p["contact"]), sorted(&CONTACT_KEYS));

@@ -42,6 +42,11 @@
 //!                        interfaces/<name>/{status, traction, jump,
 //!                        normal_opening[, tangential_status, slip]},
 //!                        interior/<name>/{mesh_nodes, x, u, sigma (k×3)}
+//! /mechanism/            where the run failed at a mechanism, or its collapse search found
+//!                        one: the moving bodies' rigid motions drawn with the last state
+//!                        (the VTK block "mechanism"), body (k, index in /bodies order),
+//!                        centroid (k×2), translation (k×2, the centroid's velocity),
+//!                        rotation (k, anticlockwise), the fastest boundary node at 1
 //! /timings/              attribute created (UTC date of the run); one scalar dataset per
 //!                        stage (seconds). The date and the timings are the only parts
 //!                        that differ between two runs of the same scene and mesh.
@@ -75,7 +80,7 @@ use hdf5_metno as h5;
 
 use super::record::{Array, InteriorRecord, IterateRecord, RunRecord, FORMAT_VERSION};
 use crate::error::{Error, Result};
-use crate::solution::History;
+use crate::solution::{BodyMotion, History};
 
 mod read;
 mod write;
@@ -168,6 +173,8 @@ pub enum ArchivePart {
         contact_operators: Option<Vec<(String, Array)>>,
         history: History,
         states: Vec<IterateRecord>,
+        /// The mechanism drawn with the last state (empty: none).
+        mechanism: Vec<BodyMotion>,
     },
     /// The end of the run: the interior field of the final state, the status, the timings
     /// and the text of summary.json.
@@ -187,10 +194,12 @@ impl ArchivePart {
                 contact_operators,
                 history,
                 states,
+                mechanism,
             } => {
                 rec.contact_operators = contact_operators;
                 rec.history = history;
                 rec.states = states;
+                rec.mechanism = mechanism;
             }
             ArchivePart::Finished {
                 interior,

@@ -9,7 +9,9 @@ use crate::output::record::{
     Array, BodyOperators, BodyRecord, InterfaceRecord, InteriorRecord, IterateRecord, MeshRecord,
     PairingRecord, RunRecord,
 };
-use crate::solution::{BodyField, History, HistoryRow, InterfaceResult, PairResult, PairStatus};
+use crate::solution::{
+    BodyField, BodyMotion, History, HistoryRow, InterfaceResult, PairResult, PairStatus,
+};
 
 use super::{ctx, group_name, offsets, R};
 
@@ -216,6 +218,9 @@ pub(super) fn read_all(file: &h5::File) -> R<RunRecord> {
         rec.contact_operators = Some(ops);
     }
     rec.history = read_history(&open_group(root, "history")?, &rec)?;
+    if root.link_exists("mechanism") {
+        rec.mechanism = read_mechanism(&open_group(root, "mechanism")?)?;
+    }
     let states = open_group(root, "states")?;
     let count = attr_usize(&states, "count")?;
     if attr_i64(root, "format_version")? >= 2 {
@@ -255,6 +260,23 @@ pub(super) fn read_all(file: &h5::File) -> R<RunRecord> {
         rec.timings.push((name, v[0]));
     }
     Ok(rec)
+}
+
+/// The mechanism drawn with the last state (`/mechanism`).
+fn read_mechanism(g: &Group) -> R<Vec<BodyMotion>> {
+    let body = get_idx(g, "body", None)?;
+    let k = Some(body.len());
+    let centroid = get_vec2(g, "centroid", k)?;
+    let translation = get_vec2(g, "translation", k)?;
+    let rotation = get_f64(g, "rotation", k)?;
+    Ok((0..body.len())
+        .map(|i| BodyMotion {
+            body: body[i],
+            centroid: centroid[i],
+            translation: translation[i],
+            rotation: rotation[i],
+        })
+        .collect())
 }
 
 fn read_mesh(g: &Group) -> R<MeshRecord> {

@@ -11,7 +11,7 @@ use crate::output::record::{
     plane_name, Array, BodyOperators, BodyRecord, InterfaceRecord, IterateRecord, MeshRecord,
     PairingRecord, RunRecord, FORMAT_VERSION,
 };
-use crate::solution::{History, HistoryRow, PairResult, PairStatus};
+use crate::solution::{BodyMotion, History, HistoryRow, PairResult, PairStatus};
 
 use super::{
     ctx, group_name, offsets, CHUNK_VALUES, COMPRESS, COMPRESS_FROM, DEFLATE_LEVEL, FORMAT, R,
@@ -233,6 +233,9 @@ pub(super) fn write_solved(file: &h5::File, rec: &RunRecord) -> R<()> {
     }
 
     write_history(&group(root, "history")?, &rec.history, rec, &u)?;
+    if !rec.mechanism.is_empty() {
+        write_mechanism(&group(root, "mechanism")?, &rec.mechanism, &u)?;
+    }
 
     let states = group(root, "states")?;
     put_attr(&states, "count", rec.states.len() as i64)?;
@@ -261,6 +264,43 @@ pub(super) fn write_solved(file: &h5::File, rec: &RunRecord) -> R<()> {
         write_state_compact(&group(&states, &format!("{k:04}"))?, st, rec, &u)?;
     }
     Ok(())
+}
+
+/// The mechanism drawn with the last state: one row per moving body.
+fn write_mechanism(g: &Group, m: &[BodyMotion], u: &U) -> R<()> {
+    let body: Vec<usize> = m.iter().map(|m| m.body).collect();
+    let centroid: Vec<[f64; 2]> = m.iter().map(|m| m.centroid).collect();
+    let translation: Vec<[f64; 2]> = m.iter().map(|m| m.translation).collect();
+    let rotation: Vec<f64> = m.iter().map(|m| m.rotation).collect();
+    put_idx(
+        g,
+        "body",
+        &body,
+        "each moving body (index in /bodies order)",
+    )?;
+    put_vec2(
+        g,
+        "centroid",
+        &centroid,
+        "the centroid of its nodes",
+        u.len(),
+    )?;
+    put_vec2(
+        g,
+        "translation",
+        &translation,
+        "the velocity of its centroid, the fastest boundary node of the mechanism at 1",
+        "1",
+    )?;
+    put_f64(
+        g,
+        "rotation",
+        &[rotation.len()],
+        &rotation,
+        "its angular velocity, anticlockwise positive: v = translation + rotation k x \
+         (x - centroid)",
+        &format!("1/{}", u.len()),
+    )
 }
 
 /// One state of `/states`: every body's and every interface's values in one dataset per
