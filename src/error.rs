@@ -23,20 +23,20 @@ impl Error {
     pub fn input(file: impl AsRef<Path>, message: impl Into<String>) -> Self {
         Error::Input {
             file: file.as_ref().display().to_string(),
-            message: message.into(),
+            message: bounded(message.into()),
         }
     }
 
     pub fn numerical(message: impl Into<String>) -> Self {
         Error::Numerical {
-            message: message.into(),
+            message: bounded(message.into()),
         }
     }
 
     pub fn io(file: impl AsRef<Path>, err: impl fmt::Display) -> Self {
         Error::Io {
             file: file.as_ref().display().to_string(),
-            message: err.to_string(),
+            message: bounded(err.to_string()),
         }
     }
 
@@ -72,6 +72,33 @@ impl fmt::Display for Error {
 impl std::error::Error for Error {}
 
 pub type Result<T> = std::result::Result<T, Error>;
+
+/// The longest line of a message, in characters: a longer one (a hostile input quoted
+/// whole: a TOML line of 200 000 brackets, a `--set` value of megabytes) keeps its start and
+/// its end, which says how to fix it.
+const MAX_LINE: usize = 1200;
+
+/// `message` with every line of more than [`MAX_LINE`] characters shortened in the middle.
+pub(crate) fn bounded(message: String) -> String {
+    if message.lines().all(|l| l.chars().count() <= MAX_LINE) {
+        return message;
+    }
+    message
+        .split('\n')
+        .map(|line| {
+            let n = line.chars().count();
+            if n <= MAX_LINE {
+                return line.to_string();
+            }
+            let (keep_head, keep_tail) = (MAX_LINE * 2 / 3, MAX_LINE / 4);
+            let head: String = line.chars().take(keep_head).collect();
+            let tail: String = line.chars().skip(n - keep_tail).collect();
+            let left = n - keep_head - keep_tail;
+            format!("{head} … ({left} characters left out) … {tail}")
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
 
 /// The candidate closest to `name` by edit distance, if close enough to be a likely typo.
 pub fn nearest<'a>(name: &str, candidates: impl Iterator<Item = &'a str>) -> Option<&'a str> {
@@ -120,6 +147,21 @@ mod tests {
         assert_eq!(nearest("poison", keys.iter().copied()), Some("poisson"));
         assert_eq!(nearest("density", keys.iter().copied()), None);
         assert_eq!(edit_distance("kitten", "sitting"), 3);
+    }
+
+    #[test]
+    fn long_lines_of_a_message_keep_their_start_and_end() {
+        let m = format!("start {} end", "x".repeat(100_000));
+        let e = Error::input("scene.toml", format!("short line\n{m}"));
+        let text = e.message();
+        assert!(text.starts_with("short line\nstart xxx") && text.ends_with("xxx end"));
+        assert!(text.contains("characters left out"), "{text}");
+        assert!(
+            text.lines().all(|l| l.chars().count() <= MAX_LINE),
+            "{}",
+            text.len()
+        );
+        assert_eq!(Error::io("a", "as it was").message(), "as it was");
     }
 
     #[test]

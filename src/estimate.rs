@@ -425,18 +425,39 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
 /// `memory.max`, v1 `memory.limit_in_bytes`, of its cgroup and every parent), with where it
 /// comes from; None when none can be read.
 pub(crate) fn available_memory() -> Option<(f64, &'static str)> {
-    if let Ok(v) = std::env::var("SGBEM_MEMORY_LIMIT") {
-        if let Ok(b) = v.trim().parse::<f64>() {
-            if b.is_finite() && b > 0.0 {
-                return Some((b, "SGBEM_MEMORY_LIMIT"));
-            }
-        }
+    if let Some(b) = std::env::var("SGBEM_MEMORY_LIMIT")
+        .ok()
+        .and_then(|v| memory_limit(&v))
+    {
+        return Some((b, "SGBEM_MEMORY_LIMIT"));
     }
     let mut limits: Vec<(f64, &'static str)> = Vec::new();
     limits.extend(meminfo_available().map(|b| (b, "MemAvailable in /proc/meminfo")));
     limits.extend(address_space_left().map(|b| (b, "the address space left under ulimit -v")));
     limits.extend(cgroup_room().map(|b| (b, "the room left under the cgroup's memory limit")));
     limits.into_iter().min_by(|a, b| a.0.total_cmp(&b.0))
+}
+
+/// The bytes `SGBEM_MEMORY_LIMIT` gives: a positive finite number, else None.
+fn memory_limit(v: &str) -> Option<f64> {
+    v.trim()
+        .parse::<f64>()
+        .ok()
+        .filter(|b| b.is_finite() && *b > 0.0)
+}
+
+/// A note when `SGBEM_MEMORY_LIMIT` is set but is no positive number of bytes: it is
+/// ignored, and the system's limits apply.
+pub(crate) fn memory_limit_note() -> Option<String> {
+    let v = std::env::var("SGBEM_MEMORY_LIMIT").ok()?;
+    if memory_limit(&v).is_some() {
+        return None;
+    }
+    let shown: String = v.chars().take(40).collect();
+    Some(format!(
+        "SGBEM_MEMORY_LIMIT = \"{shown}\" is not a positive number of bytes (e.g. 8e9): it is \
+         ignored, and the memory available to the system applies"
+    ))
 }
 
 /// A number of bytes in a `/proc` text: `VALUE kB` or `VALUE` (a bare number of bytes).

@@ -10,6 +10,9 @@ use sgbem::error::Error;
 use sgbem::input::scene::Method;
 use sgbem::{pipeline, report};
 
+mod guard;
+use guard::{allocation_failed, LARGE};
+
 #[derive(Parser)]
 #[command(
     name = "sgbem",
@@ -241,77 +244,6 @@ fn archive_in_child(archive: &std::path::Path) -> Result<u8, Error> {
         std::thread::sleep(std::time::Duration::from_millis(20));
     }
 }
-
-/// The system allocator, except that a failed allocation (the matrices of a run under a
-/// memory limit: ulimit -v, a cgroup's memory.max) ends the process with a message and exit
-/// 1 instead of the abort (exit 134) or the library panic (exit 101) it would be. After a
-/// large one (1 MiB or more: small ones likely still succeed) the run's unfinished staging
-/// folder is removed; after a small one nothing more is tried (the next run removes it).
-struct Guarded;
-
-const LARGE: usize = 1 << 20;
-
-fn allocation_failed(size: usize) {
-    use std::sync::atomic::{AtomicBool, Ordering};
-    static ENDING: AtomicBool = AtomicBool::new(false);
-    if sgbem::estimate::PROBING.load(Ordering::SeqCst) {
-        return;
-    }
-    if ENDING.swap(true, Ordering::SeqCst) {
-        // Another thread is ending the process: wait for it (returning would abort).
-        loop {
-            std::thread::sleep(std::time::Duration::from_secs(1));
-        }
-    }
-    if size >= LARGE {
-        sgbem::output::folder::remove_unfinished();
-    }
-    let _ = std::io::stderr().write_all(
-        b"sgbem: out of memory: an allocation of the run failed (a memory limit: ulimit -v, \
-          the cgroup's memory.max of a container or SLURM job); the output folder was left as \
-          it was: coarsen the mesh, or raise the limit (`sgbem check` prints the memory a run \
-          needs)\n",
-    );
-    // Other threads may still be allocating: end without running anything more.
-    unsafe { exit_now(1) }
-}
-
-unsafe extern "C" {
-    /// `_exit(2)`: ends the process at once (no atexit handlers, no flushing).
-    #[link_name = "_exit"]
-    fn exit_now(code: i32) -> !;
-}
-
-// SAFETY: every call is forwarded to the system allocator with its own arguments.
-unsafe impl std::alloc::GlobalAlloc for Guarded {
-    unsafe fn alloc(&self, layout: std::alloc::Layout) -> *mut u8 {
-        let p = unsafe { std::alloc::System.alloc(layout) };
-        if p.is_null() {
-            allocation_failed(layout.size());
-        }
-        p
-    }
-    unsafe fn alloc_zeroed(&self, layout: std::alloc::Layout) -> *mut u8 {
-        let p = unsafe { std::alloc::System.alloc_zeroed(layout) };
-        if p.is_null() {
-            allocation_failed(layout.size());
-        }
-        p
-    }
-    unsafe fn realloc(&self, ptr: *mut u8, layout: std::alloc::Layout, size: usize) -> *mut u8 {
-        let p = unsafe { std::alloc::System.realloc(ptr, layout, size) };
-        if p.is_null() {
-            allocation_failed(size);
-        }
-        p
-    }
-    unsafe fn dealloc(&self, ptr: *mut u8, layout: std::alloc::Layout) {
-        unsafe { std::alloc::System.dealloc(ptr, layout) }
-    }
-}
-
-#[global_allocator]
-static ALLOCATOR: Guarded = Guarded;
 
 /// A panic that says the system refused a resource (a failed allocation reported by a
 /// library, a thread that could not start) is the same out-of-memory end: a message and

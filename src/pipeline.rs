@@ -305,7 +305,11 @@ fn load_for_run(
 fn lock_run_folder(scene_path: &Path, opts: &RunOptions) -> Result<RunFolder> {
     let scene = crate::input::scene::read_scene_with(scene_path, &opts.sets)?;
     let target = opts.out.clone().unwrap_or(scene.output.directory);
-    RunFolder::acquire(&target)
+    let mesh = opts.mesh.as_ref().or(scene.mesh.as_ref());
+    let inputs: Vec<&Path> = std::iter::once(scene_path)
+        .chain(mesh.map(PathBuf::as_path))
+        .collect();
+    RunFolder::acquire(&target, &inputs)
 }
 
 /// Refuses what cannot fit before allocating any of it; keeps the mesh a .geo scene was

@@ -384,13 +384,13 @@ fn pseudo_time_stages(scene: &Scene, stages: &mut Vec<(&'static str, String)>) -
                 format!(
                     "pseudo-time t = {}: no prescribed value depends on t (the same loads at \
                      every step)",
-                    list.join(", ")
+                    crate::report::shortened_list(&list, ", ")
                 )
             } else {
                 format!(
                     "pseudo-time t = {}, each step from the previous state; depending on t: {} \
                      (evaluated and assembled again at each step)",
-                    list.join(", "),
+                    crate::report::shortened_list(&list, ", "),
                     dep.join(", ")
                 )
             },

@@ -40,7 +40,12 @@ fn write_scene(o: &mut String, scene: &Scene, model: &Model, mesh_binary: bool, 
         scene.title
     );
     if !scene.overrides.is_empty() {
-        let _ = writeln!(o, "overrides --set {}", scene.overrides.join(" --set "));
+        let sets: Vec<String> = scene
+            .overrides
+            .iter()
+            .map(|s| crate::input::scene::shown_set(s))
+            .collect();
+        let _ = writeln!(o, "overrides --set {}", shortened_list(&sets, " --set "));
     }
     if !scene.mesh_parameters.is_empty() {
         let p: Vec<String> = scene
@@ -679,4 +684,19 @@ fn interface_json<'a>(
         pairs: i.pairs.len(),
         tangential: sp.tangential.name(),
     }
+}
+
+/// `items` joined by `sep`, at most [`SHOWN`] of them: a long list (200 000 load steps,
+/// 50 000 `--set`) shows its first ones, its last two and how many there are in all.
+pub(crate) fn shortened_list(items: &[String], sep: &str) -> String {
+    const SHOWN: usize = 12;
+    if items.len() <= SHOWN {
+        return items.join(sep);
+    }
+    format!(
+        "{}{sep}…{sep}{} ({} in all)",
+        items[..SHOWN - 2].join(sep),
+        items[items.len() - 2..].join(sep),
+        items.len()
+    )
 }

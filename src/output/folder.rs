@@ -11,7 +11,8 @@
 //! releases it whenever the process ends) refuses a second run into the same folder while
 //! the first is alive; the staging folders a killed run left are removed by the next one.
 //! SIGINT and SIGTERM remove the staging folder and the lock file before the process ends
-//! (exit 130).
+//! (exit 130). A symbolic link given as the folder is followed: the folder it points to is
+//! the one replaced, and the link stays.
 
 use std::io::Write;
 use std::path::{Path, PathBuf};
@@ -92,6 +93,10 @@ fn remove_leftovers(target: &Path, parent: &Path) {
     }
 }
 
+/// The longest name of an output folder: `.NAME.staging-PID` (PID up to 7 digits) must fit
+/// in the 255 bytes of a file name.
+const MAX_NAME: usize = 255 - ".".len() - ".staging-".len() - 7;
+
 /// A run folder being written.
 pub struct RunFolder {
     target: PathBuf,
@@ -112,7 +117,8 @@ pub(crate) fn beside(target: &Path, suffix: &str) -> PathBuf {
 /// The lock of a folder: `.NAME.lock` beside it, locked with `flock` (the kernel releases
 /// it when the process ends, however it ends). The file holds the process id, for the
 /// message of a refused run only; the holder removes it before unlocking, so a run that
-/// locked a file no longer at the path tries again.
+/// locked a file no longer at the path tries again. A symbolic link, folder or special file
+/// at the path is refused, never written through.
 pub(crate) struct Lock {
     path: PathBuf,
     file: Option<std::fs::File>,
@@ -122,6 +128,25 @@ impl Lock {
     pub(crate) fn take(path: &Path, target: &Path) -> Result<Lock> {
         use std::os::unix::fs::MetadataExt;
         for _ in 0..100 {
+            // The file is written (the process id): never through a link to another file.
+            if let Ok(m) = std::fs::symlink_metadata(path) {
+                if !m.is_file() {
+                    return Err(Error::io(
+                        path,
+                        format!(
+                            "the lock file is {}, not a file sgbem wrote: sgbem writes its \
+                             process id there; remove it, or give this run another --out",
+                            if m.file_type().is_symlink() {
+                                "a symbolic link"
+                            } else if m.is_dir() {
+                                "a folder"
+                            } else {
+                                "a special file"
+                            }
+                        ),
+                    ));
+                }
+            }
             let file = std::fs::OpenOptions::new()
                 .read(true)
                 .write(true)
@@ -149,7 +174,7 @@ impl Lock {
                 }
             }
             // The file locked must still be the one at the path (a holder removes it).
-            let same = match (file.metadata(), std::fs::metadata(path)) {
+            let same = match (file.metadata(), std::fs::symlink_metadata(path)) {
                 (Ok(a), Ok(b)) => a.ino() == b.ino() && a.dev() == b.dev(),
                 _ => false,
             };
@@ -182,15 +207,27 @@ impl Drop for Lock {
 
 impl RunFolder {
     /// Takes the lock of `target`, checks that the tool may replace it (new, empty, or
-    /// holding only what its marker lists: [`super::owned`]), and creates an empty staging
-    /// folder beside it.
-    pub fn acquire(target: &Path) -> Result<RunFolder> {
+    /// holding only what its marker lists: [`super::owned`], and none of the command's
+    /// `inputs`), and creates an empty staging folder beside it.
+    pub fn acquire(target: &Path, inputs: &[&Path]) -> Result<RunFolder> {
         let target = if target.file_name().is_none() {
             // "out/" or "." : name the folder itself.
             std::path::absolute(target).map_err(|e| Error::io(target, e))?
         } else {
             target.to_path_buf()
         };
+        let target = through_link(target)?;
+        let name_len = target.file_name().map_or(0, |n| n.len());
+        if name_len > MAX_NAME {
+            return Err(Error::io(
+                &target,
+                format!(
+                    "the output folder's name has {name_len} bytes: sgbem writes \
+                     `.NAME.staging-PID` beside it, and a file name has at most 255 bytes; give \
+                     --out a name of at most {MAX_NAME} bytes"
+                ),
+            ));
+        }
         if target.exists() && !target.is_dir() {
             return Err(Error::io(
                 &target,
@@ -198,12 +235,19 @@ impl RunFolder {
             ));
         }
         check_replaceable(&target)?;
+        check_inputs(&target, inputs)?;
         let parent = match target.parent() {
             Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
             _ => PathBuf::from("."),
         };
-        std::fs::create_dir_all(&parent)
-            .map_err(|e| Error::io(&parent, format!("cannot create the folder: {e}")))?;
+        std::fs::create_dir_all(&parent).map_err(|e| {
+            let why = if parent.ancestors().any(|a| a.is_file()) {
+                ": a part of the path is a file, not a folder; give --out a path of folders"
+            } else {
+                ""
+            };
+            Error::io(&parent, format!("cannot create the folder: {e}{why}"))
+        })?;
         install_signal_cleanup();
         let lock_path = beside(&target, "lock");
         let lock = Lock::take(&lock_path, &target)?;
@@ -304,6 +348,57 @@ impl RunFolder {
         }
         Ok(())
     }
+}
+
+/// The folder a symbolic link given as the output folder points to (the run is staged
+/// beside that folder and swapped in there, the link kept); a link that leads nowhere is
+/// refused, since the run would replace the link itself.
+fn through_link(target: PathBuf) -> Result<PathBuf> {
+    let is_link = std::fs::symlink_metadata(&target).is_ok_and(|m| m.file_type().is_symlink());
+    if !is_link {
+        return Ok(target);
+    }
+    match std::fs::canonicalize(&target) {
+        Ok(real) if real.is_dir() => Ok(real),
+        Ok(real) => Err(Error::io(
+            &target,
+            format!(
+                "the output path is a symbolic link to {}, which is not a folder: give --out \
+                 a folder",
+                real.display()
+            ),
+        )),
+        Err(e) => Err(Error::io(
+            &target,
+            format!(
+                "the output path is a symbolic link that leads nowhere ({e}): create the \
+                 folder it points to, or give --out another folder"
+            ),
+        )),
+    }
+}
+
+/// Refuses (input error) a `target` that holds one of the command's own input files: the
+/// archive an export reads (`--vtk` given the run folder itself), a mesh an earlier run
+/// wrote into its `mesh/`. Replacing the folder would delete the input with the results.
+fn check_inputs(target: &Path, inputs: &[&Path]) -> Result<()> {
+    let Ok(real) = std::fs::canonicalize(target) else {
+        return Ok(());
+    };
+    for input in inputs {
+        if std::fs::canonicalize(input).is_ok_and(|f| f.starts_with(&real)) {
+            return Err(Error::input(
+                input,
+                format!(
+                    "this input of the command lies in the output folder {}, which the \
+                     command replaces whole: give --out (or --vtk) another folder, or copy the \
+                     file out of it first",
+                    target.display()
+                ),
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Refuses (input error, naming them) a `target` holding entries its marker does not

@@ -164,8 +164,11 @@ pub(crate) fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error
     } else {
         String::new()
     };
+    let them = if strangers.len() == 1 { "it" } else { "them" };
     let why = if owned {
-        format!("which the sgbem run that wrote it did not write (its {MARKER} does not list them)")
+        format!(
+            "which the sgbem run that wrote it did not write (its {MARKER} does not list {them})"
+        )
     } else {
         format!(
             "and sgbem did not write this folder (it has no {MARKER}; a folder of an sgbem \
@@ -176,9 +179,14 @@ pub(crate) fn refusal(folder: &Path, strangers: &[String], owned: bool) -> Error
         folder,
         format!(
             "the output folder exists and holds {}{more}, {why}: sgbem replaces only what it \
-             wrote, so move these files away, or give --out (or output.directory, or \
-             --vtk) a new folder",
-            shown.join(", ")
+             wrote, so move {} away, or give --out (or output.directory, or --vtk) a new \
+             folder",
+            shown.join(", "),
+            if strangers.len() == 1 {
+                "it"
+            } else {
+                "these files"
+            }
         ),
     )
 }

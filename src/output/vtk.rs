@@ -346,7 +346,7 @@ pub fn export(archive: &Path, dir: &Path) -> Result<Vec<PathBuf>> {
         .unwrap_or_default();
     // The folder is written whole, as a run folder is: no file of a longer earlier export
     // is left, and nothing the tool did not write is replaced (output/folder.rs).
-    let folder = super::folder::RunFolder::acquire(dir)?;
+    let folder = super::folder::RunFolder::acquire(dir, &[archive])?;
     let files = write_vtk_staged(folder.staging(), &rec)?;
     let files = files
         .iter()

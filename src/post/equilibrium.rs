@@ -59,7 +59,8 @@ impl Wrench {
 #[derive(Debug, Clone)]
 pub struct BodyBalance {
     pub body: String,
-    /// The point moments are taken about: the centroid.
+    /// The point moments are taken about: the centroid (rounded to the spacing of
+    /// coordinates there; the moments are about the exact one).
     pub point: [f64; 2],
     /// (what, wrench): `body_force`, `boundary NAME` (tractions and reactions of a Physical
     /// Curve), `interface NAME` (the interface's nodal forces on this body).
@@ -93,9 +94,36 @@ fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
     a[0] * b[1] - a[1] * b[0]
 }
 
+/// The centroid moments are taken about, kept as one of the body's nodes `o` and the
+/// centroid relative to it, `c`: far from the origin the centroid itself rounds to the
+/// spacing of coordinates there, but an arm `(x − o) − c` keeps every digit.
+#[derive(Debug, Clone, Copy)]
+pub struct Pivot {
+    pub o: [f64; 2],
+    pub c: [f64; 2],
+}
+
+impl Pivot {
+    /// The arm from the centroid to `x`.
+    fn arm(&self, x: [f64; 2]) -> [f64; 2] {
+        [
+            (x[0] - self.o[0]) - self.c[0],
+            (x[1] - self.o[1]) - self.c[1],
+        ]
+    }
+    /// The arm from the centroid to a point given relative to `o`.
+    fn arm_rel(&self, r: [f64; 2]) -> [f64; 2] {
+        [r[0] - self.c[0], r[1] - self.c[1]]
+    }
+    /// The centroid in absolute coordinates (rounded far from the origin).
+    pub fn point(&self) -> [f64; 2] {
+        [self.o[0] + self.c[0], self.o[1] + self.c[1]]
+    }
+}
+
 /// Area and centroid of a body's polygonal boundary (the body is on the left of every
 /// element, so holes subtract), relative to its first node to keep the digits.
-pub fn centroid(body: &Body) -> (f64, [f64; 2]) {
+pub fn centroid(body: &Body) -> (f64, Pivot) {
     let o = body.nodes.first().copied().unwrap_or([0.0; 2]);
     let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
     for e in &body.elements {
@@ -108,16 +136,21 @@ pub fn centroid(body: &Body) -> (f64, [f64; 2]) {
         cy += (p[1] + q[1]) * w / 6.0;
     }
     if a == 0.0 {
-        return (0.0, o);
+        return (0.0, Pivot { o, c: [0.0; 2] });
     }
-    (a, [o[0] + cx / a, o[1] + cy / a])
+    (
+        a,
+        Pivot {
+            o,
+            c: [cx / a, cy / a],
+        },
+    )
 }
 
 /// The wrench about `c` of a traction linear along the segment `x0 → x1`.
-fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c: [f64; 2]) -> Wrench {
+fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c: &Pivot) -> Wrench {
     let l = (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
-    let r0 = [x0[0] - c[0], x0[1] - c[1]];
-    let r1 = [x1[0] - c[0], x1[1] - c[1]];
+    let (r0, r1) = (c.arm(x0), c.arm(x1));
     Wrench {
         fx: 0.5 * l * (t0[0] + t1[0]),
         fy: 0.5 * l * (t0[1] + t1[1]),
@@ -182,7 +215,7 @@ pub fn balances(
                     body.nodes[e.nodes[1]],
                     t[0],
                     t[1],
-                    c,
+                    &c,
                 );
                 add(format!("boundary {}", model.parts[pi].spec.name), w);
             }
@@ -201,13 +234,13 @@ pub fn balances(
                     Wrench {
                         fx: f[0],
                         fy: f[1],
-                        m: cross([x[0] - c[0], x[1] - c[1]], *f),
+                        m: cross(c.arm(x), *f),
                     },
                 );
             }
         }
         for (it, r) in model.interfaces.iter().zip(interfaces) {
-            if let Some(total) = interface_wrench(body, bi, it, r, c, reactions) {
+            if let Some(total) = interface_wrench(body, bi, it, r, &c, reactions) {
                 add(format!("interface {}", it.spec.name), total);
             }
         }
@@ -224,7 +257,7 @@ fn interface_wrench(
     bi: usize,
     it: &Interface,
     r: &InterfaceResult,
-    c: [f64; 2],
+    c: &Pivot,
     reactions: bool,
 ) -> Option<Wrench> {
     let sign = if it.body_a == bi {
@@ -261,9 +294,9 @@ fn interface_wrench(
         ];
         // Where the sides were meshed on their own, B takes the force where its partners are.
         let arm = if sign < 0.0 && it.independent() {
-            it.b_offset(body, j, c)
+            c.arm_rel(it.b_offset(body, j, c.o))
         } else {
-            [p.x[0] - c[0], p.x[1] - c[1]]
+            c.arm(p.x)
         };
         total.add(Wrench {
             fx: f[0],
@@ -276,7 +309,7 @@ fn interface_wrench(
 
 /// A body's balance: its loads (summed per name, in first-seen order) times the thickness,
 /// their imbalance about `c`, and that imbalance relative to the loads.
-fn balance(body: &Body, c: [f64; 2], loads: Vec<(String, Wrench)>, thickness: f64) -> BodyBalance {
+fn balance(body: &Body, c: Pivot, loads: Vec<(String, Wrench)>, thickness: f64) -> BodyBalance {
     let loads: Vec<(String, Wrench)> = loads
         .into_iter()
         .map(|(n, w)| (n, w.scaled(thickness)))
@@ -294,7 +327,7 @@ fn balance(body: &Body, c: [f64; 2], loads: Vec<(String, Wrench)>, thickness: f6
     };
     BodyBalance {
         body: body.name.clone(),
-        point: c,
+        point: c.point(),
         loads,
         imbalance,
         relative,
@@ -361,7 +394,14 @@ mod tests {
     #[test]
     fn linear_traction_on_a_segment_integrates_exactly() {
         // t = (0, s) along x from 0 to 2 (s = x): F = 2, M about 0 = ∫ x·x dx = 8/3.
-        let w = segment_wrench([0.0, 0.0], [2.0, 0.0], [0.0, 0.0], [0.0, 2.0], [0.0, 0.0]);
+        let at = |c: [f64; 2]| Pivot { o: [0.0; 2], c };
+        let w = segment_wrench(
+            [0.0, 0.0],
+            [2.0, 0.0],
+            [0.0, 0.0],
+            [0.0, 2.0],
+            &at([0.0; 2]),
+        );
         assert!((w.fy - 2.0).abs() < 1e-15 && w.fx == 0.0);
         assert!((w.m - 8.0 / 3.0).abs() < 1e-15, "{}", w.m);
         // About the resultant's line of action x = 4/3 the moment vanishes.
@@ -370,7 +410,7 @@ mod tests {
             [2.0, 0.0],
             [0.0, 0.0],
             [0.0, 2.0],
-            [4.0 / 3.0, 5.0],
+            &at([4.0 / 3.0, 5.0]),
         );
         assert!(w.m.abs() < 1e-15, "{}", w.m);
     }

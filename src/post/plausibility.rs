@@ -25,8 +25,10 @@ const LENGTHS: [(&str, f64); 12] = [
 ];
 
 /// Force units sgbem recognises, in newtons.
-const FORCES: [(&str, f64); 12] = [
+const FORCES: [(&str, f64); 14] = [
     ("N", 1.0),
+    ("uN", 1e-6),
+    ("µN", 1e-6),
     ("mN", 1e-3),
     ("daN", 10.0),
     ("kN", 1e3),
@@ -49,6 +51,43 @@ const YOUNG_PA: (f64, f64) = (1e3, 2e12);
 /// example 2, 4.55 cm on a 4 m clamped beam: 1.13 %.)
 pub(crate) const SMALL_DISPLACEMENT: f64 = 0.05;
 
+/// One note per implausible Young's modulus (`pa`: Pa per unit of stress), naming the
+/// bodies that have it: a wall of 410 bricks of one material is one note, not 410.
+fn young_notes(model: &Model, pa: f64, len: &str, force: &str) -> Vec<String> {
+    let mut moduli: Vec<(f64, Vec<&str>)> = Vec::new();
+    for b in &model.bodies {
+        let e = b.young * pa;
+        if (YOUNG_PA.0..=YOUNG_PA.1).contains(&e) {
+            continue;
+        }
+        match moduli.iter_mut().find(|(y, _)| *y == b.young) {
+            Some((_, names)) => names.push(&b.name),
+            None => moduli.push((b.young, vec![&b.name])),
+        }
+    }
+    moduli
+        .into_iter()
+        .map(|(young, names)| {
+            let shown: Vec<String> = names.iter().take(4).map(|n| format!("\"{n}\"")).collect();
+            let who = match names.len() {
+                1 => format!("body {}", shown[0]),
+                n if n <= 4 => format!("bodies {}", shown.join(", ")),
+                n => format!("bodies {} and {} more", shown.join(", "), n - 4),
+            };
+            format!(
+                "{who}: young = {} {force}/{len}² is {} Pa, outside the moduli of solids \
+                 ({:.0e} to {:.0e} Pa; rubber about 1e6, concrete 3e10, steel 2.1e11): check \
+                 the value and `units` (or keep it, for a body meant to be nearly rigid or \
+                 nearly void)",
+                fmt_num(young),
+                fmt_num(young * pa),
+                YOUNG_PA.0,
+                YOUNG_PA.1
+            )
+        })
+        .collect()
+}
+
 fn factor(list: &[(&str, f64)], unit: &str) -> Option<f64> {
     list.iter()
         .find(|(u, _)| *u == unit.trim())
@@ -66,33 +105,23 @@ pub(crate) fn input_notes(scene: &Scene, model: &Model) -> Vec<String> {
         ("units.force", force, &FORCES[..]),
     ] {
         if !unit.trim().is_empty() && factor(list, unit).is_none() {
+            let like = list
+                .iter()
+                .find(|(u, _)| u.eq_ignore_ascii_case(unit.trim()))
+                .map(|(u, _)| format!(" (did you mean \"{u}\"?)"))
+                .unwrap_or_default();
             notes.push(format!(
-                "`{key}` = \"{unit}\" is not a unit sgbem knows ({}): units are recorded in the \
-                 outputs, never converted, so check the spelling",
+                "`{key}` = \"{unit}\" is not a unit sgbem knows{like}: it knows {}; units are \
+                 recorded in the outputs, never converted, so check the spelling",
                 names(list)
             ));
         }
     }
     if let (Some(l), Some(f)) = (factor(&LENGTHS, len), factor(&FORCES, force)) {
-        let pa = f / (l * l);
-        for b in &model.bodies {
-            let e = b.young * pa;
-            if e < YOUNG_PA.0 || e > YOUNG_PA.1 {
-                notes.push(format!(
-                    "body \"{}\": young = {} {force}/{len}² is {} Pa, outside the moduli of \
-                     solids ({:.0e} to {:.0e} Pa; rubber about 1e6, concrete 3e10, steel \
-                     2.1e11): check the value and `units` (or keep it, for a body meant to be \
-                     nearly rigid or nearly void)",
-                    b.name,
-                    fmt_num(b.young),
-                    fmt_num(e),
-                    YOUNG_PA.0,
-                    YOUNG_PA.1
-                ));
-            }
-        }
+        notes.extend(young_notes(model, f / (l * l), len, force));
     }
     notes.extend(far_note(model));
+    notes.extend(crate::estimate::memory_limit_note());
     if !loaded(model) {
         notes.push(
             "nothing loads the model: every prescribed displacement and traction is zero, no \

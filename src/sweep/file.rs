@@ -59,12 +59,9 @@ pub fn read(path: &Path, cli: Given) -> Result<Given> {
     let err = |m: String| Error::input(path, format!("sweep file: {m}"));
     let text = std::str::from_utf8(&bytes)
         .map_err(|_| err("not UTF-8 text: a sweep file is TOML text".into()))?;
-    let doc: toml::Table = text.parse().map_err(|e: toml::de::Error| {
-        err(format!(
-            "not valid TOML: {}",
-            e.to_string().trim_end().replace('\n', "\n  ")
-        ))
-    })?;
+    let doc: toml::Table = text
+        .parse()
+        .map_err(|e: toml::de::Error| err(crate::input::scene::toml_error(&e, text)))?;
     for key in doc.keys() {
         if !KEYS.contains(&key.as_str()) {
             return Err(err(format!(

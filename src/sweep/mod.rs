@@ -4,7 +4,8 @@
 //! Place in the flow: above the pipeline; each point is `sgbem run SCENE --set ... --out
 //! DIR/<point> --quiet`, so that a point that fails (exit 3) leaves the others alone.
 //!
-//! Point folders have unique names (values that clean to the same text get `~2`, `~3`).
+//! Point folders have unique names (values that clean to the same text get `~2`, `~3`), of
+//! at most 160 characters (each value's first 40).
 //! A lock (`.DIR.lock`, flock) refuses a second sweep into the same folder. The children
 //! run in process groups of their own and end with the sweep: SIGINT or SIGTERM to the
 //! sweep ends them (SIGTERM to each group), writes the table of the points that finished
@@ -94,8 +95,14 @@ fn labels(axes: &[Axis]) -> Vec<String> {
         .collect()
 }
 
+/// The longest cleaned value in a point's folder name, and the longest name: a file name
+/// has at most 255 bytes, and the run writes `.NAME.staging-PID` beside its folder.
+const VALUE_CHARS: usize = 40;
+const NAME_CHARS: usize = 160;
+
 fn clean(v: &str) -> String {
     v.chars()
+        .take(VALUE_CHARS)
         .map(|c| {
             if c.is_ascii_alphanumeric() || "._+-".contains(c) {
                 c
@@ -130,10 +137,15 @@ pub fn points(axes: &[Axis]) -> Vec<Point> {
         }
         pts = next;
     }
-    // Distinct values may clean to the same text (`α`, `β` → `_`): number the repeats
-    // (`~` is never in a cleaned value, so the names stay distinct).
+    // Distinct values may clean to the same text (`α`, `β` → `_`, long values cut to their
+    // start): number the repeats (`~` is never in a cleaned value, so the names stay
+    // distinct).
     let mut seen = std::collections::HashMap::new();
     for p in &mut pts {
+        if p.name.len() > NAME_CHARS {
+            // Cleaned names are ASCII: any byte is a character boundary.
+            p.name.truncate(NAME_CHARS);
+        }
         let n = seen.entry(p.name.clone()).or_insert(0usize);
         *n += 1;
         if *n > 1 {
@@ -239,10 +251,26 @@ pub fn sweep(
         }
         Mode::All => {}
     }
-    std::fs::create_dir_all(out)
-        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
+    // The lock beside the folder first: a refused sweep creates nothing.
+    if let Some(parent) = out.parent().filter(|p| !p.as_os_str().is_empty()) {
+        std::fs::create_dir_all(parent)
+            .map_err(|e| Error::io(parent, format!("cannot create the folder: {e}")))?;
+    }
     let lock_path = crate::output::folder::beside(out, "lock");
     let _lock = crate::output::folder::Lock::take(&lock_path, out)?;
+    if out.join(crate::output::owned::MARKER).exists() {
+        return Err(Error::input(
+            out,
+            format!(
+                "this is the folder of a run or an export (it holds {}): a sweep writes its \
+                 points into a folder of its own, and the run's next rerun would refuse the \
+                 folder then; give --out another folder",
+                crate::output::owned::MARKER
+            ),
+        ));
+    }
+    std::fs::create_dir_all(out)
+        .map_err(|e| Error::io(out, format!("cannot create the sweep folder: {e}")))?;
     let _ = ctrlc::set_handler(|| STOP.store(true, Ordering::SeqCst));
     remove_stale_points(out, &pts);
     let marker = SweepMarker {

@@ -134,16 +134,28 @@ pub(super) fn check_held(
             .iter()
             .map(|&b| format!("\"{}\"", bodies[b].name))
             .collect();
-        let who = if members.len() == 1 {
-            format!("body {}", names[0])
+        let one = members.len() == 1;
+        let who = if one {
+            format!("body {} is", names[0])
+        } else if names.len() <= 6 {
+            format!("bodies {} (joined by interfaces) are", names.join(", "))
         } else {
-            format!("bodies {} (joined by interfaces)", names.join(", "))
+            format!(
+                "bodies {} and {} more (joined by interfaces) are",
+                names[..5].join(", "),
+                names.len() - 5
+            )
         };
         let free = free_mode(&basis);
-        let what = if basis.is_empty() {
-            "it has no displacement condition".to_string()
+        let (it, its) = if one {
+            ("it has", "its")
         } else {
-            format!("its displacement conditions leave {free} free")
+            ("they have", "their")
+        };
+        let what = if basis.is_empty() {
+            format!("{it} no displacement condition")
+        } else {
+            format!("{its} displacement conditions leave {free} free")
         };
         let no_iface = members.len() == 1
             && !interfaces
@@ -153,8 +165,10 @@ pub(super) fn check_held(
         return Err(Error::input(
             sfile,
             format!(
-                "{who} is not held: {what}{extra}; prescribe displacements on a boundary \
-                 (e.g. [boundary.NAME] ux = 0, uy = 0) or join it to a held body with an interface"
+                "{who} not held: {what}{extra}; prescribe displacements on a boundary \
+                 (e.g. [boundary.NAME] ux = 0, uy = 0) or join {} to a held body with an \
+                 interface",
+                if one { "it" } else { "them" }
             ),
         ));
     }

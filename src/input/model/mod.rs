@@ -799,12 +799,23 @@ fn check_resolution(
             (mesh.nodes[n[0]], mesh.nodes[n[1]])
         });
     let (far, step, h) = resolution(lines);
+    if far.is_finite() && far > 0.0 && !h.is_finite() {
+        // Every element has zero length: a mesh of points, or one so far out that its
+        // elements rounded away (1e16 for elements of 0.1).
+        return Err(Error::input(
+            mfile,
+            format!(
+                "every boundary element has zero length; its nodes lie up to {} from the \
+                 origin, where floating-point coordinates are spaced {} apart, so elements \
+                 shorter than that collapse: move the model near the origin and mesh again \
+                 (or, if the mesh has no elements of positive size, mesh with `gmsh -2`)",
+                fmt_num(far),
+                fmt_num(step)
+            ),
+        ));
+    }
     if !far.is_finite() || (far > 0.0 && (step > 0.1 * h || step.is_nan())) {
-        let shortest = if h.is_finite() {
-            format!("a tenth of its shortest element ({})", fmt_num(h))
-        } else {
-            "the size of any element (every element has collapsed)".to_string()
-        };
+        let shortest = format!("a tenth of its shortest element ({})", fmt_num(h));
         return Err(Error::input(
             mfile,
             format!(

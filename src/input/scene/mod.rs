@@ -552,15 +552,45 @@ pub fn parse_scene(text: &str, path: &Path) -> Result<Scene> {
 }
 
 fn parse_doc(text: &str, path: &Path) -> Result<toml::Table> {
-    text.parse().map_err(|e: toml::de::Error| {
-        Error::input(
-            path,
-            format!(
-                "not valid TOML: {}",
-                e.to_string().trim_end().replace('\n', "\n  ")
-            ),
-        )
-    })
+    text.parse()
+        .map_err(|e: toml::de::Error| Error::input(path, toml_error(&e, text)))
+}
+
+/// A TOML parse error of `text`: where (line and column), what, and the line around that
+/// column (at most 60 characters either side). Nesting deeper than the parser follows is
+/// said so.
+pub(crate) fn toml_error(e: &toml::de::Error, text: &str) -> String {
+    let what = e.message().trim_end();
+    let what = if what.contains("recursion limit") {
+        "tables or arrays nested deeper than sgbem reads (a scene's values nest a few levels)"
+    } else {
+        what
+    };
+    let Some(at) = e.span().map(|s| s.start.min(text.len())) else {
+        return format!("not valid TOML: {what}");
+    };
+    let at = (0..=at)
+        .rev()
+        .find(|&i| text.is_char_boundary(i))
+        .unwrap_or(0);
+    let line_start = text[..at].rfind('\n').map_or(0, |i| i + 1);
+    let line_end = text[at..].find('\n').map_or(text.len(), |i| at + i);
+    let line_no = text[..at].matches('\n').count() + 1;
+    let before: Vec<char> = text[line_start..at].chars().collect();
+    let column = before.len() + 1;
+    let from = before.len().saturating_sub(60);
+    let start: String = before[from..].iter().collect();
+    let rest: String = text[at..line_end].chars().take(60).collect();
+    let cut_start = if from > 0 { "…" } else { "" };
+    let cut_end = if text[at..line_end].chars().count() > 60 {
+        "…"
+    } else {
+        ""
+    };
+    format!(
+        "not valid TOML at line {line_no}, column {column}: {what}\n  {line_no} | \
+         {cut_start}{start}{rest}{cut_end}"
+    )
 }
 
 /// Validates a TOML document (the file's, overrides applied); `text` is kept for the archive.

@@ -292,9 +292,16 @@ impl Drop for ArchiveWriter {
 /// Reads an archive written by [`write_archive`].
 pub fn read_archive(path: &Path) -> Result<RunRecord> {
     if !path.is_file() {
+        let what = match std::fs::metadata(path) {
+            Err(_) => "no such archive",
+            Ok(m) if m.is_dir() => "this is a folder, not an archive",
+            Ok(_) => "this is a special file (a pipe or a device), not an archive",
+        };
         return Err(Error::io(
             path,
-            "no such archive: give the archive.h5 of a run (sgbem run writes it to the output folder)",
+            format!(
+                "{what}: give the archive.h5 of a run (sgbem run writes it to the output folder)"
+            ),
         ));
     }
     let file = h5::File::with_options()
