@@ -736,9 +736,10 @@ fn a_pier_of_blocks_past_overturning_ends_with_the_tipping_mechanism() {
 // Large friction tends to stick
 
 /// A running-bond wall of 4 courses of 5 bricks (geo/wall.geo, 0.4 × 0.2 m, E = 5 MPa) on a
-/// clamped base under its weight and a lateral body force of 0.625 of it, with Coulomb
-/// friction μ on every joint, against the same wall with stick joints (the limit μ → ∞).
-fn large_friction_scene(tangential: &str, lateral: f64) -> String {
+/// clamped base under its weight (20 kN/m³) and the lateral body force `lateral` (a TOML
+/// value: 12.5 is 0.625 of the weight, "20*t" a collapse search's), with Coulomb friction μ
+/// on every joint, against the same wall with stick joints (the limit μ → ∞).
+fn large_friction_scene(tangential: &str, lateral: &str) -> String {
     format!(
         r#"title = "4 x 5 wall under a lateral load"
 plane = "strain"
@@ -834,7 +835,7 @@ fn large_friction_converges_and_tends_to_stick() {
     let dir = support::tmpdir("large_friction");
     let solve = |name: &str, tangential: &str| -> (Vec<InterfaceRow>, Value) {
         // All interfaces are read below (`run` reads one).
-        let r = run(&dir, name, &large_friction_scene(tangential, 12.5), "");
+        let r = run(&dir, name, &large_friction_scene(tangential, "12.5"), "");
         assert_eq!(r.code, 0, "{name}: {}", r.stderr);
         assert_eq!(r.summary["contact"]["converged"], true, "{name}");
         (all_rows(&dir.join(format!("out_{name}"))), r.summary)
@@ -880,7 +881,7 @@ fn large_friction_converges_and_tends_to_stick() {
     }
     // At half the weight sideways the statuses of μ = 1000 alternate around a row at the
     // point of opening (the history is then kept across them): it settles too.
-    let scene = large_friction_scene("tangential = \"friction\"\nfriction = 1000.0", 10.0);
+    let scene = large_friction_scene("tangential = \"friction\"\nfriction = 1000.0", "10.0");
     let r = run(&dir, "mu1000_half", &scene, "");
     assert_eq!(r.code, 0, "{}", r.stderr);
     assert_eq!(r.summary["contact"]["converged"], true);
@@ -898,9 +899,7 @@ fn collapse_with_very_large_friction_completes_near_stick() {
     let dir = support::tmpdir("collapse_mu1000");
     let collapse = "[solve]\ncollapse = { max = 2.0, tolerance = 0.002 }\n";
     let search = |name: &str, tangential: &str| -> (f64, f64, Value) {
-        let scene = large_friction_scene(tangential, 0.0)
-            .replace("body_force = [0, -20.0]", "body_force = [\"20*t\", -20.0]")
-            + collapse;
+        let scene = large_friction_scene(tangential, "\"20*t\"") + collapse;
         let r = run(&dir, name, &scene, "");
         assert_eq!(r.code, 0, "{name}: {}", r.stderr);
         let c = &r.summary["contact"]["collapse"];
