@@ -33,10 +33,18 @@ impl Error {
         }
     }
 
+    /// An I/O error; one of a full file system (ENOSPC, os error 28) says what to do.
     pub fn io(file: impl AsRef<Path>, err: impl fmt::Display) -> Self {
+        let mut message = err.to_string();
+        if message.contains("(os error 28)") {
+            message += "; the file system is full: free space there, write elsewhere (--out \
+                        DIR), or ask for smaller outputs in [output] (history = \"steps\" or \
+                        \"final\", every = N, vtk_fields, vtk = \"compressed\"; `sgbem check` \
+                        prints their estimated size)";
+        }
         Error::Io {
             file: file.as_ref().display().to_string(),
-            message: bounded(err.to_string()),
+            message: bounded(message),
         }
     }
 

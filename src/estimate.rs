@@ -494,13 +494,21 @@ fn address_space_left() -> Option<f64> {
         .and_then(kb_or_bytes)
         .unwrap_or(0.0);
     // glibc reserves up to 64 MiB of address space per malloc arena, one arena per thread
-    // that allocates (the rayon workers and the main thread).
+    // that allocates (the rayon workers and two more). A thread already running besides the
+    // main one (`run`'s signal handler) maps its arena already (in VmSize): it takes the
+    // place of one of the two, so that `check` and `run` find the same room.
     let threads = std::env::var("RAYON_NUM_THREADS")
         .ok()
         .and_then(|v| v.trim().parse::<usize>().ok())
         .filter(|&n| n > 0)
         .unwrap_or_else(|| std::thread::available_parallelism().map_or(1, |n| n.get()));
-    let arenas = 64.0 * 1024.0 * 1024.0 * (threads + 2) as f64;
+    let running = status
+        .lines()
+        .find_map(|l| l.strip_prefix("Threads:"))
+        .and_then(|t| t.trim().parse::<usize>().ok())
+        .unwrap_or(1);
+    let spare = 2usize.saturating_sub(running.saturating_sub(1));
+    let arenas = 64.0 * 1024.0 * 1024.0 * (threads + spare) as f64;
     // Address space is not memory in use: freed blocks, thread stacks and the libraries'
     // buffers map more than the estimate counts (measured: about 1.3 times at the peak).
     Some(((soft - used - arenas) / 1.5).max(0.0))

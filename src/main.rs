@@ -311,31 +311,7 @@ fn main() -> ExitCode {
             set,
             json,
             allow_geo_shell,
-        } => {
-            sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
-            // A .geo mesh is meshed into a temporary folder, removed afterwards.
-            let tmp = sgbem::input::gmsh::Scratch::new("check");
-            let loaded = pipeline::load_with(
-                &scene,
-                &pipeline::LoadOptions {
-                    mesh,
-                    sets: set,
-                    mesh_dir: Some(tmp.path().to_path_buf()),
-                },
-            );
-            // The report reads the mesh file's size (the outputs' estimate): the folder goes
-            // after it.
-            let printed = loaded.and_then(|l| {
-                out(&if json {
-                    let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
-                    format!("{}\n", serde_json::to_string_pretty(&v).unwrap_or_default())
-                } else {
-                    report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
-                })
-            });
-            drop(tmp);
-            printed
-        }
+        } => check_command(&scene, mesh, set, json, allow_geo_shell),
         Command::Run {
             scene,
             mesh,
@@ -422,6 +398,44 @@ fn main() -> ExitCode {
 fn fail(e: &Error) -> ExitCode {
     err_line(&format!("sgbem: {e}"));
     ExitCode::from(e.exit_code() as u8)
+}
+
+/// `sgbem check`: reads and validates the scene, prints the report (`json`: as JSON), and
+/// refuses what `run` would refuse for memory or disk space (after the report, which shows
+/// the estimates), in the same words.
+fn check_command(
+    scene: &std::path::Path,
+    mesh: Option<PathBuf>,
+    sets: Vec<String>,
+    json: bool,
+    allow_geo_shell: bool,
+) -> sgbem::error::Result<()> {
+    sgbem::input::gmsh::allow_shell_commands(allow_geo_shell);
+    // A .geo mesh is meshed into a temporary folder, removed afterwards.
+    let tmp = sgbem::input::gmsh::Scratch::new("check");
+    let loaded = pipeline::load_with(
+        scene,
+        &pipeline::LoadOptions {
+            mesh,
+            sets,
+            mesh_dir: Some(tmp.path().to_path_buf()),
+        },
+    );
+    // The report reads the mesh file's size (the outputs' estimate): the folder goes after
+    // it.
+    let printed = loaded.and_then(|mut l| {
+        let on = l.scene.output.directory.clone();
+        let fits = pipeline::check_resources(&mut l, scene, &on);
+        out(&if json {
+            let v = report::check_json(&l.scene, &l.model, &l.plan, l.mesh.binary);
+            format!("{}\n", serde_json::to_string_pretty(&v).unwrap_or_default())
+        } else {
+            report::check_report(&l.scene, &l.model, &l.plan, l.mesh.binary)
+        })?;
+        fits
+    });
+    drop(tmp);
+    printed
 }
 
 /// `sgbem sweep` of `given` (the command line, merged into the sweep file `file` if given)

@@ -240,8 +240,8 @@ pub fn run(scene_path: &Path, opts: &RunOptions) -> Result<RunReport> {
     // A .geo is meshed into a scratch folder, never into the output folder before the run
     // owns it; the mesh then goes into the run's mesh/.
     let scratch = crate::input::gmsh::Scratch::new("run");
-    let loaded = load_for_run(scene_path, opts, scratch.path(), &mut timings)?;
-    check_fits_and_keep_mesh(&loaded, scene_path, &folder, scratch.path())?;
+    let mut loaded = load_for_run(scene_path, opts, scratch.path(), &mut timings)?;
+    check_fits_and_keep_mesh(&mut loaded, scene_path, &folder, scratch.path())?;
     let settings = quadrature(&loaded.scene);
     let progress = Progress::new(opts.quiet);
     let mut rec = RunRecord::from_model(&loaded.scene, &loaded.mesh, &loaded.model)?;
@@ -312,16 +312,44 @@ fn lock_run_folder(scene_path: &Path, opts: &RunOptions) -> Result<RunFolder> {
     RunFolder::acquire(&target, &inputs)
 }
 
+/// The resources a run of `loaded` needs against what this machine has, as `sgbem run` and
+/// `sgbem check` both ask: the memory (`Estimate::check_fits`: exit 2 when the estimate
+/// exceeds the memory available, exit 1 when the system refuses to reserve it) and the free
+/// space of the file system that holds `on` (a folder on the output folder's file system;
+/// the output folder is named as `scene.output.directory`: exit 2 when the outputs cannot
+/// fit, output::space). A full history that may not fit is advice (`plan.advice`: check's
+/// `advice:` lines, run's notes), not a refusal.
+pub fn check_resources(loaded: &mut Loaded, scene_path: &Path, on: &Path) -> Result<()> {
+    let cost = crate::estimate::estimate(&loaded.model, &loaded.scene);
+    cost.check_fits(&loaded.model, scene_path)?;
+    let floor = if loaded.scene.output.history == HistoryLevel::Full {
+        let mut steps = loaded.scene.clone();
+        steps.output.history = HistoryLevel::Steps;
+        crate::estimate::estimate(&loaded.model, &steps).outputs
+    } else {
+        cost.outputs.clone()
+    };
+    let space = crate::output::space::Space {
+        outputs: &cost.outputs,
+        floor: &floor,
+        folder: &loaded.scene.output.directory,
+        on,
+    };
+    if let Some(note) = space.check(scene_path)? {
+        loaded.plan.advice.push(note);
+    }
+    Ok(())
+}
+
 /// Refuses what cannot fit before allocating any of it; keeps the mesh a .geo scene was
 /// meshed into (`meshed`, a scratch folder) in the new run's mesh/.
 fn check_fits_and_keep_mesh(
-    loaded: &Loaded,
+    loaded: &mut Loaded,
     scene_path: &Path,
     folder: &RunFolder,
     meshed: &Path,
 ) -> Result<()> {
-    crate::estimate::estimate(&loaded.model, &loaded.scene)
-        .check_fits(&loaded.model, scene_path)?;
+    check_resources(loaded, scene_path, folder.staging())?;
     if crate::input::gmsh::is_geo(loaded.scene.mesh.as_deref().unwrap_or(Path::new("")))
         && meshed.is_dir()
     {

@@ -285,16 +285,6 @@ fn write_plan(o: &mut String, scene: &Scene, model: &Model, plan: &Plan) {
         let _ = writeln!(o, "  cost:    {line}");
     }
     let _ = writeln!(o, "  outputs: {}", cost.outputs.line(scene));
-    if let Some((avail, source)) = crate::estimate::available_memory() {
-        if cost.peak_bytes > avail {
-            let _ = writeln!(
-                o,
-                "  cost:    more than the {} available ({source}): `sgbem run` will refuse; \
-                 coarsen the mesh",
-                crate::estimate::fmt_bytes(avail)
-            );
-        }
-    }
     for a in &plan.advice {
         let _ = writeln!(o, "  advice: {a}");
     }

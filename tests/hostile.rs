@@ -848,12 +848,19 @@ fn run_with_limit(
     msh: &Path,
     out: &Path,
 ) -> std::process::Output {
+    let args = ["run", s(sc), "--mesh", s(msh), "--out", s(out), "--quiet"];
+    with_limit(kb, limit, &args)
+}
+
+/// `sgbem ARGS` under `ulimit -v kb` (if given) and `SGBEM_MEMORY_LIMIT` (if given), with
+/// two threads.
+fn with_limit(kb: Option<u64>, limit: Option<&str>, args: &[&str]) -> std::process::Output {
     let kb = kb.map_or("unlimited".to_string(), |k| k.to_string());
     let mut cmd = std::process::Command::new("sh");
     cmd.arg("-c")
         .arg(format!("ulimit -v {kb} && exec \"$0\" \"$@\""))
         .arg(env!("CARGO_BIN_EXE_sgbem"))
-        .args(["run", s(sc), "--mesh", s(msh), "--out", s(out), "--quiet"])
+        .args(args)
         // Each allocating thread may reserve a 64 MiB malloc arena: fix their number.
         .env("RAYON_NUM_THREADS", "2");
     if let Some(l) = limit {
@@ -893,6 +900,26 @@ fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
             !err.contains("panicked") && !err.contains("memory allocation of"),
             "{err}"
         );
+        // `check` under the same limit gives the same answer: the same exit status and,
+        // for a refusal, the same message but for the room left, measured in each process
+        // (`run`'s signal-handling thread maps its 2 MiB stack more).
+        let c = with_limit(Some(kb), limit, &["check", s(&sc), "--mesh", s(&msh)]);
+        let c_err = String::from_utf8_lossy(&c.stderr);
+        eprintln!("  check: exit {:?}", c.status.code());
+        if limit.is_none() {
+            assert_eq!(c.status.code(), Some(code), "check {kb}: {c_err}");
+        } else {
+            assert!(matches!(c.status.code(), Some(0 | 1)), "{c_err}");
+        }
+        let room = |e: &str| -> String {
+            match (e.find(" but "), e.find(" are available")) {
+                (Some(a), Some(b)) if a < b => format!("{}{}", &e[..a], &e[b..]),
+                _ => e.to_string(),
+            }
+        };
+        if code == 2 {
+            assert_eq!(room(&c_err), room(&err), "check and run differ");
+        }
         match code {
             2 => assert!(
                 err.contains("ulimit -v") && err.contains("coarsen the mesh"),

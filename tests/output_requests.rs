@@ -430,3 +430,142 @@ fn bad_requests_name_the_key() {
         assert!(!err.contains("panicked"), "{err}");
     }
 }
+
+/// A tmpfs of `size` mounted at `at` for one test, unmounted when dropped (also when the
+/// test fails); None, with a message, where the test cannot mount one (not root, no mount).
+struct SmallFs(PathBuf);
+
+impl SmallFs {
+    fn mount(at: &Path, size: &str) -> Option<SmallFs> {
+        // SAFETY: geteuid has no preconditions.
+        if unsafe { libc::geteuid() } != 0 {
+            eprintln!("SKIPPED: mounting a small tmpfs needs root");
+            return None;
+        }
+        std::fs::create_dir_all(at).unwrap();
+        let o = std::process::Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(at)
+            .output();
+        match o {
+            Ok(o) if o.status.success() => Some(SmallFs(at.to_path_buf())),
+            Ok(o) => {
+                let why = String::from_utf8_lossy(&o.stderr);
+                eprintln!("SKIPPED: cannot mount a tmpfs: {why}");
+                None
+            }
+            Err(e) => {
+                eprintln!("SKIPPED: cannot run mount: {e}");
+                None
+            }
+        }
+    }
+
+    /// The names in the file system's root.
+    fn names(&self) -> Vec<String> {
+        let mut n: Vec<String> = std::fs::read_dir(&self.0)
+            .unwrap()
+            .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+            .collect();
+        n.sort();
+        n
+    }
+}
+
+impl Drop for SmallFs {
+    fn drop(&mut self) {
+        let _ = std::process::Command::new("umount").arg(&self.0).status();
+    }
+}
+
+/// Outputs larger than the free space of the output folder's file system (a 2 MB tmpfs) are
+/// refused before anything is computed, by `run` and `check` alike (exit 2, the same
+/// message: the folder, the size needed and free, the output requests that write less);
+/// outputs that fit run. A full history whose expected size exceeds the free space while
+/// one state per load step fits is advice, and a run that meets a full device all the same
+/// ends in exit 1 with the fix, leaving nothing behind. Skipped (said on stderr) without
+/// root.
+#[test]
+fn outputs_larger_than_the_free_space_are_refused_by_check_and_run() {
+    let dir = tmpdir("requests-disk");
+    let Some(fs) = SmallFs::mount(&dir.join("small"), "2m") else {
+        return;
+    };
+    let msh = mesh(&dir, "clamped_beam_joint");
+    let out = fs.0.join("beam");
+    let o = out.display().to_string();
+    let at = format!("output.directory={:?}", o);
+    // The default requests: 15.5 MB with one state per load step (the operators).
+    let run_err = sgbem_on("run", "clamped_beam_joint", Some(&msh), &["--out", &o], &[]);
+    let check = sgbem_on("check", "clamped_beam_joint", Some(&msh), &[], &[&at]);
+    assert_eq!(run_err.0, 2, "{}", run_err.2);
+    assert_eq!(check.0, 2, "{}", check.2);
+    assert_eq!(check.2, run_err.2);
+    assert!(check.1.contains("outputs: about"), "{}", check.1);
+    for words in [
+        o.as_str(),
+        "writes at least about 15.",
+        "MB of outputs",
+        "2.1 MB free",
+        "history = \"steps\"",
+        "every = N",
+        "vtk_fields",
+        "--out DIR",
+    ] {
+        assert!(run_err.2.contains(words), "{words}: {}", run_err.2);
+    }
+    // Nothing written: no folder, no staging folder, no lock.
+    assert!(fs.names().is_empty(), "{:?}", fs.names());
+
+    // A full history that may not fit, while its last state per step does: advice.
+    let lean = ["output.operators=false"];
+    let c = sgbem_on(
+        "check",
+        "clamped_beam_joint",
+        Some(&msh),
+        &[],
+        &[&at, lean[0]],
+    );
+    assert_eq!(c.0, 0, "{}", c.2);
+    assert!(
+        c.1.contains("advice: a full history of about") && c.1.contains("more than the 2.1 MB"),
+        "{}",
+        c.1
+    );
+    // Run, it meets the full device: exit 1, the fix, nothing left.
+    let r = sgbem_on(
+        "run",
+        "clamped_beam_joint",
+        Some(&msh),
+        &["--out", &o, "--quiet"],
+        &lean,
+    );
+    assert_eq!(r.0, 1, "{}", r.2);
+    assert!(
+        r.2.contains("No space left on device") && r.2.contains("the file system is full"),
+        "{}",
+        r.2
+    );
+    assert!(fs.names().is_empty(), "{:?}", fs.names());
+
+    // Outputs that fit: check and run succeed.
+    let fit = ["output.operators=false", "output.history=\"final\""];
+    let c = sgbem_on(
+        "check",
+        "clamped_beam_joint",
+        Some(&msh),
+        &[],
+        &[&at, fit[0], fit[1]],
+    );
+    assert_eq!(c.0, 0, "{}", c.2);
+    assert!(!c.1.contains("free on its file system"), "{}", c.1);
+    let r = sgbem_on(
+        "run",
+        "clamped_beam_joint",
+        Some(&msh),
+        &["--out", &o, "--quiet"],
+        &fit,
+    );
+    assert_eq!(r.0, 0, "{}", r.2);
+    assert!(out.join("summary.json").is_file());
+}

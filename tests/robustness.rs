@@ -246,9 +246,19 @@ fn a_run_too_large_for_memory_is_refused_before_assembling() {
         &["needs about", "TB", "are available", "body \"", "coarsen"],
     );
     assert!(secs < 20.0, "refused after {secs} s");
-    let r = check(&sc, &big);
-    assert_eq!(r.0, 0, "{}", r.2);
-    assert!(r.1.contains("`sgbem run` will refuse"), "{}", r.1);
+    // `check` refuses it as `run` does: the report (with the estimate), then the same message.
+    let c = check(&sc, &big);
+    assert_eq!(c.0, 2, "{}", c.2);
+    assert!(c.1.contains("peak memory"), "{}", c.1);
+    // The same words; the memory available is read by each process at its own time.
+    let room = |e: &str| e.split(" are available").nth(1).map(str::to_string);
+    assert!(
+        room(&c.2).is_some() && room(&c.2) == room(&r.2),
+        "{}\n{}",
+        c.2,
+        r.2
+    );
+    assert_eq!(c.2.split(" but ").next(), r.2.split(" but ").next());
 }
 
 // --- 2. Run folders ------------------------------------------------------------------------

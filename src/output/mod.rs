@@ -17,6 +17,7 @@ pub mod owned;
 pub mod progress;
 pub mod record;
 pub mod size;
+pub mod space;
 mod stamp;
 pub mod summary;
 pub mod vtk;
