@@ -347,7 +347,8 @@ impl Problem {
                     }
                 }
                 let (node, e) = self.dof_at[d];
-                let a = mechanism::rigid_row(nodes.get(node).copied().unwrap_or(c), c, e, scale);
+                let x = nodes.get(node).copied().unwrap_or(c.point());
+                let a = mechanism::rigid_row(x, &c, e, scale);
                 for i in 0..3 {
                     h[i] += a[i] * u;
                     for j in 0..3 {
@@ -361,11 +362,12 @@ impl Problem {
                 row[i] += 1e-12 * tr;
             }
             let q = crate::linalg::solve3(g, h).unwrap_or([0.0; 3]);
+            let rotation = q[2] / scale;
             out.push(BodyMotion {
                 body: b,
-                centroid: c,
-                translation: [q[0], q[1]],
-                rotation: q[2] / scale,
+                centroid: c.point(),
+                translation: c.translation_at_point([q[0], q[1]], rotation),
+                rotation,
             });
         }
         out
