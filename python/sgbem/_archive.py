@@ -6,10 +6,10 @@ children's group names in run order, each child a `name` attribute with its real
 `/states/NNNN` hold every archived state with the bodies' nodes and elements and the
 interfaces' pairs concatenated, sliced by `/states/node_offset`, `element_offset` and
 `pair_offset`; `/solution/interior/<body>` holds the interior field of the final state.
-The hubs of the thrust line are not archived: `Run.hubs` reads the run folder's
-thrust_hubs.csv. The thrust block of `to_pyvista` (hubs included) is computed from the
-states' tractions and the interfaces' `x`, `s`, `normal` and tributary lengths, with the
-bodies' `body_force` (a state's own where it has one) for "down" (`_thrust.py`).
+The thrust block of `to_pyvista` and the hubs of `Run.hubs` (thrust_hubs.csv) are
+computed from the states' tractions and the interfaces' `x`, `s`, `normal` and tributary
+lengths, with the bodies' `body_force` (a state's own where it has one) for "down"
+(`_thrust.py`), so that an archive copied alone has them.
 """
 
 import json
@@ -381,36 +381,25 @@ class Run:
         resultant of the body's group of joints), R_x, R_y (that resultant on the body,
         times the thickness), group ("below": the bed joints below along the body force;
         "above": those above, where none is below), joints (how many loaded joints the hub
-        joins, more than two). The hubs are not in the archive: read from thrust_hubs.csv
-        in the run folder (FileNotFoundError for an archive away from its folder); an
-        empty frame for a run without interfaces or without hubs."""
+        joins, more than two). Computed from the archive's final state as sgbem computes
+        thrust_hubs.csv (`_thrust.py`: the same sums in the same order, so the values are
+        the file's bit for bit), so an archive copied alone has them too; an empty frame for
+        a run without interfaces or without hubs."""
+        from ._thrust import hub_rows
+
         force, length = self.units["force"], self.units["length"]
         units = {"body": "", "x": length, "y": length, "R_x": force, "R_y": force,
                  "group": "", "joints": "1"}
-        path = self.folder / "thrust_hubs.csv"
-        if not self.interfaces and not path.is_file():
-            df = pd.DataFrame({c: pd.Series(dtype=object if c in ("body", "group") else
-                                            np.int64 if c == "joints" else float)
-                               for c in units})
-        elif not path.is_file():
-            raise FileNotFoundError(
-                f"{path}: no such file: the hubs are written beside thrust.csv in the run "
-                f"folder, not into the archive (open the run folder, or a run of a sgbem "
-                f"that writes thrust_hubs.csv)")
-        else:
-            df = pd.read_csv(path, keep_default_na=False, dtype=str)
-            head = {c.split(" [")[0]: c for c in df.columns}
-            if list(head) != list(units):
-                raise ValueError(f"{path}: columns {list(df.columns)}, expected "
-                                 f"{list(units)} (with units in brackets)")
-            df.columns = list(head)
-            for c in ("x", "y", "R_x", "R_y"):
-                df[c] = df[c].astype(float) + 0.0
-            df["joints"] = df["joints"].astype(np.int64)
-            # The header's units are the scene's, as self.units gives them.
-            for c, h in head.items():
-                if "[" in h:
-                    units[c] = h.split(" [", 1)[1].rstrip("]")
+        rows = []
+        if self.interfaces and self.state_count > 0:
+            with self._file() as f:
+                rows = hub_rows(self, f, self.state_count - 1)
+        for r in rows:
+            r["body"] = self.bodies[r["body"]]
+        df = pd.DataFrame({c: pd.Series([r[c] for r in rows],
+                                        dtype=object if c in ("body", "group") else
+                                        np.int64 if c == "joints" else float)
+                           for c in units})
         df.index.name = "hub"
         df.attrs["units"] = units
         return df

@@ -121,7 +121,8 @@ def _state_body_forces(run, f, st):
 
 def _hub(group, joints, seen):
     """The point on the line of action of the resultant of joints `group` nearest to the
-    centre of their normal forces, taken relative to the first joint's first pair."""
+    centre of their normal forces, taken relative to the first joint's first pair, and that
+    resultant (on the body, times the thickness); None where there is none."""
     o = joints[group[0]].about
     r, m0, n, c = [0.0, 0.0], 0.0, 0.0, [0.0, 0.0]
     for k in group:
@@ -139,33 +140,17 @@ def _hub(group, joints, seen):
         return None
     m = [c[0] / n, c[1] / n]
     mm = m0 - (m[0] * r[1] - m[1] * r[0])
-    return [o[0] + m[0] + mm * r[1] / r2, o[1] + m[1] - mm * r[0] / r2]
+    return [o[0] + m[0] + mm * r[1] / r2, o[1] + m[1] - mm * r[0] / r2], r
 
 
-def thrust_line(run, f, k):
-    """The thrust block of state `k` as plain arrays: `points` (n x 2), `cells` (a list of
-    point-index tuples), `cell_types` (VTK codes: 1 vertex, 3 line) and the point data
-    N, T, e, e_over_half_length (float, NaN at a hub), inside, in_closed_part (1 yes, 0 no,
-    -1 at a hub), joint (the interface's index in the run, -1 at a hub) and displacement
-    (n x 2: the first body's, weighted as the point is; at a hub the mean of its joints')."""
-    st = f["states"][f"{k:04}"]
+def _state_joints(run, f, st):
+    """The joints (`_Joint`) of state `st` in run order, each with its (first, second)
+    body's index, and the state's displacements."""
     thickness = float(f.attrs.get("thickness", 1.0))
     u = np.asarray(st["u"], dtype=float).reshape(-1, 2)
     status = np.asarray(st["status"])
     traction = np.asarray(st["traction"], dtype=float).reshape(-1, 2)
-    cols = {c: [] for c in ("points", "displacement", "N", "T", "e", "e_over_half_length",
-                            "inside", "in_closed_part", "joint")}
-
-    def push(x, disp, joint, values, flags):
-        cols["points"].append(x)
-        cols["displacement"].append(disp)
-        cols["joint"].append(joint)
-        for c, v in zip(("N", "T", "e", "e_over_half_length"), values):
-            cols[c].append(v)
-        cols["inside"].append(flags[0])
-        cols["in_closed_part"].append(flags[1])
-
-    joints, bodies, point_of = [], [], []
+    joints, bodies = [], []
     for i, (_, gname) in enumerate(run._interfaces):
         it = f["interfaces"][gname]
         lo, hi = run._pair_offset[i], run._pair_offset[i + 1]
@@ -174,30 +159,30 @@ def thrust_line(run, f, k):
         th = _Joint(x, np.asarray(it["s"], dtype=float), _tributary(it, x),
                     np.asarray(it["normal"], dtype=float).reshape(-1, 2), status[lo:hi],
                     traction[lo:hi], thickness)
-        point_of.append(None)
-        if th.point is not None:
-            ua = u[run._node_offset[a] + np.asarray(it["node_a"], dtype=np.int64)]
-            point_of[i] = len(cols["joint"])
-            p = th.point
-            push(p["x"], th.at_point(ua), i, (th.normal, th.tangential, p["e"],
-                                              p["e_over_half_length"]),
-                 (int(p["inside"]), int(p["in_closed_part"])))
+        th.first_nodes = np.asarray(it["node_a"], dtype=np.int64)
         joints.append(th)
         bodies.append((a, b))
-    cells = [(j,) for j in range(len(cols["joint"]))]
-    types = [VERTEX] * len(cells)
-    # Each body's loaded joints (those with a point), in run order.
+    return joints, bodies, u
+
+
+def _loaded(run, joints, bodies):
+    """Each body's loaded joints (those with a point of application), in run order."""
     loaded = [[] for _ in run._bodies]
     for j, (a, b) in enumerate(bodies):
-        if point_of[j] is not None:
+        if joints[j].point is not None:
             for body in (a, b):
                 if 0 <= body < len(loaded):
                     loaded[body].append(j)
-    for js in loaded:
-        if len(js) == 2:
-            cells.append((point_of[js[0]], point_of[js[1]]))
-            types.append(LINE)
+    return loaded
+
+
+def _hubs(run, f, st, joints, bodies, loaded):
+    """The hubs of the bodies with more than two loaded joints (docs/thrust.md, "Bodies with
+    more joints"), in body order, as sgbem's post/thrust.rs `hubs` finds them: per hub the
+    body's index, the hub, the resultant of its group of joints on the body, whether that
+    group lies below (along the body's "down") and the body's loaded joints."""
     down = _down(_state_body_forces(run, f, st))
+    out = []
     for body, js in enumerate(loaded):
         if len(js) <= 2:
             continue
@@ -210,10 +195,69 @@ def thrust_line(run, f, k):
             return ([sign * t.force[0], sign * t.force[1]], sign * t.moment,
                     sign * (n[0] * d[0] + n[1] * d[1]))
 
-        group = [j for j in js if seen(j)[2] > BED] or [j for j in js if -seen(j)[2] > BED]
-        hub = _hub(group, joints, seen) if group else None
-        if hub is None:
-            continue
+        below = [j for j in js if seen(j)[2] > BED]
+        group = below or [j for j in js if -seen(j)[2] > BED]
+        found = _hub(group, joints, seen) if group else None
+        if found is not None:
+            out.append((body, found[0], found[1], bool(below), js))
+    return out
+
+
+def hub_rows(run, f, k):
+    """The hubs of state `k` as thrust_hubs.csv lists them for the final state: per hub a
+    dict of body (its index), x, y, R_x, R_y (the resultant on the body of its group of
+    joints, times the thickness), group ("below" or "above") and joints (how many loaded
+    joints it joins)."""
+    st = f["states"][f"{k:04}"]
+    joints, bodies, _ = _state_joints(run, f, st)
+    rows = []
+    for body, x, r, below, js in _hubs(run, f, st, joints, bodies,
+                                       _loaded(run, joints, bodies)):
+        rows.append({"body": body, "x": x[0] + 0.0, "y": x[1] + 0.0, "R_x": r[0] + 0.0,
+                     "R_y": r[1] + 0.0, "group": "below" if below else "above",
+                     "joints": len(js)})
+    return rows
+
+
+def thrust_line(run, f, k):
+    """The thrust block of state `k` as plain arrays: `points` (n x 2), `cells` (a list of
+    point-index tuples), `cell_types` (VTK codes: 1 vertex, 3 line) and the point data
+    N, T, e, e_over_half_length (float, NaN at a hub), inside, in_closed_part (1 yes, 0 no,
+    -1 at a hub), joint (the interface's index in the run, -1 at a hub) and displacement
+    (n x 2: the first body's, weighted as the point is; at a hub the mean of its joints')."""
+    st = f["states"][f"{k:04}"]
+    cols = {c: [] for c in ("points", "displacement", "N", "T", "e", "e_over_half_length",
+                            "inside", "in_closed_part", "joint")}
+
+    def push(x, disp, joint, values, flags):
+        cols["points"].append(x)
+        cols["displacement"].append(disp)
+        cols["joint"].append(joint)
+        for c, v in zip(("N", "T", "e", "e_over_half_length"), values):
+            cols[c].append(v)
+        cols["inside"].append(flags[0])
+        cols["in_closed_part"].append(flags[1])
+
+    joints, bodies, u = _state_joints(run, f, st)
+    point_of = []
+    for i, th in enumerate(joints):
+        point_of.append(None)
+        if th.point is not None:
+            a = bodies[i][0]
+            ua = u[run._node_offset[a] + th.first_nodes]
+            point_of[i] = len(cols["joint"])
+            p = th.point
+            push(p["x"], th.at_point(ua), i, (th.normal, th.tangential, p["e"],
+                                              p["e_over_half_length"]),
+                 (int(p["inside"]), int(p["in_closed_part"])))
+    cells = [(j,) for j in range(len(cols["joint"]))]
+    types = [VERTEX] * len(cells)
+    loaded = _loaded(run, joints, bodies)
+    for js in loaded:
+        if len(js) == 2:
+            cells.append((point_of[js[0]], point_of[js[1]]))
+            types.append(LINE)
+    for _, hub, _, _, js in _hubs(run, f, st, joints, bodies, loaded):
         ends = [point_of[j] for j in js]
         ux, uy = 0.0, 0.0
         for e in ends:

@@ -376,23 +376,35 @@ def test_contact_points_equal_the_vtk_contact_block(beam, wall, patch):
     assert c["normal_force"].sum() == pytest.approx(-2 * p, rel=1e-8)
 
 
-def test_hubs_equal_thrust_hubs_csv(beam, wall, tmp_path):
-    beam_hubs = beam.hubs()                       # one joint, two bodies: no hub
-    assert len(beam_hubs) == 0 and list(beam_hubs.columns) == [
-        "body", "x", "y", "R_x", "R_y", "group", "joints"]
-    hubs = wall.hubs()
-    table = pd.read_csv(wall.folder / "thrust_hubs.csv", keep_default_na=False)
+def assert_hubs_equal_the_csv(run):
+    """`run.hubs()` (computed from the archive) against the run folder's thrust_hubs.csv:
+    the same rows, names and numbers bit for bit (the file writes round-tripping decimals)."""
+    hubs = run.hubs()
+    table = pd.read_csv(run.folder / "thrust_hubs.csv", keep_default_na=False)
     assert list(table.columns) == ["body", "x [m]", "y [m]", "R_x [kN]", "R_y [kN]", "group",
                                    "joints"]
     assert list(hubs.columns) == [c.split(" [")[0] for c in table.columns]
     assert hubs.attrs["units"] == {"body": "", "x": "m", "y": "m", "R_x": "kN", "R_y": "kN",
                                    "group": "", "joints": "1"}
+    assert len(hubs) == len(table)
     for col in ("body", "group"):
-        assert list(hubs[col]) == list(table[col])
+        assert list(hubs[col]) == list(table[col].astype(str))
     for col, head in zip(("x", "y", "R_x", "R_y"), table.columns[1:5]):
-        np.testing.assert_array_equal(hubs[col].to_numpy(), table[head].to_numpy(),
+        np.testing.assert_array_equal(hubs[col].to_numpy(), table[head].to_numpy(dtype=float),
                                       err_msg=col)
     assert list(hubs["joints"]) == list(table["joints"])
+    return hubs
+
+
+def test_hubs_equal_thrust_hubs_csv(beam, wall, collapse, tmp_path):
+    beam_hubs = beam.hubs()                       # one joint, two bodies: no hub
+    assert len(beam_hubs) == 0 and list(beam_hubs.columns) == [
+        "body", "x", "y", "R_x", "R_y", "group", "joints"]
+    assert beam_hubs["joints"].dtype == np.int64 and beam_hubs["x"].dtype == float
+    assert len(pd.read_csv(beam.folder / "thrust_hubs.csv")) == 0
+    # The collapse search's state: body forces of its own (sideways), its hubs' "down".
+    assert len(assert_hubs_equal_the_csv(collapse)) == 8
+    hubs = assert_hubs_equal_the_csv(wall)
     # A hub per brick of the 3 x 4 bond but the last of the top course (its head joint
     # opens: two loaded joints); in body order, each joining the body's loaded joints of
     # thrust(), more than two.
@@ -419,13 +431,11 @@ def test_hubs_equal_thrust_hubs_csv(beam, wall, tmp_path):
     thrust = pyvista.read(wall.folder / f"vtk/state_{last:04d}.vtm")["thrust"]
     at = thrust.points[thrust.point_data["joint"] == -1]
     np.testing.assert_array_equal(at[:, :2], hubs[["x", "y"]].to_numpy())
-    # An archive away from its run folder: no hubs (they are not archived), the contact
-    # points still.
+    # An archive copied alone: the same hubs (computed from it), the contact points too.
     alone = tmp_path / "archive.h5"
     alone.write_bytes(wall.archive.read_bytes())
     run = sgbem.open(alone)
-    with pytest.raises(FileNotFoundError, match="thrust_hubs.csv"):
-        run.hubs()
+    pd.testing.assert_frame_equal(run.hubs(), hubs)
     pd.testing.assert_frame_equal(run.contact_points(), wall.contact_points())
 
 
@@ -456,7 +466,7 @@ def test_to_pyvista_thrust_block_equals_the_vtk_thrust_block(beam, wall, collaps
                                               err_msg=f"state {k}: {name}")
             assert ours.field_data["iteration"][0] == run.states["iteration"].iloc[k]
         # The final state: a point per loaded joint (thrust(), from the summary), then the
-        # hubs (hubs(), from thrust_hubs.csv).
+        # hubs (hubs(), equal to thrust_hubs.csv).
         d = ours.point_data
         at = d["joint"] >= 0
         loaded = run.thrust().dropna(subset=["x"])
