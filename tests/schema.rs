@@ -23,8 +23,10 @@ use serde_json::Value as Json;
 use sgbem::input::scene::{parse_scene, schema::schema};
 use toml::Value;
 
-/// The JSON Schema keywords the validator below implements.
-const KEYWORDS: [&str; 15] = [
+/// The JSON Schema keywords the validator below implements (draft-07; the combinations of
+/// keys the reader refuses: `const`, `not`, `allOf`, `anyOf`, `if`/`then`/`else`,
+/// `dependencies`, `minProperties`, and `pattern` in the one form the schema uses).
+const KEYWORDS: [&str; 25] = [
     "$schema",
     "title",
     "description",
@@ -40,6 +42,16 @@ const KEYWORDS: [&str; 15] = [
     "maxItems",
     "uniqueItems",
     "minimum",
+    "const",
+    "not",
+    "allOf",
+    "anyOf",
+    "if",
+    "then",
+    "else",
+    "dependencies",
+    "minProperties",
+    "pattern",
 ];
 
 fn root() -> PathBuf {
@@ -110,6 +122,103 @@ fn property<'a>(s: &'a Json, key: &str) -> Option<&'a Json> {
     }
 }
 
+/// Whether TOML value `v` equals JSON value `c` (numbers by value: 0 is 0.0).
+fn same(v: &Value, c: &Json) -> bool {
+    match (
+        v.as_float().or(v.as_integer().map(|i| i as f64)),
+        c.as_f64(),
+    ) {
+        (Some(a), Some(b)) => a == b,
+        _ => json_of(v) == *c,
+    }
+}
+
+/// Whether `text` matches `pattern`, of the one form the schema uses: literal characters
+/// (`\.` a dot) and classes `[..]`, anchored at the end (`$`).
+fn matches(text: &str, pattern: &str) -> bool {
+    let body = pattern
+        .strip_suffix('$')
+        .unwrap_or_else(|| panic!("pattern {pattern:?}: only a suffix ending in $ is checked"));
+    let mut tokens: Vec<Vec<char>> = Vec::new();
+    let mut chars = body.chars();
+    while let Some(c) = chars.next() {
+        tokens.push(match c {
+            '\\' => vec![chars.next().expect("an escaped character")],
+            '[' => chars.by_ref().take_while(|&c| c != ']').collect(),
+            c if c.is_alphanumeric() || c == '_' => vec![c],
+            c => panic!("pattern {pattern:?}: `{c}` is not checked"),
+        });
+    }
+    let text: Vec<char> = text.chars().collect();
+    text.len() >= tokens.len()
+        && text[text.len() - tokens.len()..]
+            .iter()
+            .zip(&tokens)
+            .all(|(c, class)| class.contains(c))
+}
+
+/// The combinations of keys: `const`, `allOf`, `anyOf`, `not`, `if`/`then`/`else`,
+/// `dependencies`, `minProperties`, `pattern`.
+fn check_combinations(v: &Value, s: &Json, at: &str, errors: &mut Vec<String>, seen: &mut usize) {
+    let fits = |b: &Json| {
+        let mut e = Vec::new();
+        check(v, b, at, &mut e, &mut 0);
+        e.is_empty()
+    };
+    if let Some(c) = s.get("const") {
+        if !same(v, c) {
+            errors.push(format!("{at} = {v}: not {c} (const)"));
+        }
+    }
+    for b in s["allOf"].as_array().into_iter().flatten() {
+        check(v, b, at, errors, seen);
+    }
+    if let Some(bs) = s["anyOf"].as_array() {
+        if !bs.iter().any(fits) {
+            errors.push(format!("{at}: fits none of the anyOf branches"));
+        }
+    }
+    if let Some(n) = s.get("not") {
+        if fits(n) {
+            errors.push(format!("{at}: fits {n}, which `not` forbids"));
+        }
+    }
+    if let Some(cond) = s.get("if") {
+        let branch = if fits(cond) { "then" } else { "else" };
+        if let Some(b) = s.get(branch) {
+            check(v, b, &format!("{at} ({branch})"), errors, seen);
+        }
+    }
+    if let Value::Table(t) = v {
+        for (k, d) in s["dependencies"].as_object().into_iter().flatten() {
+            if !t.contains_key(k) {
+                continue;
+            }
+            match d {
+                Json::Array(keys) => {
+                    for r in keys.iter().filter_map(Json::as_str) {
+                        if !t.contains_key(r) {
+                            errors.push(format!("{at}: `{k}` needs `{r}`"));
+                        }
+                    }
+                }
+                d => check(v, d, &format!("{at} (with `{k}`)"), errors, seen),
+            }
+        }
+        if s["minProperties"]
+            .as_u64()
+            .is_some_and(|m| (t.len() as u64) < m)
+        {
+            errors.push(format!("{at}: fewer keys than minProperties"));
+        }
+    }
+    if let (Some(p), Some(text)) = (s["pattern"].as_str(), v.as_str()) {
+        if !matches(text, p) {
+            errors.push(format!("{at} = {text:?}: does not match {p}"));
+        }
+    }
+}
+
 /// Checks `v` (at key path `at`) against schema `s`, pushing a line per violation; counts
 /// the values checked in `seen`.
 fn check(v: &Value, s: &Json, at: &str, errors: &mut Vec<String>, seen: &mut usize) {
@@ -144,6 +253,7 @@ fn check(v: &Value, s: &Json, at: &str, errors: &mut Vec<String>, seen: &mut usi
         errors.push(format!("{at} = {v}: not of type {ts:?}"));
         return;
     }
+    check_combinations(v, s, at, errors, seen);
     if let Some(words) = s["enum"].as_array() {
         if !words.contains(&json_of(v)) {
             errors.push(format!("{at} = {v}: not one of {words:?}"));
@@ -712,4 +822,138 @@ fn required_keys_are_the_readers() {
         }
     }
     assert!(drift.is_empty(), "{}", drift.join("\n"));
+}
+
+/// The combinations of keys the reader refuses (each names the other key in its message),
+/// planted alone into [`BASE`], a scene it reads, and beside each the nearest combination it
+/// accepts: the keys set (`PATH=VALUE`, `; ` between them) and whether the reader reads it.
+const PLANTED: &[(&str, bool)] = &[
+    // tangential = "friction" needs its coefficient; the coefficient needs that law.
+    (
+        r#"interface.J.model="unilateral"; interface.J.tangential="friction""#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.friction=0.5"#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.friction=0.5; interface.J.tangential="slide""#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.friction=0.5; interface.J.tangential="friction""#,
+        true,
+    ),
+    // A bonded interface: closed, no cohesion, gap or sliding (in a named, pattern or
+    // default table alike).
+    (
+        r#"defaults.interface.model="bonded"; defaults.interface.initial="open""#,
+        false,
+    ),
+    (
+        r#"interface."j*".model="bonded"; interface."j*".cohesion=1.5"#,
+        false,
+    ),
+    (
+        r#"interface.J.model="bonded"; interface.J.cohesion="0""#,
+        false,
+    ),
+    (
+        r#"interface.J.model="bonded"; interface.J.tangential="slide""#,
+        false,
+    ),
+    (
+        r#"interface.J.model="bonded"; interface.J.cohesion=0; interface.J.gap=0.0; interface.J.initial="closed"; interface.J.tangential="stick""#,
+        true,
+    ),
+    // A gap for zones that start open, a cohesion for zones that start closed.
+    (
+        r#"interface.J.model="unilateral"; interface.J.gap=0.01"#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.initial="closed"; interface.J.gap="0.01*x""#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.initial="open"; interface.J.cohesion=1"#,
+        false,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.initial="open"; interface.J.gap="0.01*x"; interface.J.cohesion=0"#,
+        true,
+    ),
+    (
+        r#"interface.J.model="unilateral"; interface.J.cohesion=2; interface.J.gap=0"#,
+        true,
+    ),
+    // Per direction a displacement or a traction; one frame per boundary.
+    ("boundary.B.ux=0; boundary.B.tx=1", false),
+    (r#"boundary.B.un=0; boundary.B.tn="-t""#, false),
+    ("boundary.B.ux=0; boundary.B.tn=1", false),
+    ("boundary.B.ty=-1; boundary.B.ut=0", false),
+    ("boundary.B.ux=0; boundary.B.ty=-1", true),
+    ("boundary.B.un=0; boundary.B.tt=1", true),
+    // Load factors or pseudo-time; a collapse search with neither.
+    ("solve.time=[1.0]; solve.load_factors=[1.0]", false),
+    ("solve.collapse.max=2.0; solve.time=[0.5, 1.0]", false),
+    ("solve.collapse.max=2.0; solve.load_factors=[1]", false),
+    (r#"solve.collapse.max=2.0; solve.method="sparse""#, true),
+    ("solve.time=[0.5, 1.0]", true),
+    // `every` thins a full history.
+    (r#"output.every=2; output.history="steps""#, false),
+    (r#"output.every=3; output.history="final""#, false),
+    (r#"output.every=2; output.history="full""#, true),
+    // gmsh parameters with a .geo only.
+    (r#"mesh.file="probe.msh"; mesh.h=2"#, false),
+    (r#"mesh.file="probe.GEO"; mesh.h=2"#, true),
+    // At least one body table, pattern or [defaults.body].
+    ("body={}", false),
+    (
+        "body={}; defaults.body={ young = 1.0, poisson = 0.3 }",
+        true,
+    ),
+    (
+        r#"body={ "brick_*" = { young = 1.0, poisson = 0.3 } }"#,
+        true,
+    ),
+];
+
+/// The combinations of keys the reader refuses are marked by the schema (draft-07
+/// `dependencies`, `if`/`then`/`else`, `not`, `anyOf`, `const`, `pattern`, read by the
+/// validator above), planted one at a time into a scene the reader reads; the nearest
+/// combinations it accepts pass the schema (it is not stricter than the reader).
+#[test]
+fn combinations_the_reader_refuses_are_marked_by_the_schema() {
+    let s = schema();
+    let base: toml::Table = BASE.parse().expect("BASE");
+    let mut drift = Vec::new();
+    for (keys, reads) in PLANTED {
+        let mut doc = base.clone();
+        for kv in keys.split("; ") {
+            let (k, v) = kv.split_once('=').expect("PATH=VALUE");
+            set(&mut doc, k, value(v));
+        }
+        let reader = read(&doc);
+        let (errors, _) = violations(&Value::Table(doc), &s);
+        if reader.is_ok() != *reads {
+            drift.push(format!(
+                "{keys:?}: the reader says {reader:?}, expected {reads}"
+            ));
+        }
+        if errors.is_empty() != *reads {
+            drift.push(format!(
+                "{keys:?}: the schema {}",
+                if errors.is_empty() {
+                    "passes it".to_string()
+                } else {
+                    format!("marks it: {errors:?}")
+                }
+            ));
+        }
+    }
+    assert!(drift.is_empty(), "{}", drift.join("\n"));
+    let refused = PLANTED.iter().filter(|(_, r)| !r).count();
+    assert!(refused >= 20, "{refused} planted mistakes");
 }

@@ -40,6 +40,10 @@ def test_mistakes_are_marked(schema):
     jsonschema.validate(ok, schema)
     # The mesh may come from --mesh; `between` in a named interface table.
     ok = copy.deepcopy(good)
+    ok["defaults"]["interface"].update(initial="open", gap=0.01)
+    ok["boundary"] = {"top": {"ux": 0.0, "ty": -1.0}, "side": {"un": 0.0, "tt": 0.5}}
+    jsonschema.validate(ok, schema)
+    ok = copy.deepcopy(good)
     ok.pop("mesh")
     ok["interface"] = {"joint": {"model": "unilateral", "between": ["a_face", "b_face"]}}
     jsonschema.validate(ok, schema)
@@ -59,6 +63,17 @@ def test_mistakes_are_marked(schema):
         lambda s: s["defaults"]["interface"].update(between=["a_face", "b_face"]),
         lambda s: s.update(interface={"joint_*": {"model": "unilateral",
                                                   "between": ["a_face", "b_face"]}}),
+        # Combinations the reader refuses (tests/schema.rs has them all, with the reader).
+        lambda s: s["defaults"]["interface"].pop("friction"),
+        lambda s: s["defaults"]["interface"].update(tangential="slide"),
+        lambda s: s["defaults"]["interface"].update(model="bonded"),
+        lambda s: s["defaults"]["interface"].update(gap=0.01),
+        lambda s: s.update(boundary={"top": {"ux": 0.0, "tx": 1.0}}),
+        lambda s: s.update(boundary={"top": {"ux": 0.0, "tn": 1.0}}),
+        lambda s: s["solve"].update(load_factors=[1.0]),
+        lambda s: s["output"].update(history="steps", every=2),
+        lambda s: s.update(mesh={"file": "wall.msh", "h": 2.0}),
+        lambda s: (s.pop("body", None), s["defaults"].pop("body")),
     ):
         s = copy.deepcopy(good)
         change(s)

@@ -1,7 +1,9 @@
 //! The JSON Schema of a scene file (`sgbem schema`), for editors that check TOML against a
 //! schema (Taplo, Even Better TOML, IntelliJ): key names, types, allowed words and a short
-//! description of every key, from docs/scene.md. It checks the shape only: ranges that depend
-//! on other keys, expressions, names of mesh groups and files are `sgbem check`'s.
+//! description of every key, from docs/scene.md, and the combinations of keys the reader
+//! refuses (draft-07 `dependencies`, `if`/`then`/`else`, `not`: [`rules`]). Ranges that
+//! depend on other keys' values (a collapse tolerance below its max), expressions, names of
+//! mesh groups and files, and names shared across tables are `sgbem check`'s.
 //!
 //! Place in the flow: nothing reads it; the test below keeps its keys those of `raw`.
 
@@ -48,6 +50,30 @@ fn numbers(description: &str) -> Value {
     json!({ "type": "array", "items": { "type": "number" }, "description": description })
 }
 
+/// `key` is given and is `word`.
+fn is(key: &str, word: &str) -> Value {
+    json!({ "required": [key], "properties": { key: { "const": word } } })
+}
+
+/// Any of `keys` is given.
+fn any_of(keys: &[&str]) -> Value {
+    let each: Vec<Value> = keys.iter().map(|k| json!({ "required": [k] })).collect();
+    json!({ "anyOf": each })
+}
+
+/// `table` with the combinations of keys the reader refuses, `rules` (each a schema the
+/// table must also satisfy), and `dependencies` (key: the schema the table satisfies where
+/// the key is given).
+fn rules(mut table: Value, rules: Vec<Value>, dependencies: Value) -> Value {
+    if !rules.is_empty() {
+        table["allOf"] = Value::Array(rules);
+    }
+    if dependencies.as_object().is_some_and(|d| !d.is_empty()) {
+        table["dependencies"] = dependencies;
+    }
+    table
+}
+
 /// Tables keyed by a group name or pattern, each of the schema `of`.
 fn named(description: &str, of: Value) -> Value {
     json!({ "type": "object", "description": description, "additionalProperties": of })
@@ -67,7 +93,7 @@ fn body() -> Value {
                 json!({
                     "type": "array", "items": { "type": ["number", "string"] },
                     "minItems": 2, "maxItems": 2,
-                    "description": "body force [bx, by] (F/L³): numbers or expressions in x, y, t",
+                    "description": "body force [bx, by] (F/L³): numbers or expressions in t (uniform in the body)",
                 }),
             ),
         ],
@@ -83,7 +109,22 @@ fn boundary() -> Value {
         _ => "normal / tangential traction (F/L²): number or expression",
     };
     let props: Vec<(&str, Value)> = BOUNDARY_KEYS.iter().map(|&k| (k, scalar(d(k)))).collect();
-    table("conditions on a Physical Curve", &props, &[])
+    // Per direction a displacement or a traction, not both; one frame per boundary.
+    let both: Vec<Value> = [["ux", "tx"], ["uy", "ty"], ["un", "tn"], ["ut", "tt"]]
+        .iter()
+        .map(|pair| json!({ "required": pair }))
+        .collect();
+    rules(
+        table("conditions on a Physical Curve", &props, &[]),
+        vec![
+            json!({ "not": { "anyOf": both } }),
+            json!({
+                "if": any_of(&["ux", "uy", "tx", "ty"]),
+                "then": { "not": any_of(&["un", "ut", "tn", "tt"]) },
+            }),
+        ],
+        json!({}),
+    )
 }
 
 /// An interface table; `between` only in a named one (the reader refuses it in a pattern
@@ -127,11 +168,34 @@ fn interface(named: bool) -> Value {
             }),
         ));
     }
-    table("an interface between two bodies", &props, &["model"])
+    let zero = json!({ "const": 0 });
+    rules(
+        table("an interface between two bodies", &props, &["model"]),
+        vec![
+            // tangential = "friction" needs its coefficient.
+            json!({ "if": is("tangential", "friction"), "then": { "required": ["friction"] } }),
+            // A bonded interface starts closed, with no cohesion, gap or sliding.
+            json!({
+                "if": is("model", "bonded"),
+                "then": { "properties": {
+                    "initial": { "const": "closed" }, "cohesion": zero, "gap": zero,
+                    "tangential": { "const": "stick" },
+                } },
+            }),
+            // A gap applies to zones that start open, a cohesion to zones that start closed.
+            json!({
+                "if": is("initial", "open"),
+                "then": { "properties": { "cohesion": zero } },
+                "else": { "properties": { "gap": zero } },
+            }),
+        ],
+        // The coefficient applies with tangential = "friction" only.
+        json!({ "friction": is("tangential", "friction") }),
+    )
 }
 
 fn solve() -> Value {
-    table(
+    let solve = table(
         "the contact solver and the load path",
         &[
             (
@@ -165,6 +229,12 @@ fn solve() -> Value {
             ),
         ],
         &[],
+    );
+    // Load factors or pseudo-time, not both; a collapse search with neither.
+    rules(
+        solve,
+        vec![json!({ "not": { "required": ["time", "load_factors"] } })],
+        json!({ "collapse": { "not": any_of(&["time", "load_factors"]) } }),
     )
 }
 
@@ -182,7 +252,7 @@ fn output() -> Value {
         ],
         &["name", "from", "to", "points"],
     );
-    table(
+    let output = table(
         "what the run writes",
         &[
             ("directory", typed("string", "the run folder")),
@@ -236,8 +306,17 @@ fn output() -> Value {
             ),
         ],
         &[],
+    );
+    // `every` thins a full history (the default).
+    rules(
+        output,
+        Vec::new(),
+        json!({ "every": { "properties": { "history": { "const": "full" } } } }),
     )
 }
+
+/// A `.geo` file name (the extension in any case, as the reader takes it).
+const GEO: &str = "\\.[gG][eE][oO]$";
 
 /// The schema of a scene file.
 pub fn schema() -> Value {
@@ -250,6 +329,9 @@ pub fn schema() -> Value {
                 "properties": { "file": { "type": "string" } },
                 "required": ["file"],
                 "additionalProperties": { "type": "number" },
+                // gmsh parameters apply to a .geo only.
+                "if": { "minProperties": 2 },
+                "then": { "properties": { "file": { "pattern": GEO } } },
             },
         ],
     });
@@ -317,8 +399,17 @@ pub fn schema() -> Value {
         ("solve", solve()),
         ("output", output()),
     ];
-    // The mesh may come from the command line (--mesh) instead.
-    let mut s = table("an sgbem scene (docs/scene.md)", &props, &["plane"]);
+    // The mesh may come from the command line (--mesh) instead. A body table, a pattern
+    // or [defaults.body]: at least one.
+    let bodies = json!({ "anyOf": [
+        { "required": ["body"], "properties": { "body": { "minProperties": 1 } } },
+        { "required": ["defaults"], "properties": { "defaults": { "required": ["body"] } } },
+    ] });
+    let mut s = rules(
+        table("an sgbem scene (docs/scene.md)", &props, &["plane"]),
+        vec![bodies],
+        json!({}),
+    );
     s["$schema"] = json!("http://json-schema.org/draft-07/schema#");
     s["title"] = json!("sgbem scene");
     s
