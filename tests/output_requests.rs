@@ -528,7 +528,9 @@ fn outputs_larger_than_the_free_space_are_refused_by_check_and_run() {
     );
     assert_eq!(c.0, 0, "{}", c.2);
     assert!(
-        c.1.contains("advice: a full history of about") && c.1.contains("more than the 2.1 MB"),
+        c.1.contains("advice: the outputs, about")
+            && c.1.contains("a full history of about")
+            && c.1.contains("may not fit in the 2.1 MB free"),
         "{}",
         c.1
     );
