@@ -12,7 +12,7 @@
 //! With history "steps" or "final" the estimate is within 30 % of what the shipped scenes
 //! write; a full history's number of states is only expected. So the refusal takes the
 //! fewest states the run keeps (one per load step: the size with history "steps") less
-//! those 30 % ([`SURE`]): outputs refused cannot fit. An estimate beyond the free space
+//! those 30 % (`SURE`): outputs refused cannot fit. An estimate beyond the free space
 //! short of that (a full history's, or one within its own error) is a note, not a refusal.
 //! A file system that reports no size at all (`f_blocks` 0: /proc, some FUSE mounts) is
 //! not judged.
@@ -81,7 +81,7 @@ const FIX: &str = "ask for less in [output] (history = \"steps\" keeps one state
 
 impl Space<'_> {
     /// Err (input error, exit 2) when the fewest states the run keeps cannot fit in the free
-    /// space (even at [`SURE`] of their estimate); Ok(Some(note)) when only the estimate
+    /// space (even at `SURE` of their estimate); Ok(Some(note)) when only the estimate
     /// exceeds it; Ok(None) when it fits or the free space cannot be read.
     pub fn check(&self, scene_file: &Path) -> Result<Option<String>> {
         let Some((free, _)) = free_bytes(self.on) else {

@@ -1,7 +1,7 @@
 //! The JSON Schema of a scene file (`sgbem schema`), for editors that check TOML against a
 //! schema (Taplo, Even Better TOML, IntelliJ): key names, types, allowed words and a short
 //! description of every key, from docs/scene.md, and the combinations of keys the reader
-//! refuses (draft-07 `dependencies`, `if`/`then`/`else`, `not`: [`rules`]). Ranges that
+//! refuses (draft-07 `dependencies`, `if`/`then`/`else`, `not`: `rules`). Ranges that
 //! depend on other keys' values (a collapse tolerance below its max), expressions, names of
 //! mesh groups and files, and names shared across tables are `sgbem check`'s.
 //!
