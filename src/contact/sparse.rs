@@ -46,8 +46,7 @@
 use std::collections::HashSet;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::linalg::solvers::SolveCore;
-use faer::sparse::linalg::cholesky;
+use faer::sparse::linalg::{cholesky, lu};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, Mat, Par, Side};
 
@@ -73,6 +72,8 @@ pub struct SparseSystem {
     work: Work,
     /// The storage of the last factor that failed, for the next.
     spare: Vec<f64>,
+    /// The values of the last LU of the Newton attempt, whose storage the next reuses.
+    lu: lu::NumericLu<usize, f64>,
 }
 
 /// A status (open rows, regularisation) and its factorisation, if positive definite.
@@ -220,6 +221,7 @@ impl SparseSystem {
             scratch: Scratch::default(),
             work: Work::default(),
             spare: Vec::new(),
+            lu: lu::NumericLu::new(),
         })
     }
 
@@ -416,7 +418,7 @@ impl SparseSystem {
     /// are fixed in `x` (`hx = H x`); `prox` as for [`SparseSystem::solve_w`]. None where
     /// the matrix is singular (a body left free) or the memory cannot be had.
     fn solve_coupled(
-        &self,
+        &mut self,
         inner: &Inner,
         c: &[f64],
         (open, sg): (&[bool], &[f64]),
@@ -491,18 +493,19 @@ impl SparseSystem {
         }
         let mat = SparseColMat::<usize, f64>::try_new_from_triplets(m, m, &trip).ok()?;
         drop(trip);
-        // The LU of faer's solver API runs at the global parallelism: sequential here, as
-        // the Cholesky factors are (on the 220-stone wall threads cost 15 s of system time
-        // of 103 s, without them the run takes 93 s).
-        let before = faer::get_global_parallelism();
-        faer::set_global_parallelism(PAR);
-        let lu = mat.sp_lu().ok();
+        // Sequential, as the Cholesky factors are; the LU's values and work space are kept
+        // from one status to the next (fresh ones cost their pages again every time: on the
+        // 220-stone wall 13 M page faults and 23 s of system time of 93 s).
+        let symbolic = lu::factorize_symbolic_lu(mat.symbolic(), Default::default()).ok()?;
+        let req = symbolic
+            .factorize_numeric_lu_scratch::<f64>(PAR, Default::default())
+            .or(symbolic.solve_in_place_scratch::<f64>(1, PAR));
+        let stack = self.scratch.stack(req)?;
+        let lu = symbolic
+            .factorize_numeric_lu(&mut self.lu, mat.as_ref(), PAR, stack, Default::default())
+            .ok()?;
         let mut sol = Mat::<f64>::from_fn(m, 1, |i, _| rhs[i]);
-        if let Some(lu) = &lu {
-            lu.solve_in_place_with_conj(Conj::No, sol.as_mut());
-        }
-        faer::set_global_parallelism(before);
-        lu?;
+        lu.solve_in_place_with_conj(Conj::No, sol.as_mut(), PAR, stack);
         let mut w = x.to_vec();
         for k in (0..size).filter(|&k| index[k] != usize::MAX) {
             w[k] = sol[(index[k], 0)];
