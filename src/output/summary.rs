@@ -13,8 +13,9 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::contact::driver::QpCheck;
+use crate::input::model::wrench::Wrench;
 use crate::input::model::Interface;
-use crate::post::equilibrium::{BodyBalance, Wrench};
+use crate::post::equilibrium::BodyBalance;
 use crate::post::thrust::Thrust;
 use crate::solution::{
     ContactSummary, InterfaceResult, MechanismBody, PairStatus, RunStatus, SolverInfo,
