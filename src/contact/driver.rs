@@ -14,6 +14,7 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
+use crate::contact::statics::Verdict;
 use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
@@ -305,6 +306,7 @@ fn finish(
         history,
         states,
         failure,
+        mechanism,
         motion,
         ..
     } = acc;
@@ -352,7 +354,8 @@ fn finish(
         qp: qp_block,
         notes,
         failure,
-        mechanism: motion,
+        // An undecided step has no mechanism to show.
+        mechanism: if mechanism { motion } else { None },
         collapse_mechanism: None,
         operators: None,
     })
@@ -652,6 +655,7 @@ impl StepAcc {
         self.failure = None;
         self.mechanism = false;
         self.motion = None;
+        self.statics = None;
     }
 }
 
@@ -672,8 +676,11 @@ pub(super) struct StepAcc {
     pub(super) failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium): no substeps help.
     pub(super) mechanism: bool,
-    /// The motion of that mechanism, where found.
+    /// The motion the solver found at its "no equilibrium", where found (also where the
+    /// rigid-block check left it undecided: the run then reports none).
     pub(super) motion: Option<Vec<BodyMotion>>,
+    /// The rigid-block check's verdict on that "no equilibrium", where it ran.
+    pub(super) statics: Option<Verdict>,
     /// Substeps solved since the last load step that was subdivided.
     substeps: usize,
 }
@@ -724,6 +731,12 @@ fn contact_step(
             ));
         }
     }
+    // A "no equilibrium" with Coulomb pairs is checked by the rigid-block statics.
+    let t = Instant::now();
+    let verdict = super::statics::judge_step(session.model, f, &mut r);
+    if verdict.is_some() {
+        timings.add("contact_statics", t.elapsed().as_secs_f64());
+    }
     let t = Instant::now();
     keep_recorded(session, &mut r, scene, &mut acc.recorded);
     timings.add("contact_record", t.elapsed().as_secs_f64());
@@ -770,6 +783,7 @@ fn contact_step(
         acc.failure = Some(e);
         acc.mechanism = r.mechanism;
         acc.motion = r.motion;
+        acc.statics = verdict;
     }
 }
 

@@ -85,7 +85,7 @@ pub(super) fn rigid_row(x: [f64; 2], c: [f64; 2], dir: [f64; 2], scale: f64) -> 
     ]
 }
 
-fn body_has_support(model: &Model, b: usize) -> bool {
+pub(crate) fn body_has_support(model: &Model, b: usize) -> bool {
     model.bodies[b].dof_counts()[0] > 0
 }
 

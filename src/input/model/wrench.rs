@@ -11,7 +11,8 @@
 //! * an interface pair's nodal force: at the pair's node on the first body, and on the
 //!   second where its partners are (`pair_arm`).
 
-use super::{Body, Interface};
+use super::{Body, Interface, Model, Role};
+use crate::input::scene::{Condition, Frame};
 
 /// Force (x, y) and moment of one load.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -126,6 +127,50 @@ pub fn pair_arm(c: &Pivot, it: &Interface, body: &Body, j: usize, on_a: bool) ->
     } else {
         c.arm(it.pairs[j].x)
     }
+}
+
+/// The wrench of the loads given on body `bi` at load factor `f` and pseudo-time `t`, about
+/// its centroid, per unit thickness: the prescribed tractions of its boundary parts, linear
+/// along each element between their values at its nodes (as the assembly holds them,
+/// `bem::assembly`), and its body force times its area. Reactions of displacement
+/// conditions and interface forces are not in it.
+pub fn body_load(model: &Model, bi: usize, f: f64, t: f64) -> Wrench {
+    let body = &model.bodies[bi];
+    let (area, c) = centroid(body);
+    let mut total = Wrench::default();
+    let b = match &body.body_force_spec {
+        Some(s) => Some([s[0].eval([0.0, 0.0], t), s[1].eval([0.0, 0.0], t)]),
+        None => body.body_force,
+    };
+    if let Some(b) = b {
+        total.add(body_force_wrench([b[0] * f, b[1] * f], area));
+    }
+    for e in &body.elements {
+        let Role::Boundary(pi) = e.role else { continue };
+        let spec = &model.parts[pi].spec;
+        let mut tr = [[0.0; 2]; 2];
+        for (k, cond) in spec.components.iter().enumerate() {
+            let Condition::Traction(v) = cond else {
+                continue;
+            };
+            let dir = match (spec.frame, k) {
+                (Frame::Global, 0) => [1.0, 0.0],
+                (Frame::Global, _) => [0.0, 1.0],
+                (Frame::Local, 0) => e.tangent,
+                (Frame::Local, _) => e.normal,
+            };
+            for (end, te) in tr.iter_mut().enumerate() {
+                let val = f * v.eval(body.nodes[e.nodes[end]], t);
+                te[0] += val * dir[0];
+                te[1] += val * dir[1];
+            }
+        }
+        if tr != [[0.0; 2]; 2] {
+            let (x0, x1) = (body.nodes[e.nodes[0]], body.nodes[e.nodes[1]]);
+            total.add(segment_wrench(x0, x1, tr[0], tr[1], &c));
+        }
+    }
+    total
 }
 
 #[cfg(test)]
