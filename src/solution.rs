@@ -289,6 +289,12 @@ pub struct CollapseSummary {
     pub tolerance: f64,
     /// Every trial in the order made.
     pub trials: Vec<CollapseTrial>,
+    /// The largest t at which interface forces within the pairs' laws balance every body
+    /// that no displacement condition holds (the rigid-block statics, Coulomb's cone taken
+    /// as it is: an upper bound of the multiplier); `null` where there is none.
+    pub upper_bound: Option<f64>,
+    /// What `upper_bound` is, or why there is none.
+    pub upper_bound_meaning: String,
 }
 
 /// One trial of the collapse search: the multiplier and whether an equilibrium exists.

@@ -553,6 +553,8 @@ mod tests {
                     stands: true,
                     t: 0.0,
                 }],
+                upper_bound: Some(0.8),
+                upper_bound_meaning: "a bound".into(),
             }),
             complementarity_residual: 0.0,
             converged: true,
