@@ -4,8 +4,9 @@
 //! Place in the flow: called by the `driver` before the run itself, which is then made at
 //! the multiplier found. Each trial is a single step from the unloaded state at t; a trial
 //! stands when the contact problem has a solution and fails when the solver reports a
-//! mechanism (no equilibrium exists). The multiplier is bracketed by bisection between 0
-//! (which must stand) and `max`, down to `tolerance`.
+//! mechanism (no equilibrium exists), or one that the rigid-block statics leaves undecided
+//! (`statics`). The multiplier is bracketed by bisection between 0 (which must stand) and
+//! `max`, down to `tolerance`; the statics' largest feasible t bounds it from above.
 
 use std::time::Instant;
 

@@ -3,8 +3,10 @@
 //! Place in the flow: `bem::prepare` (the bodies' operators) → **`driver`** → post-processing.
 //! [`solve`] runs every load step from the state the previous one left (docs/formulation.md
 //! §6, §10): the main solver gives the answer and the history, the cross-check solvers solve the
-//! same step from the same state and their statuses are compared pair by pair. A step that
-//! does not converge for a reason other than a mechanism is solved again in substeps; with
+//! same step from the same state and their statuses are compared pair by pair. A
+//! "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (`statics`):
+//! confirmed, or undecided. A step that does not converge for a reason other than a
+//! mechanism (an undecided one too) is solved again in substeps; with
 //! `[solve] time` and loads that depend on t, every step is assembled at its pseudo-time (the
 //! operators are those of the bodies; the columns of the opening stiffness are kept). With
 //! `[solve] collapse` the largest load multiplier with an equilibrium is searched first
