@@ -279,7 +279,8 @@ pub struct CollapseSummary {
     pub max: f64,
     /// Why the smallest multiplier without an equilibrium has none (`null` if none).
     pub mechanism: Option<String>,
-    /// The motion of that mechanism, body by body (left out where `max` stands).
+    /// The motion of that mechanism, body by body (left out where `max` stands); where the
+    /// rigid-block statics leaves that trial undecided, the motion the solver found.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion: Option<Vec<MechanismBody>>,
     /// The largest multiplier with an equilibrium: the run's.
