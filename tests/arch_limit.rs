@@ -559,7 +559,8 @@ fn collapse_multiplier_of_running_bond_walls_is_the_rigid_block_limit() {
 /// support as it lifts off) and the rigid-block statics' bound (1.085: associative friction,
 /// that sliding not free): the solver ends at that mechanism, but forces within the friction
 /// cones that balance every block exist, so the run's verdict is undecided: exit 3, a
-/// message that no longer says "no equilibrium exists", no mechanism in the summary.
+/// message that no longer says "no equilibrium exists", no mechanism in the summary, no
+/// substeps.
 #[test]
 fn a_mechanism_that_the_statics_cannot_confirm_is_undecided() {
     let dir = support::tmpdir("undecided_wall");
@@ -584,4 +585,7 @@ fn a_mechanism_that_the_statics_cannot_confirm_is_undecided() {
         serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["status"], "not converged");
     assert!(s.get("mechanism").is_none(), "{}", s["mechanism"]);
+    // Like a mechanism, not solved again in substeps.
+    let notes = s["notes"].to_string();
+    assert!(!notes.contains("substeps"), "{notes}");
 }

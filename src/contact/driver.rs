@@ -6,7 +6,7 @@
 //! same step from the same state and their statuses are compared pair by pair. A
 //! "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (`statics`):
 //! confirmed, or undecided. A step that does not converge for a reason other than a
-//! mechanism (an undecided one too) is solved again in substeps; with
+//! mechanism (confirmed or undecided) is solved again in substeps; with
 //! `[solve] time` and loads that depend on t, every step is assembled at its pseudo-time (the
 //! operators are those of the bodies; the columns of the opening stiffness are kept). With
 //! `[solve] collapse` the largest load multiplier with an equilibrium is searched first
@@ -509,7 +509,10 @@ fn load_step(
         reassembled,
     )?;
     let Some(from) = from else { return Ok(()) };
-    if acc.failure.is_none() || acc.mechanism || level >= MAX_SUBDIVISION {
+    // No substeps for a mechanism, nor where the rigid-block statics left the solver's "no
+    // equilibrium" undecided (the solver's finding is a mechanism's all the same).
+    let found_mechanism = acc.mechanism || acc.statics.is_some();
+    if acc.failure.is_none() || found_mechanism || level >= MAX_SUBDIVISION {
         acc.substeps += 1;
         return Ok(());
     }

@@ -319,8 +319,8 @@ pub fn decide(found: &str, v: &Verdict) -> Decision {
 
 /// The check of a step's "no equilibrium": where the step `r` on `model` at load factor `f` ended at a
 /// mechanism and the model has Coulomb pairs, the LP decides its message and whether it
-/// stays a mechanism (an undecided step is no mechanism: it is solved again in substeps
-/// like any other failure); the verdict, where the check ran.
+/// stays a mechanism (an undecided step is no mechanism, though, like one, not solved again
+/// in substeps); the verdict, where the check ran.
 pub(super) fn judge_step(model: &Model, f: f64, r: &mut ContactResult) -> Option<Verdict> {
     if !r.mechanism || !has_coulomb(model) {
         return None;
