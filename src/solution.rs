@@ -279,7 +279,8 @@ pub struct CollapseSummary {
     pub max: f64,
     /// Why the smallest multiplier without an equilibrium has none (`null` if none).
     pub mechanism: Option<String>,
-    /// The motion of that mechanism, body by body (left out where `max` stands).
+    /// The motion of that mechanism, body by body (left out where `max` stands); where the
+    /// rigid-block statics leaves that trial undecided, the motion the solver found.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub motion: Option<Vec<MechanismBody>>,
     /// The largest multiplier with an equilibrium: the run's.
@@ -289,6 +290,12 @@ pub struct CollapseSummary {
     pub tolerance: f64,
     /// Every trial in the order made.
     pub trials: Vec<CollapseTrial>,
+    /// The largest t at which interface forces within the pairs' laws balance every body
+    /// that no displacement condition holds (the rigid-block statics, Coulomb's cone taken
+    /// as it is: an upper bound of the multiplier); `null` where there is none.
+    pub upper_bound: Option<f64>,
+    /// What `upper_bound` is, or why there is none.
+    pub upper_bound_meaning: String,
 }
 
 /// One trial of the collapse search: the multiplier and whether an equilibrium exists.

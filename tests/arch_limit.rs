@@ -86,42 +86,14 @@ fn run_summary(dir: &std::path::Path, scene: &std::path::Path, args: &[&str]) ->
 /// analysis value b/h = 2 (overturning about the toe: t·W·h/2 = W·b/2).
 #[test]
 fn collapse_multiplier_of_a_tilting_block_is_the_rigid_block_limit() {
-    let dir = support::tmpdir("collapse_block");
-    support::gmsh(
-        &support::root().join("geo/two_blocks.geo"),
-        &dir,
-        "tb.msh",
-        false,
-        &["-setnumber", "n", "16"],
+    let dir = support::two_blocks_mesh("collapse_block");
+    let scene = support::two_blocks_scene(
+        "[\"t\", -1.0]",
+        10.0,
+        "[solve]\ncollapse = { max = 5.0, tolerance = 0.001 }",
+        true,
     );
-    let scene = support::write(
-        &dir,
-        "col.toml",
-        r#"
-mesh = "tb.msh"
-plane = "strain"
-[body.lower]
-young = 1000.0
-poisson = 0.3
-[body.upper]
-young = 1000.0
-poisson = 0.3
-body_force = ["t", -1.0]
-[boundary.base]
-ux = 0.0
-uy = 0.0
-[interface.joint]
-model = "unilateral"
-initial = "closed"
-tangential = "friction"
-friction = 10.0
-[solve]
-collapse = { max = 5.0, tolerance = 0.001 }
-[output]
-directory = "out"
-field = false
-"#,
-    );
+    let scene = support::write(&dir, "col.toml", &scene);
     let s = run_summary(&dir, &scene, &[]);
     let c = &s["contact"]["collapse"];
     let (lo, hi) = (
@@ -132,11 +104,20 @@ field = false
     eprintln!("tilting block: collapse multiplier {lo:.4} .. {hi:.4}, rigid block {rigid}");
     assert!(hi - lo <= 0.001 + 1e-12, "bisection to the tolerance");
     assert!((lo / rigid - 1.0).abs() < 0.01, "{lo} vs {rigid}");
+    // The rigid-block statics (tipping at b/h before sliding at μ = 10) is the closed form,
+    // and confirms the mechanism found above it.
+    let bound = c["upper_bound"].as_f64().expect("upper_bound");
+    eprintln!(
+        "tilting block: rigid-block statics upper bound {bound:.9} ({:+.1e})",
+        bound - rigid
+    );
+    assert!((bound - rigid).abs() < 1e-6, "{bound} vs {rigid}");
     let mech = c["mechanism"].as_str().unwrap();
     assert!(
         mech.contains("body \"upper\"") && mech.contains("tipping"),
         "{mech}"
     );
+    assert!(mech.contains("the rigid-block check confirms it"), "{mech}");
     // The reported state is the standing one at the multiplier.
     assert_eq!(s["status"], "converged");
     // The mechanism as data: the block turns clockwise about its toe (1, 0.5), its corner
@@ -200,8 +181,15 @@ fn collapse_multiplier_of_a_two_block_pier_is_the_rigid_block_limit() {
     let c = &s["contact"]["collapse"];
     let lo = c["multiplier"].as_f64().unwrap();
     let rigid = 0.4 / (2.0 * 0.2);
-    eprintln!("two-block pier: collapse multiplier {lo:.4}, rigid blocks {rigid}");
+    let bound = c["upper_bound"].as_f64().expect("upper_bound");
+    eprintln!(
+        "two-block pier: collapse multiplier {lo:.4}, rigid blocks {rigid}, rigid-block \
+         statics {bound:.9} ({:+.1e})",
+        bound - rigid
+    );
     assert!((lo / rigid - 1.0).abs() < 0.01, "{lo} vs {rigid}");
+    // Stick joints: no sliding, so the statics' bound is the rocking limit itself.
+    assert!((bound - rigid).abs() < 1e-6, "{bound} vs {rigid}");
     let mech = c["mechanism"].as_str().unwrap();
     assert!(mech.contains("joints[brick_1|brick_2]"), "{mech}");
 }
@@ -465,6 +453,45 @@ fn rocking_multiplier(blocks: &[Rect], pivot: [f64; 2]) -> f64 {
     restoring / overturning
 }
 
+/// The scene of the running-bond `blocks` (courses `h` high, meshed into `dir`): E = 5 GPa,
+/// bed joints μ = 5, head joints frictionless, the first course clamped, under the body
+/// force `body_force` (TOML), with `extra` (TOML tables) after.
+fn running_bond_scene(
+    dir: &std::path::Path,
+    blocks: &[Rect],
+    body_force: &str,
+    extra: &str,
+) -> String {
+    let h = blocks[0].y1 - blocks[0].y0;
+    let geo = support::write(dir, "wall.geo", &blocks_geo(blocks, h, 4));
+    let msh = support::gmsh(&geo, dir, "wall.msh", false, &[]);
+    format!(
+        r#"plane = "strain"
+[mesh]
+file = "{}"
+[defaults.body]
+young = 5.0e6
+poisson = 0.2
+body_force = {body_force}
+[interface.bed]
+model = "unilateral"
+tangential = "friction"
+friction = 5.0
+[interface.head]
+model = "unilateral"
+tangential = "slide"
+[boundary.base]
+ux = 0.0
+uy = 0.0
+{extra}
+[output]
+history = "final"
+vtk = false
+"#,
+        msh.display()
+    )
+}
+
 /// Running-bond walls on a clamped first course, under a lateral acceleration t·g: the
 /// collapse multiplier of the elastic blocks (E = 5 GPa: nearly rigid; bed joints μ = 5,
 /// head joints frictionless) against rigid-block limit analysis. The courses above the
@@ -485,39 +512,17 @@ fn collapse_multiplier_of_running_bond_walls_is_the_rigid_block_limit() {
         let blocks = running_bond(courses, 2, w, h);
         let lp = rigid_block_limit(&blocks, 5.0);
         let dir = support::tmpdir("collapse_wall");
-        let geo = support::write(&dir, "wall.geo", &blocks_geo(&blocks, h, 4));
-        let msh = support::gmsh(&geo, &dir, "wall.msh", false, &[]);
-        let scene = format!(
-            r#"title = "running-bond wall, {courses} courses"
-plane = "strain"
-[mesh]
-file = "{}"
-[defaults.body]
-young = 5.0e6
-poisson = 0.2
-body_force = ["20*t", -20.0]
-[interface.bed]
-model = "unilateral"
-tangential = "friction"
-friction = 5.0
-[interface.head]
-model = "unilateral"
-tangential = "slide"
-[boundary.base]
-ux = 0.0
-uy = 0.0
-[solve]
-collapse = {{ max = 5.0, tolerance = 0.001 }}
-[output]
-history = "final"
-vtk = false
-"#,
-            msh.display()
+        let scene = running_bond_scene(
+            &dir,
+            &blocks,
+            "[\"20*t\", -20.0]",
+            "[solve]\ncollapse = { max = 5.0, tolerance = 0.001 }",
         );
         let path = support::write(&dir, "wall.toml", &scene);
         let s = run_summary(&dir, &path, &[]);
         let c = &s["contact"]["collapse"];
         let t = c["multiplier"].as_f64().unwrap();
+        let bound = c["upper_bound"].as_f64().expect("upper_bound");
         let junctions = s["contact"]["junctions"]["points"].as_u64().unwrap_or(0);
         // The leeward half brick (b5), with the brick above it (b7) in 3 courses, tipping
         // about its toe.
@@ -531,9 +536,13 @@ vtk = false
         eprintln!(
             "running-bond wall of {courses} courses ({} blocks, {junctions} junctions): \
              collapse multiplier {t:.4}; rigid blocks: mechanism {kinematic:.4}, static LP \
-             {lp:.4}",
-            blocks.len()
+             {lp:.6}, the run's rigid-block statics {bound:.6} ({:+.1e})",
+            blocks.len(),
+            bound - lp
         );
+        // sgbem's statics over every pair of the mesh is this test's LP over the joints'
+        // ends (a joint's cone is spanned by its ends').
+        assert!((bound - lp).abs() < 1e-6, "{bound} vs {lp}");
         assert_eq!(junctions, 3 * (courses as u64 - 1));
         assert!((t / kinematic - 1.0).abs() < 0.01, "{t} vs {kinematic}");
         assert!(t <= lp * 1.001, "{t} above the LP bound {lp}");
@@ -543,4 +552,40 @@ vtk = false
         let mech = c["mechanism"].as_str().unwrap();
         assert!(mech.contains("b5"), "{mech}");
     }
+}
+
+/// The 3-course running-bond wall above at 0.9 g sideways, between its collapse multiplier
+/// (0.714: the leeward half brick tips with the brick above it, which slides over its other
+/// support as it lifts off) and the rigid-block statics' bound (1.085: associative friction,
+/// that sliding not free): the solver ends at that mechanism, but forces within the friction
+/// cones that balance every block exist, so the run's verdict is undecided: exit 3, a
+/// message that no longer says "no equilibrium exists", no mechanism in the summary, no
+/// substeps.
+#[test]
+fn a_mechanism_that_the_statics_cannot_confirm_is_undecided() {
+    let dir = support::tmpdir("undecided_wall");
+    let scene = running_bond_scene(&dir, &running_bond(3, 2, 0.4, 0.2), "[18.0, -20.0]", "");
+    let path = support::write(&dir, "wall.toml", &scene);
+    let out = dir.join("out");
+    let t0 = std::time::Instant::now();
+    let (code, stderr) = support::run_scene(&path, &out);
+    eprintln!(
+        "0.9 g: exit {code} in {:.1} s: {}",
+        t0.elapsed().as_secs_f64(),
+        stderr.trim()
+    );
+    assert_eq!(code, 3, "{stderr}");
+    assert!(
+        stderr.contains("undecided: the solver found no equilibrium, but interface forces")
+            && stderr.contains("method = \"sparse\"")
+            && !stderr.contains("no equilibrium exists"),
+        "{stderr}"
+    );
+    let s: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["status"], "not converged");
+    assert!(s.get("mechanism").is_none(), "{}", s["mechanism"]);
+    // Like a mechanism, not solved again in substeps.
+    let notes = s["notes"].to_string();
+    assert!(!notes.contains("substeps"), "{notes}");
 }

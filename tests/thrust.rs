@@ -47,14 +47,7 @@ history = "final"
 
 /// Runs the block with the top condition `top`; returns its run folder and summary.
 fn run_block(name: &str, top: &str) -> (std::path::PathBuf, Value) {
-    let dir = tmpdir(name);
-    gmsh(
-        &root().join("geo/two_blocks.geo"),
-        &dir,
-        "tb.msh",
-        false,
-        &["-setnumber", "n", "16"],
-    );
+    let dir = two_blocks_mesh(name);
     let scene = write(&dir, "block.toml", &block_scene(top));
     let out = dir.join("out");
     let summary = run(&scene, &out);

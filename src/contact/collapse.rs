@@ -4,12 +4,14 @@
 //! Place in the flow: called by the `driver` before the run itself, which is then made at
 //! the multiplier found. Each trial is a single step from the unloaded state at t; a trial
 //! stands when the contact problem has a solution and fails when the solver reports a
-//! mechanism (no equilibrium exists). The multiplier is bracketed by bisection between 0
-//! (which must stand) and `max`, down to `tolerance`.
+//! mechanism (no equilibrium exists), or one that the rigid-block statics leaves undecided
+//! (`statics`). The multiplier is bracketed by bisection between 0 (which must stand) and
+//! `max`, down to `tolerance`; the statics' largest feasible t bounds it from above.
 
 use std::time::Instant;
 
 use super::driver::{step_at, StepAcc, StepContext, Stepper};
+use super::statics::{self, Bound, Verdict};
 use crate::bem::Operators;
 use crate::contact::Session;
 use crate::error::{Error, Result};
@@ -34,9 +36,34 @@ struct Search<'a, 'b> {
     stepper: &'a Stepper<'b>,
     ctx: &'a StepContext<'b>,
     trials: Vec<CollapseTrial>,
+    /// The rigid-block statics' largest t (`statics::collapse_bound`).
+    bound: Bound,
 }
 
 impl Search<'_, '_> {
+    /// What the search knows so far, for a failure's message: the largest t that stood and
+    /// the rigid-block upper bound.
+    fn bracket(&self) -> String {
+        let stood = self
+            .trials
+            .iter()
+            .filter(|t| t.stands)
+            .map(|t| t.t)
+            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))));
+        let stood = match stood {
+            Some(t) => format!("the largest t that stands so far is {}", fmt_num(t)),
+            None => "no t stands so far".to_string(),
+        };
+        let (bound, meaning) = bound_figures(&self.bound);
+        match bound {
+            Some(b) => format!(
+                "{stood}; no equilibrium exists above t = {} (rigid-block statics)",
+                fmt_num(b)
+            ),
+            None => format!("{stood}; rigid-block upper bound: {meaning}"),
+        }
+    }
+
     /// One trial at `t`: `Some((mechanism, motion))` when no equilibrium exists, an error
     /// when the solver fails otherwise.
     fn trial(
@@ -63,13 +90,17 @@ impl Search<'_, '_> {
             reassembled,
         )?;
         timings.add_within("collapse_search", t0.elapsed().as_secs_f64(), inner);
+        // A "no equilibrium" that the rigid-block check leaves undecided fails the trial
+        // too (its message says so; the bracket stays [multiplier, upper_bound]).
+        let undecided = a.statics == Some(Verdict::Feasible);
         let outcome = match a.failure {
             None => None,
-            Some(e) if a.mechanism => Some((e, a.motion)),
+            Some(e) if a.mechanism || undecided => Some((e, a.motion)),
             Some(e) => {
                 return Err(Error::numerical(format!(
-                    "the collapse search failed at t = {}: {}",
+                    "the collapse search failed at t = {} ({}): {}",
                     fmt_num(t),
+                    self.bracket(),
                     e.message()
                 )))
             }
@@ -95,6 +126,7 @@ pub(super) fn search(
         stepper,
         ctx,
         trials: Vec::new(),
+        bound: statics::collapse_bound(stepper.case.scene, stepper.case.model, c.max),
     };
     if let Some((e, _)) = s.trial(0.0, session, timings, reassembled)? {
         return Err(Error::numerical(format!(
@@ -120,6 +152,7 @@ pub(super) fn search(
         }
     }
     let collapses = mechanism.is_some();
+    let (upper_bound, upper_bound_meaning) = bound_figures(&s.bound);
     let (message, motion) = mechanism.map_or((None, None), |(e, m)| (Some(e), m));
     Ok(Found {
         multiplier: lo,
@@ -134,7 +167,31 @@ pub(super) fn search(
             state: "the results are those of the largest multiplier with an equilibrium",
             tolerance: c.tolerance,
             trials: s.trials,
+            upper_bound,
+            upper_bound_meaning,
         },
         motion,
     })
+}
+
+/// The summary's `upper_bound` and what it is (or why there is none).
+fn bound_figures(b: &Bound) -> (Option<f64>, String) {
+    match b {
+        Bound::Value(t) => (
+            Some(*t),
+            "the largest t at which interface forces within the pairs' laws (Coulomb's cone, \
+             no tension) balance every body that no displacement condition holds (rigid-block \
+             statics, docs/formulation.md §6.9): no equilibrium exists above it"
+                .to_string(),
+        ),
+        Bound::Unbounded => (
+            None,
+            "none: such forces exist at every t (the rigid-block statics is unbounded)".into(),
+        ),
+        Bound::Infeasible => (
+            None,
+            "none: such forces exist at no t (the rigid-block statics is infeasible)".into(),
+        ),
+        Bound::None(why) => (None, format!("none: {why}")),
+    }
 }

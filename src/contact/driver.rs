@@ -3,8 +3,10 @@
 //! Place in the flow: `bem::prepare` (the bodies' operators) → **`driver`** → post-processing.
 //! [`solve`] runs every load step from the state the previous one left (docs/formulation.md
 //! §6, §10): the main solver gives the answer and the history, the cross-check solvers solve the
-//! same step from the same state and their statuses are compared pair by pair. A step that
-//! does not converge for a reason other than a mechanism is solved again in substeps; with
+//! same step from the same state and their statuses are compared pair by pair. A
+//! "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (`statics`):
+//! confirmed, or undecided. A step that does not converge for a reason other than a
+//! mechanism (confirmed or undecided) is solved again in substeps; with
 //! `[solve] time` and loads that depend on t, every step is assembled at its pseudo-time (the
 //! operators are those of the bodies; the columns of the opening stiffness are kept). With
 //! `[solve] collapse` the largest load multiplier with an equilibrium is searched first
@@ -14,6 +16,7 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
+use crate::contact::statics::Verdict;
 use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
 use crate::input::model::{fmt_num, Model};
@@ -305,6 +308,7 @@ fn finish(
         history,
         states,
         failure,
+        mechanism,
         motion,
         ..
     } = acc;
@@ -352,7 +356,8 @@ fn finish(
         qp: qp_block,
         notes,
         failure,
-        mechanism: motion,
+        // An undecided step has no mechanism to show.
+        mechanism: if mechanism { motion } else { None },
         collapse_mechanism: None,
         operators: None,
     })
@@ -504,7 +509,10 @@ fn load_step(
         reassembled,
     )?;
     let Some(from) = from else { return Ok(()) };
-    if acc.failure.is_none() || acc.mechanism || level >= MAX_SUBDIVISION {
+    // No substeps for a mechanism, nor where the rigid-block statics left the solver's "no
+    // equilibrium" undecided (the solver's finding is a mechanism's all the same).
+    let found_mechanism = acc.mechanism || acc.statics.is_some();
+    if acc.failure.is_none() || found_mechanism || level >= MAX_SUBDIVISION {
         acc.substeps += 1;
         return Ok(());
     }
@@ -652,6 +660,7 @@ impl StepAcc {
         self.failure = None;
         self.mechanism = false;
         self.motion = None;
+        self.statics = None;
     }
 }
 
@@ -672,8 +681,11 @@ pub(super) struct StepAcc {
     pub(super) failure: Option<Error>,
     /// The failure is a mechanism (no equilibrium): no substeps help.
     pub(super) mechanism: bool,
-    /// The motion of that mechanism, where found.
+    /// The motion the solver found at its "no equilibrium", where found (also where the
+    /// rigid-block check left it undecided: the run then reports none).
     pub(super) motion: Option<Vec<BodyMotion>>,
+    /// The rigid-block check's verdict on that "no equilibrium", where it ran.
+    pub(super) statics: Option<Verdict>,
     /// Substeps solved since the last load step that was subdivided.
     substeps: usize,
 }
@@ -724,6 +736,12 @@ fn contact_step(
             ));
         }
     }
+    // A "no equilibrium" with Coulomb pairs is checked by the rigid-block statics.
+    let t = Instant::now();
+    let verdict = super::statics::judge_step(session.model, f, &mut r);
+    if verdict.is_some() {
+        timings.add("contact_statics", t.elapsed().as_secs_f64());
+    }
     let t = Instant::now();
     keep_recorded(session, &mut r, scene, &mut acc.recorded);
     timings.add("contact_record", t.elapsed().as_secs_f64());
@@ -770,6 +788,7 @@ fn contact_step(
         acc.failure = Some(e);
         acc.mechanism = r.mechanism;
         acc.motion = r.motion;
+        acc.statics = verdict;
     }
 }
 

@@ -40,6 +40,7 @@ pub mod mechanism;
 pub mod problem;
 pub mod qp;
 pub mod sparse;
+pub mod statics;
 
 use std::collections::HashSet;
 

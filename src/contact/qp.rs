@@ -1,5 +1,6 @@
-//! The contact problem as one convex quadratic programme, solved with Clarabel (the only
-//! module that touches Clarabel; [paper §3.2], docs/formulation.md §6.3).
+//! The contact problem as one convex quadratic programme, solved with Clarabel (with
+//! `statics`, the rigid-block LP, the only modules that touch Clarabel; [paper §3.2],
+//! docs/formulation.md §6.3).
 //!
 //! Place in the flow: `lcp` (the inner problem) → **`qp`** → `contact`. The inner LCP of
 //! `problem` is the optimality system of

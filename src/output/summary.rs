@@ -13,8 +13,9 @@ use std::collections::BTreeMap;
 use serde::Serialize;
 
 use crate::contact::driver::QpCheck;
+use crate::input::model::wrench::Wrench;
 use crate::input::model::Interface;
-use crate::post::equilibrium::{BodyBalance, Wrench};
+use crate::post::equilibrium::BodyBalance;
 use crate::post::thrust::Thrust;
 use crate::solution::{
     ContactSummary, InterfaceResult, MechanismBody, PairStatus, RunStatus, SolverInfo,
@@ -552,6 +553,8 @@ mod tests {
                     stands: true,
                     t: 0.0,
                 }],
+                upper_bound: Some(0.8),
+                upper_bound_meaning: "a bound".into(),
             }),
             complementarity_residual: 0.0,
             converged: true,

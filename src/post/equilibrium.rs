@@ -26,34 +26,11 @@
 //!   hold exactly for the P1 hats, so no quadrature enters.
 //! * **Body force**: `b |Ω|` at the centroid (no moment about it).
 
+use crate::input::model::wrench::{
+    body_force_wrench, centroid, cross, pair_arm, segment_wrench, Pivot, Wrench,
+};
 use crate::input::model::{Body, Interface, Model, Role};
 use crate::solution::{BodyField, InterfaceResult};
-
-/// Force (x, y) and moment of one load.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Wrench {
-    pub fx: f64,
-    pub fy: f64,
-    pub m: f64,
-}
-
-impl Wrench {
-    fn add(&mut self, o: Wrench) {
-        self.fx += o.fx;
-        self.fy += o.fy;
-        self.m += o.m;
-    }
-    fn scaled(self, k: f64) -> Wrench {
-        Wrench {
-            fx: self.fx * k,
-            fy: self.fy * k,
-            m: self.m * k,
-        }
-    }
-    pub fn force(&self) -> f64 {
-        self.fx.hypot(self.fy)
-    }
-}
 
 /// The loads of one body and their imbalance.
 #[derive(Debug, Clone)]
@@ -90,74 +67,6 @@ fn held_directions(model: &Model, e: &crate::input::model::Element, pi: usize) -
         .collect()
 }
 
-fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
-}
-
-/// The centroid moments are taken about, kept as one of the body's nodes `o` and the
-/// centroid relative to it, `c`: far from the origin the centroid itself rounds to the
-/// spacing of coordinates there, but an arm `(x − o) − c` keeps every digit.
-#[derive(Debug, Clone, Copy)]
-pub struct Pivot {
-    pub o: [f64; 2],
-    pub c: [f64; 2],
-}
-
-impl Pivot {
-    /// The arm from the centroid to `x`.
-    fn arm(&self, x: [f64; 2]) -> [f64; 2] {
-        [
-            (x[0] - self.o[0]) - self.c[0],
-            (x[1] - self.o[1]) - self.c[1],
-        ]
-    }
-    /// The arm from the centroid to a point given relative to `o`.
-    fn arm_rel(&self, r: [f64; 2]) -> [f64; 2] {
-        [r[0] - self.c[0], r[1] - self.c[1]]
-    }
-    /// The centroid in absolute coordinates (rounded far from the origin).
-    pub fn point(&self) -> [f64; 2] {
-        [self.o[0] + self.c[0], self.o[1] + self.c[1]]
-    }
-}
-
-/// Area and centroid of a body's polygonal boundary (the body is on the left of every
-/// element, so holes subtract), relative to its first node to keep the digits.
-pub fn centroid(body: &Body) -> (f64, Pivot) {
-    let o = body.nodes.first().copied().unwrap_or([0.0; 2]);
-    let (mut a, mut cx, mut cy) = (0.0, 0.0, 0.0);
-    for e in &body.elements {
-        let p = body.nodes[e.nodes[0]];
-        let q = body.nodes[e.nodes[1]];
-        let (p, q) = ([p[0] - o[0], p[1] - o[1]], [q[0] - o[0], q[1] - o[1]]);
-        let w = cross(p, q);
-        a += 0.5 * w;
-        cx += (p[0] + q[0]) * w / 6.0;
-        cy += (p[1] + q[1]) * w / 6.0;
-    }
-    if a == 0.0 {
-        return (0.0, Pivot { o, c: [0.0; 2] });
-    }
-    (
-        a,
-        Pivot {
-            o,
-            c: [cx / a, cy / a],
-        },
-    )
-}
-
-/// The wrench about `c` of a traction linear along the segment `x0 → x1`.
-fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c: &Pivot) -> Wrench {
-    let l = (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
-    let (r0, r1) = (c.arm(x0), c.arm(x1));
-    Wrench {
-        fx: 0.5 * l * (t0[0] + t1[0]),
-        fy: 0.5 * l * (t0[1] + t1[1]),
-        m: l / 6.0 * (2.0 * cross(r0, t0) + cross(r0, t1) + cross(r1, t0) + 2.0 * cross(r1, t1)),
-    }
-}
-
 /// Every body's loads and imbalance in one solved state, with the state's body forces
 /// `body_force` (before the load factor).
 pub fn balances(
@@ -180,11 +89,7 @@ pub fn balances(
         if let Some(b) = body_force.get(bi).copied().flatten() {
             add(
                 "body_force".into(),
-                Wrench {
-                    fx: b[0] * load_factor * area,
-                    fy: b[1] * load_factor * area,
-                    m: 0.0,
-                },
+                body_force_wrench([b[0] * load_factor, b[1] * load_factor], area),
             );
         }
         // Where the reactions of the held nodes are known, the held components of the
@@ -293,11 +198,7 @@ fn interface_wrench(
             sign * wj * (ts * p.tangent[1] + tn * p.normal[1]),
         ];
         // Where the sides were meshed on their own, B takes the force where its partners are.
-        let arm = if sign < 0.0 && it.independent() {
-            c.arm_rel(it.b_offset(body, j, c.o))
-        } else {
-            c.arm(p.x)
-        };
+        let arm = pair_arm(c, it, body, j, sign > 0.0);
         total.add(Wrench {
             fx: f[0],
             fy: f[1],
@@ -385,33 +286,4 @@ fn diagonal(body: &Body) -> f64 {
         }
     }
     (hi[0] - lo[0]).hypot(hi[1] - lo[1])
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn linear_traction_on_a_segment_integrates_exactly() {
-        // t = (0, s) along x from 0 to 2 (s = x): F = 2, M about 0 = ∫ x·x dx = 8/3.
-        let at = |c: [f64; 2]| Pivot { o: [0.0; 2], c };
-        let w = segment_wrench(
-            [0.0, 0.0],
-            [2.0, 0.0],
-            [0.0, 0.0],
-            [0.0, 2.0],
-            &at([0.0; 2]),
-        );
-        assert!((w.fy - 2.0).abs() < 1e-15 && w.fx == 0.0);
-        assert!((w.m - 8.0 / 3.0).abs() < 1e-15, "{}", w.m);
-        // About the resultant's line of action x = 4/3 the moment vanishes.
-        let w = segment_wrench(
-            [0.0, 0.0],
-            [2.0, 0.0],
-            [0.0, 0.0],
-            [0.0, 2.0],
-            &at([4.0 / 3.0, 5.0]),
-        );
-        assert!(w.m.abs() < 1e-15, "{}", w.m);
-    }
 }

@@ -325,6 +325,67 @@ pub fn reset_peak() {
     let _ = std::fs::write("/proc/self/clear_refs", "5");
 }
 
+/// A fresh folder `name` with `geo/two_blocks.geo` meshed (16 elements per unit length) as
+/// `tb.msh`: "upper" (1 × 0.5) on "lower" (clamped at its bottom, `base`), joined along
+/// `joint`.
+pub fn two_blocks_mesh(name: &str) -> PathBuf {
+    let dir = tmpdir(name);
+    gmsh(
+        &root().join("geo/two_blocks.geo"),
+        &dir,
+        "tb.msh",
+        false,
+        &["-setnumber", "n", "16"],
+    );
+    dir
+}
+
+/// The scene of [`two_blocks_mesh`]: both blocks E = 1000, ν = 0.3, the upper one under
+/// the body force `body_force` (a TOML value), Coulomb friction μ on the joint (closed at
+/// the start), then the TOML tables `solve`; output to `out` without the interior field,
+/// and without VTK files unless `vtk`.
+pub fn two_blocks_scene(body_force: &str, mu: f64, solve: &str, vtk: bool) -> String {
+    format!(
+        r#"
+mesh = "tb.msh"
+plane = "strain"
+[body.lower]
+young = 1000.0
+poisson = 0.3
+[body.upper]
+young = 1000.0
+poisson = 0.3
+body_force = {body_force}
+[boundary.base]
+ux = 0.0
+uy = 0.0
+[interface.joint]
+model = "unilateral"
+initial = "closed"
+tangential = "friction"
+friction = {mu}
+{solve}
+[output]
+directory = "out"
+field = false
+vtk = {vtk}
+"#
+    )
+}
+
+/// A unit body force tilted by θ from the vertical, tan θ = `tan` (a TOML array).
+pub fn tilted(tan: f64) -> String {
+    let th = tan.atan();
+    format!("[{}, {}]", th.sin(), -th.cos())
+}
+
+/// `sgbem run SCENE --out OUT --quiet`: the exit code and stderr.
+pub fn run_scene(scene: &Path, out: &Path) -> (i32, String) {
+    let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();
+    let (code, _, err) = sgbem(&["run", &s(scene), "--out", &s(out), "--quiet"]);
+    (code, err)
+}
+
 /// `sgbem run SCENE --mesh MESH --out OUT --quiet`.
 pub fn run_quiet(scene: &Path, mesh: &Path, out: &Path) -> (i32, String, String) {
     let s = |p: &Path| p.to_str().expect("utf-8 path").to_string();

@@ -135,7 +135,7 @@ pub(super) fn rigid_row(x: [f64; 2], c: &Centre, dir: [f64; 2], scale: f64) -> [
     [dir[0], dir[1], (-r[1] * dir[0] + r[0] * dir[1]) / scale]
 }
 
-fn body_has_support(model: &Model, b: usize) -> bool {
+pub(crate) fn body_has_support(model: &Model, b: usize) -> bool {
     model.bodies[b].dof_counts()[0] > 0
 }
 

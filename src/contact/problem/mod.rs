@@ -71,6 +71,7 @@ use crate::input::model::Model;
 use crate::linalg::matvec;
 use crate::solution::{BodyField, BodyMotion, InterfaceResult};
 
+pub(crate) use mechanism::body_has_support;
 pub use mechanism::mechanism_hint;
 pub use opening::Opening;
 

@@ -45,6 +45,7 @@ mod curves;
 mod detect;
 mod interface;
 mod overlap;
+pub mod wrench;
 
 pub(crate) use body::winding;
 use body::{build_body, mark_traction_breaks, node_dofs};
