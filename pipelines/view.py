@@ -159,6 +159,10 @@ def main():
     boundary = [(s, b) for s, b in blocks
                 if b.GetPointData().GetArray("stress") is None and (s, b) not in thrust
                 and (s, b) not in contact and (s, b) not in mechanism]
+    # Every block at this time by name (an unnamed block as its index, a plain grid as
+    # "grid"): what a test checks against the run.
+    names = [s.rsplit("/", 1)[-1] if s is not None else "grid" for s, _ in blocks]
+    print(f"view: {run}: blocks at time {t:g}: {' '.join(names)}")
     if not boundary:
         sys.exit(f"view: {run}: the series has no boundary block at time {t:g}")
     show = field[0][1] if field else boundary[0][1]

@@ -5,10 +5,15 @@ runs when view.py extracted a block from the plain grid its reader returned).
 Skipped, saying so, where pvpython or xvfb-run is missing (`make setup` does not install
 ParaView: apt-get install -y paraview xvfb)."""
 
+import concurrent.futures
+import json
+import pathlib
 import random
 import shutil
 import subprocess
+import tempfile
 import time
+import tomllib
 
 import numpy as np
 import pytest
@@ -16,6 +21,7 @@ from PIL import Image  # pillow, installed with matplotlib
 
 import sgbem
 from conftest import ROOT, mesh
+from sgbem._cli import executable
 
 pytestmark = pytest.mark.skipif(
     not (shutil.which("pvpython") and shutil.which("xvfb-run")),
@@ -120,3 +126,87 @@ def test_paraview_draws_a_mechanism(tmp_path):
     px = picture(png)
     orange = (px[:, :, 0] > 230) & (abs(px[:, :, 1] - 128) < 40) & (px[:, :, 2] < 60)
     assert int(orange.sum()) > 500
+
+
+# --- `make view` on every shipped scene (issue 22 item 1) ------------------------------------
+
+SCENES = sorted(p.stem for p in (ROOT / "pipelines").glob("*.toml"))
+# Scenes that end at a mechanism by design: exit 3, every output written (the Makefile's
+# MECHANISM_EXAMPLES).
+MECHANISM_EXIT = {"incline_block_slides"}
+
+
+class SceneRuns:
+    """Every shipped scene run once by the built sgbem (`--quiet`, as `make examples` does),
+    each into its own folder of one temporary folder removed at the end of the module. The
+    runs go one at a time on a background thread in the order of the tests, so that ParaView
+    draws one scene while sgbem computes the next; `get` waits for a scene's run. A scene
+    whose mesh is a file under out/mesh/ gets that mesh made here by gmsh from geo/ (as
+    `make mesh` does) and passed with --mesh; a scene with a .geo meshes it itself."""
+
+    def __init__(self, root):
+        self.root = root
+        self.pool = concurrent.futures.ThreadPoolExecutor(max_workers=1)
+        self.runs = {name: self.pool.submit(self._run, name) for name in SCENES}
+
+    def _run(self, name):
+        scene = ROOT / "pipelines" / f"{name}.toml"
+        folder = self.root / name
+        folder.mkdir()
+        argv = [executable(), "run", str(scene), "--out", str(folder / "run"),
+                "--quiet"]
+        with scene.open("rb") as f:
+            declared = tomllib.load(f).get("mesh")
+        if isinstance(declared, str) and declared.endswith(".msh"):
+            argv += ["--mesh", str(mesh(f"geo/{pathlib.Path(declared).stem}.geo", folder))]
+        start = time.monotonic()
+        proc = subprocess.run(argv, capture_output=True, text=True, check=False)
+        return proc.returncode, proc.stderr, folder / "run", time.monotonic() - start
+
+    def get(self, name):
+        return self.runs[name].result()
+
+    def close(self):
+        self.pool.shutdown(wait=True, cancel_futures=True)
+        shutil.rmtree(self.root, ignore_errors=True)
+
+
+@pytest.fixture(scope="module")
+def scene_runs():
+    runs = SceneRuns(pathlib.Path(tempfile.mkdtemp(prefix="sgbem-scenes-")))
+    yield runs
+    runs.close()
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_make_view_on_every_scene(name, scene_runs, tmp_path):
+    """view.py (what `make view NAME=...` runs: xvfb-run -a pvpython pipelines/view.py RUN
+    PNG) on the run of every shipped scene: exit 0, a picture that is not blank, and the
+    blocks the run has: "boundary" always, "field" exactly where the run computed an
+    interior field, "contact" and "thrust" where it has interfaces, "mechanism" where it
+    failed at a mechanism (exit 3) or its collapse search found one."""
+    code, stderr, run, _ = scene_runs.get(name)
+    expected_code = 3 if name in MECHANISM_EXIT else 0
+    assert code == expected_code, f"sgbem run {name}: exit {code}\n{stderr[-2000:]}"
+    summary = json.loads((run / "summary.json").read_text())
+    png = tmp_path / f"{name}.png"
+    out = pvpython(ROOT / "pipelines/view.py", run, png)
+    line = next((ln for ln in out.splitlines() if ": blocks at time " in ln), None)
+    assert line is not None, out
+    blocks = line.split(": ")[-1].split()
+    assert blocks.count("boundary") == 1, line
+    assert ("field" in blocks) == (summary["counts"]["field_nodes"] > 0), line
+    has_interfaces = bool(summary["interfaces"])
+    assert ("contact" in blocks) == has_interfaces, line
+    assert ("thrust" in blocks) == has_interfaces, line
+    collapse = summary["contact"].get("collapse") or {}
+    mechanism = code == 3 or bool(collapse.get("motion"))
+    assert ("mechanism" in blocks) == mechanism, line
+    assert ", mechanism" in out if mechanism else ", mechanism" not in out
+    px = picture(png)
+    assert px.shape == (700, 1600, 3)
+    assert px.std() > 10, f"{name}: a blank picture (pixel std {px.std():.2f})"
+    assert drawn(px) > 5000, f"{name}: only {drawn(px)} pixels drawn"
+    if "field" in blocks:
+        assert coloured(px) > 20000, f"{name}: von Mises not drawn"
+    assert (run / "vtk" / "view.pvsm").is_file()
