@@ -217,7 +217,10 @@ def main():
     ld.Color = [0, 0, 0]
     ld.FontSize = 14
     ld.WindowLocation = "Upper Center"
-    # Fit the model's bounding box (with room for the warp) in the picture.
+    # Fit the model's bounding box (with room for the warp) in the picture. The first
+    # Render of paraview.simple resets the camera to the data's bounding sphere (a tight
+    # framing, the title over the model's top): render once before the camera is set.
+    Render(view)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     centre = 0.5 * (lo + hi)
     w, h = float(hi[0] - lo[0]), float(hi[1] - lo[1])
