@@ -20,7 +20,8 @@ has one "mechanism"), or history.pvd of older runs; either may come back from Pa
 reader as a multiblock or, with a single part, as a plain grid: both are handled. The view
 is set at the last time step. The warp factor comes from the results: 5 % of the model size
 (the larger side of its bounding box) over the largest displacement magnitude, rounded to
-1, 2 or 5 times a power of ten; it is printed and written in the picture's title. Writes
+1, 2 or 5 times a power of ten; it is printed and written in the picture's title. The blocks
+at that time are printed by name ("view: RUN: blocks at time T: boundary field ..."). Writes
 RUN_DIR/vtk/view.pvsm (File > Load State in ParaView opens this view at the last time).
 """
 import math
