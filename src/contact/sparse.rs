@@ -46,7 +46,7 @@
 use std::collections::HashSet;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::{cholesky, lu};
+use faer::sparse::linalg::{cholesky, lu, SupernodalThreshold};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, Mat, Par, Side};
 
@@ -495,8 +495,23 @@ impl SparseSystem {
         drop(trip);
         // Sequential, as the Cholesky factors are; the LU's values and work space are kept
         // from one status to the next (fresh ones cost their pages again every time: on the
-        // 220-stone wall 13 M page faults and 23 s of system time of 93 s).
-        let symbolic = lu::factorize_symbolic_lu(mat.symbolic(), Default::default()).ok()?;
+        // 220-stone wall 13 M page faults and 23 s of system time of 93 s). Kept only in
+        // faer's supernodal LU, which clears its storage before use: its simplicial one
+        // keeps column pointers of a larger earlier matrix (faer 0.24), so small systems,
+        // which cost little anyway, take fresh storage.
+        let reuse = m >= LU_REUSE_FROM;
+        if !reuse {
+            self.lu = lu::NumericLu::new();
+        }
+        let params = lu::LuSymbolicParams {
+            supernodal_flop_ratio_threshold: if reuse {
+                SupernodalThreshold::FORCE_SUPERNODAL
+            } else {
+                SupernodalThreshold::AUTO
+            },
+            ..Default::default()
+        };
+        let symbolic = lu::factorize_symbolic_lu(mat.symbolic(), params).ok()?;
         let req = symbolic
             .factorize_numeric_lu_scratch::<f64>(PAR, Default::default())
             .or(symbolic.solve_in_place_scratch::<f64>(1, PAR));
@@ -592,6 +607,10 @@ const COUPLED_SWITCHES: usize = 100;
 /// is more (the stone wall: 5 110 rows, 511 iterations; a trial beyond a collapse
 /// multiplier spends all of them, so a small wall keeps 50).
 const COUPLED_ROWS_PER_ITERATION: usize = 10;
+
+/// Unknowns from which the Newton attempt's LU keeps its storage between statuses (in faer's
+/// supernodal LU, which the systems of walls take anyway: the 220-stone wall's 8 000).
+const LU_REUSE_FROM: usize = 1000;
 
 /// Displacements this many times those of the loaded, all-closed state mean a body is free.
 const SINGULAR: f64 = 1e7;
