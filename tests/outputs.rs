@@ -239,9 +239,16 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         .collect()
 }
 
+/// A string attribute, which must be fixed-length (no global heap).
 fn attr_string(loc: &h5::Location, name: &str) -> String {
-    let v: h5::types::VarLenUnicode = loc.attr(name).unwrap().read_scalar().unwrap();
-    v.as_str().to_string()
+    let a = loc.attr(name).unwrap();
+    match a.dtype().unwrap().to_descriptor().unwrap() {
+        h5::types::TypeDescriptor::FixedUnicode(n) if n <= 1 << 16 => {
+            let v: h5::types::FixedUnicode<65536> = a.read_scalar().unwrap();
+            v.as_str().to_string()
+        }
+        d => panic!("attribute {name} is {d}, not a fixed-length string"),
+    }
 }
 
 #[test]
@@ -356,7 +363,14 @@ fn archive_layout_attributes_and_shapes() {
             if let Ok(ds) = g.dataset(&name) {
                 for a in ["description", "units"] {
                     assert!(ds.attr(a).is_ok(), "{}/{name} lacks {a}", g.name());
+                    attr_string(&ds, a);
                 }
+                // Chunked with checksums, but the scalars (which cannot be).
+                assert!(
+                    ds.is_chunked() || ds.ndim() == 0,
+                    "{}/{name} is not chunked",
+                    g.name()
+                );
                 checked += 1;
             } else if let Ok(sub) = g.group(&name) {
                 stack.push(sub);
@@ -370,13 +384,15 @@ fn archive_layout_attributes_and_shapes() {
 
 #[test]
 fn large_datasets_are_chunked_and_compressed() {
-    // Only with output.compress = true; unfiltered by default.
+    // Compressed only with output.compress = true; chunked with checksums always.
     let dir = tmpdir("outputs-chunks");
     let plain = dir.join("plain.h5");
     write_archive(&plain, &fabricated(80)).expect("write");
     let f = h5::File::open(&plain).unwrap();
-    assert!(!f.dataset("bodies/lower/A00").unwrap().is_chunked());
-    drop(f);
+    let a00 = f.dataset("bodies/lower/A00").unwrap();
+    assert!(a00.is_chunked());
+    assert_eq!(a00.filters(), [h5::filters::Filter::Fletcher32]);
+    drop((a00, f));
     let path = dir.join("archive.h5");
     let mut rec = fabricated(80);
     rec.compress = true;
@@ -385,7 +401,8 @@ fn large_datasets_are_chunked_and_compressed() {
     let big = f.dataset("bodies/lower/A00").unwrap();
     assert_eq!(big.shape(), [80, 80]);
     let small = f.dataset("bodies/lower/A").unwrap();
-    assert!(!small.is_chunked());
+    assert!(small.is_chunked());
+    assert_eq!(small.filters(), [h5::filters::Filter::Fletcher32]);
     if h5::filters::deflate_available() {
         assert!(big.is_chunked());
         assert!(!big.filters().is_empty());
