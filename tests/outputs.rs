@@ -1396,3 +1396,89 @@ fn progress_is_hidden_when_quiet() {
     spin.inc(1);
     spin.finish();
 }
+
+/// Rewrites the fixed-length strings under `g` (attributes and string datasets, with their
+/// attributes) as variable-length ones, as archives were written before.
+fn strings_to_varlen(g: &h5::Group) {
+    use h5::types::{FixedUnicode, TypeDescriptor, VarLenUnicode};
+    let is_fixed =
+        |t: h5::Datatype| matches!(t.to_descriptor().unwrap(), TypeDescriptor::FixedUnicode(_));
+    let varlen = |v: Vec<FixedUnicode<65536>>| -> Vec<VarLenUnicode> {
+        v.iter().map(|s| s.as_str().parse().unwrap()).collect()
+    };
+    let attrs = |loc: &h5::Location| {
+        for name in loc.attr_names().unwrap() {
+            let a = loc.attr(&name).unwrap();
+            if !is_fixed(a.dtype().unwrap()) {
+                continue;
+            }
+            let (scalar, v) = (a.is_scalar(), varlen(a.read_raw().unwrap()));
+            drop(a);
+            loc.delete_attr(&name).unwrap();
+            if scalar {
+                let a = loc
+                    .new_attr::<VarLenUnicode>()
+                    .shape(())
+                    .create(name.as_str());
+                a.unwrap().write_scalar(&v[0]).unwrap();
+            } else {
+                let v = ndarray::Array1::from(v);
+                loc.new_attr_builder()
+                    .with_data(&v)
+                    .create(name.as_str())
+                    .unwrap();
+            }
+        }
+    };
+    attrs(g);
+    for name in g.member_names().unwrap() {
+        if let Ok(sub) = g.group(&name) {
+            strings_to_varlen(&sub);
+        } else if let Ok(ds) = g.dataset(&name) {
+            if is_fixed(ds.dtype().unwrap()) {
+                let v = ndarray::Array1::from(varlen(ds.read_raw().unwrap()));
+                let texts: Vec<Vec<VarLenUnicode>> = ["description", "units"]
+                    .iter()
+                    .map(|a| varlen(ds.attr(a).unwrap().read_raw().unwrap()))
+                    .collect();
+                drop(ds);
+                g.unlink(&name).unwrap();
+                let ds = g.new_dataset_builder().with_data(&v);
+                let ds = ds.create(name.as_str()).unwrap();
+                for (a, t) in ["description", "units"].iter().zip(&texts) {
+                    let a = ds.new_attr::<VarLenUnicode>().shape(()).create(*a);
+                    a.unwrap().write_scalar(&t[0]).unwrap();
+                }
+            }
+            attrs(&g.dataset(&name).unwrap());
+        }
+    }
+}
+
+#[test]
+fn archives_with_variable_length_strings_are_still_read() {
+    let dir = tmpdir("outputs-varlen");
+    let good = dir.join("good.h5");
+    write_archive(&good, &fabricated(3)).unwrap();
+    let old = damaged_copy(&good, &dir, "old.h5", |f| strings_to_varlen(f));
+    let f = h5::File::open(&old).unwrap();
+    let t = f
+        .attr("title")
+        .unwrap()
+        .dtype()
+        .unwrap()
+        .to_descriptor()
+        .unwrap();
+    assert_eq!(t, h5::types::TypeDescriptor::VarLenUnicode);
+    let solver = f.dataset("history/solver").unwrap().dtype().unwrap();
+    assert_eq!(
+        solver.to_descriptor().unwrap(),
+        h5::types::TypeDescriptor::VarLenUnicode
+    );
+    drop((solver, f));
+    let (a, b) = (read_archive(&good).unwrap(), read_archive(&old).unwrap());
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    let (code, out, err) = sgbem(&["inspect", old.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("Two blocks, fabricated"), "{out}");
+}
