@@ -3,7 +3,10 @@
 //! `hdf5` crate's strings), whose `malloc`, `calloc` and `realloc` are these functions,
 //! forwarding to the C library's own. A C caller that does not check for a null pointer
 //! (`VarLenUnicode`'s copy of a string into memory it did not get) would otherwise crash
-//! with SIGSEGV under a memory limit (ulimit -v, a cgroup's memory.max).
+//! with SIGSEGV under a memory limit (ulimit -v, a cgroup's memory.max). The archive's
+//! writer no longer makes such strings (its strings are fixed-length, their bytes in Rust
+//! memory); the reader still does for archives written before, and libhdf5 allocates its
+//! own buffers (chunks, metadata) through these functions.
 
 use std::io::Write;
 use std::sync::atomic::{AtomicI64, Ordering};

@@ -1226,6 +1226,58 @@ fn archives_carry_checksummed_metadata_and_damage_ends_within_a_bound_of_their_s
     assert!(refused >= 6, "{refused} of {cases}");
 }
 
+/// The datasets' data carry Fletcher-32 checksums (every chunked dataset; all but the scalar
+/// timings) and the strings are fixed-length (no global heap): a byte flipped inside a
+/// chunk's data, which the metadata's checksums do not cover, is refused by `inspect` and
+/// `export` at once, naming the file and the dataset.
+#[test]
+fn a_byte_flipped_in_a_datasets_data_is_refused_by_its_checksum() {
+    use hdf5_metno as h5;
+    let dir = tmpdir("h21-archive-data");
+    let (sc, msh) = stacked_scene(&dir, MULTI_STEP);
+    let out = dir.join("out");
+    expect(&run(&sc, &msh, &out), 0, &[]);
+    let path = out.join("archive.h5");
+    // The largest chunk of /mesh's datasets: where it is in the file, and its size.
+    let (name, addr, size) = {
+        let f = h5::File::open(&path).unwrap();
+        let mut best = (String::new(), 0u64, 0u64);
+        for ds in f.group("mesh").unwrap().datasets().unwrap() {
+            if ds.size() == 0 {
+                continue;
+            }
+            assert!(ds.chunk().is_some(), "{} is not chunked", ds.name());
+            assert_eq!(ds.filters().last(), Some(&h5::filters::Filter::Fletcher32));
+            let c = ds.chunk_info(0).unwrap();
+            if c.size > best.2 {
+                best = (ds.name(), c.addr, c.size);
+            }
+        }
+        best
+    };
+    assert!(size >= 16, "{name}: chunk of {size} bytes");
+    let mut b = std::fs::read(&path).unwrap();
+    b[(addr + size / 2) as usize] ^= 0x10;
+    let file = dir.join("damaged.h5");
+    std::fs::write(&file, &b).unwrap();
+    let vtk = dir.join("vtk");
+    for args in [
+        vec!["inspect", s(&file)],
+        vec!["export", s(&file), "--vtk", s(&vtk)],
+    ] {
+        let t = std::time::Instant::now();
+        let r = sgbem(&args);
+        let secs = t.elapsed().as_secs_f64();
+        expect(&r, 1, &["damaged.h5", "damaged", &name]);
+        assert!(r.2.starts_with("sgbem: "), "{}", r.2);
+        assert!(secs < 5.0, "{args:?}: {secs} s");
+    }
+    assert!(
+        !vtk.exists(),
+        "export wrote VTK files from a damaged archive"
+    );
+}
+
 /// A folder, a pipe or a device given as the archive is named as such (each was "no such
 /// archive"), and a pipe is not waited on.
 #[test]

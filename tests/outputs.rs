@@ -239,9 +239,16 @@ fn files(dir: &Path) -> BTreeMap<String, Vec<u8>> {
         .collect()
 }
 
+/// A string attribute, which must be fixed-length (no global heap).
 fn attr_string(loc: &h5::Location, name: &str) -> String {
-    let v: h5::types::VarLenUnicode = loc.attr(name).unwrap().read_scalar().unwrap();
-    v.as_str().to_string()
+    let a = loc.attr(name).unwrap();
+    match a.dtype().unwrap().to_descriptor().unwrap() {
+        h5::types::TypeDescriptor::FixedUnicode(n) if n <= 1 << 16 => {
+            let v: h5::types::FixedUnicode<65536> = a.read_scalar().unwrap();
+            v.as_str().to_string()
+        }
+        d => panic!("attribute {name} is {d}, not a fixed-length string"),
+    }
 }
 
 #[test]
@@ -356,7 +363,14 @@ fn archive_layout_attributes_and_shapes() {
             if let Ok(ds) = g.dataset(&name) {
                 for a in ["description", "units"] {
                     assert!(ds.attr(a).is_ok(), "{}/{name} lacks {a}", g.name());
+                    attr_string(&ds, a);
                 }
+                // Chunked with checksums, but the scalars (which cannot be).
+                assert!(
+                    ds.is_chunked() || ds.ndim() == 0,
+                    "{}/{name} is not chunked",
+                    g.name()
+                );
                 checked += 1;
             } else if let Ok(sub) = g.group(&name) {
                 stack.push(sub);
@@ -370,13 +384,15 @@ fn archive_layout_attributes_and_shapes() {
 
 #[test]
 fn large_datasets_are_chunked_and_compressed() {
-    // Only with output.compress = true; unfiltered by default.
+    // Compressed only with output.compress = true; chunked with checksums always.
     let dir = tmpdir("outputs-chunks");
     let plain = dir.join("plain.h5");
     write_archive(&plain, &fabricated(80)).expect("write");
     let f = h5::File::open(&plain).unwrap();
-    assert!(!f.dataset("bodies/lower/A00").unwrap().is_chunked());
-    drop(f);
+    let a00 = f.dataset("bodies/lower/A00").unwrap();
+    assert!(a00.is_chunked());
+    assert_eq!(a00.filters(), [h5::filters::Filter::Fletcher32]);
+    drop((a00, f));
     let path = dir.join("archive.h5");
     let mut rec = fabricated(80);
     rec.compress = true;
@@ -385,7 +401,8 @@ fn large_datasets_are_chunked_and_compressed() {
     let big = f.dataset("bodies/lower/A00").unwrap();
     assert_eq!(big.shape(), [80, 80]);
     let small = f.dataset("bodies/lower/A").unwrap();
-    assert!(!small.is_chunked());
+    assert!(small.is_chunked());
+    assert_eq!(small.filters(), [h5::filters::Filter::Fletcher32]);
     if h5::filters::deflate_available() {
         assert!(big.is_chunked());
         assert!(!big.filters().is_empty());
@@ -1378,4 +1395,90 @@ fn progress_is_hidden_when_quiet() {
     let spin = Progress::hidden().spinner("contact");
     spin.inc(1);
     spin.finish();
+}
+
+/// Rewrites the fixed-length strings under `g` (attributes and string datasets, with their
+/// attributes) as variable-length ones, as archives were written before.
+fn strings_to_varlen(g: &h5::Group) {
+    use h5::types::{FixedUnicode, TypeDescriptor, VarLenUnicode};
+    let is_fixed =
+        |t: h5::Datatype| matches!(t.to_descriptor().unwrap(), TypeDescriptor::FixedUnicode(_));
+    let varlen = |v: Vec<FixedUnicode<65536>>| -> Vec<VarLenUnicode> {
+        v.iter().map(|s| s.as_str().parse().unwrap()).collect()
+    };
+    let attrs = |loc: &h5::Location| {
+        for name in loc.attr_names().unwrap() {
+            let a = loc.attr(&name).unwrap();
+            if !is_fixed(a.dtype().unwrap()) {
+                continue;
+            }
+            let (scalar, v) = (a.is_scalar(), varlen(a.read_raw().unwrap()));
+            drop(a);
+            loc.delete_attr(&name).unwrap();
+            if scalar {
+                let a = loc
+                    .new_attr::<VarLenUnicode>()
+                    .shape(())
+                    .create(name.as_str());
+                a.unwrap().write_scalar(&v[0]).unwrap();
+            } else {
+                let v = ndarray::Array1::from(v);
+                loc.new_attr_builder()
+                    .with_data(&v)
+                    .create(name.as_str())
+                    .unwrap();
+            }
+        }
+    };
+    attrs(g);
+    for name in g.member_names().unwrap() {
+        if let Ok(sub) = g.group(&name) {
+            strings_to_varlen(&sub);
+        } else if let Ok(ds) = g.dataset(&name) {
+            if is_fixed(ds.dtype().unwrap()) {
+                let v = ndarray::Array1::from(varlen(ds.read_raw().unwrap()));
+                let texts: Vec<Vec<VarLenUnicode>> = ["description", "units"]
+                    .iter()
+                    .map(|a| varlen(ds.attr(a).unwrap().read_raw().unwrap()))
+                    .collect();
+                drop(ds);
+                g.unlink(&name).unwrap();
+                let ds = g.new_dataset_builder().with_data(&v);
+                let ds = ds.create(name.as_str()).unwrap();
+                for (a, t) in ["description", "units"].iter().zip(&texts) {
+                    let a = ds.new_attr::<VarLenUnicode>().shape(()).create(*a);
+                    a.unwrap().write_scalar(&t[0]).unwrap();
+                }
+            }
+            attrs(&g.dataset(&name).unwrap());
+        }
+    }
+}
+
+#[test]
+fn archives_with_variable_length_strings_are_still_read() {
+    let dir = tmpdir("outputs-varlen");
+    let good = dir.join("good.h5");
+    write_archive(&good, &fabricated(3)).unwrap();
+    let old = damaged_copy(&good, &dir, "old.h5", |f| strings_to_varlen(f));
+    let f = h5::File::open(&old).unwrap();
+    let t = f
+        .attr("title")
+        .unwrap()
+        .dtype()
+        .unwrap()
+        .to_descriptor()
+        .unwrap();
+    assert_eq!(t, h5::types::TypeDescriptor::VarLenUnicode);
+    let solver = f.dataset("history/solver").unwrap().dtype().unwrap();
+    assert_eq!(
+        solver.to_descriptor().unwrap(),
+        h5::types::TypeDescriptor::VarLenUnicode
+    );
+    drop((solver, f));
+    let (a, b) = (read_archive(&good).unwrap(), read_archive(&old).unwrap());
+    assert_eq!(format!("{a:?}"), format!("{b:?}"));
+    let (code, out, err) = sgbem(&["inspect", old.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(out.contains("Two blocks, fabricated"), "{out}");
 }

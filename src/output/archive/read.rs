@@ -1,8 +1,9 @@
 //! Reading the archive back into a [`RunRecord`], every shape checked against the file.
 
-use h5::types::VarLenUnicode;
+use h5::types::{TypeDescriptor, VarLenUnicode};
 use h5::{Group, H5Type, Location};
 use hdf5_metno as h5;
+use hdf5_metno_sys as h5sys;
 
 use crate::input::scene::{Plane, Units};
 use crate::output::record::{
@@ -25,13 +26,70 @@ fn open_group(parent: &Group, name: &str) -> R<Group> {
 }
 
 pub(super) fn attr_str(loc: &Location, name: &str) -> R<String> {
+    let what = || format!("{}: attribute {name}", loc.name());
+    let mut v = attr_texts(loc, name)?;
+    match v.len() {
+        1 => Ok(v.remove(0)),
+        k => Err(format!("{}: {k} strings, expected one", what())),
+    }
+}
+
+/// The strings of attribute `name`: fixed-length (archives since format 1.10 checksums of
+/// the data) or variable-length (earlier archives).
+fn attr_texts(loc: &Location, name: &str) -> R<Vec<String>> {
+    let what = || format!("{}: attribute {name}", loc.name());
     let a = ctx(loc.attr(name), || {
         format!("{}: missing attribute {name}", loc.name())
     })?;
-    let v: VarLenUnicode = ctx(a.read_scalar(), || {
-        format!("{}: attribute {name}", loc.name())
-    })?;
-    Ok(v.as_str().to_string())
+    let t = ctx(a.dtype(), what)?;
+    let Some(n) = fixed_len(&t, what)? else {
+        let v: Vec<VarLenUnicode> = ctx(a.read_raw(), what)?;
+        return Ok(v.iter().map(|s| s.as_str().to_string()).collect());
+    };
+    let mut bytes = text_buffer(loc, n, a.size(), what)?;
+    // SAFETY: `bytes` has room for all the attribute's values in its own (fixed-length
+    // string) type, and both handles are open; the library's lock is held as the crate
+    // holds it.
+    let rc = h5::sync::sync(|| unsafe {
+        h5sys::h5a::H5Aread(a.id(), t.id(), bytes.as_mut_ptr().cast())
+    });
+    if rc < 0 {
+        return Err(format!("{}: the library could not read it", what()));
+    }
+    split_text(&bytes, n, what)
+}
+
+/// The length of a fixed-length string type (`None`: a variable-length one).
+fn fixed_len(t: &h5::Datatype, what: impl Fn() -> String) -> R<Option<usize>> {
+    match ctx(t.to_descriptor(), &what)? {
+        TypeDescriptor::FixedUnicode(n) | TypeDescriptor::FixedAscii(n) => Ok(Some(n)),
+        TypeDescriptor::VarLenUnicode | TypeDescriptor::VarLenAscii => Ok(None),
+        d => Err(format!("{}: holds {d}, not text", what())),
+    }
+}
+
+/// A buffer for `count` strings of `n` bytes, refused when larger than the file (the
+/// lengths of a damaged file).
+fn text_buffer(loc: &Location, n: usize, count: usize, what: impl Fn() -> String) -> R<Vec<u8>> {
+    let file_size = loc.file().map(|f| f.size()).unwrap_or(0);
+    match n.checked_mul(count) {
+        Some(b) if b as u64 <= file_size.max(1 << 20) => Ok(vec![0u8; b]),
+        _ => Err(format!(
+            "{}: {count} strings of {n} bytes, more than the file holds",
+            what()
+        )),
+    }
+}
+
+/// Fixed-length strings of `n` bytes each, cut at their first NUL.
+fn split_text(bytes: &[u8], n: usize, what: impl Fn() -> String) -> R<Vec<String>> {
+    bytes
+        .chunks_exact(n.max(1))
+        .map(|c| {
+            let end = c.iter().position(|&b| b == 0).unwrap_or(c.len());
+            String::from_utf8(c[..end].to_vec()).map_err(|_| format!("{}: not UTF-8", what()))
+        })
+        .collect()
 }
 
 fn attr_f64(loc: &Location, name: &str) -> R<f64> {
@@ -58,17 +116,27 @@ fn attr_usize(loc: &Location, name: &str) -> R<usize> {
 }
 
 fn attr_list(loc: &Location, name: &str) -> R<Vec<String>> {
-    let a = ctx(loc.attr(name), || {
-        format!("{}: missing attribute {name}", loc.name())
-    })?;
-    let v: Vec<VarLenUnicode> = ctx(a.read_raw(), || format!("{}: attribute {name}", loc.name()))?;
-    Ok(v.iter().map(|s| s.as_str().to_string()).collect())
+    attr_texts(loc, name)
 }
 
 /// Reads dataset `name` and checks its shape against `shape` (`None`: any extent).
 fn get<T: H5Type>(g: &Group, name: &str, shape: &[Option<usize>]) -> R<(Vec<usize>, Vec<T>)> {
     let where_ = || format!("{}/{name}", g.name().trim_end_matches('/'));
     let ds = ctx(g.dataset(name), || format!("missing dataset {}", where_()))?;
+    let s = check_shape(&ds, shape, where_)?;
+    let data: Vec<T> = ctx(ds.read_raw(), where_)?;
+    if data.len() != s.iter().product::<usize>() {
+        return Err(format!("{}: size does not match its shape", where_()));
+    }
+    Ok((s, data))
+}
+
+/// The shape of `ds`, checked against `shape` (`None`: any extent).
+fn check_shape(
+    ds: &h5::Dataset,
+    shape: &[Option<usize>],
+    where_: impl Fn() -> String,
+) -> R<Vec<usize>> {
     let s = ds.shape();
     let ok = s.len() == shape.len() && s.iter().zip(shape).all(|(a, b)| b.is_none_or(|b| *a == b));
     if !ok {
@@ -82,11 +150,7 @@ fn get<T: H5Type>(g: &Group, name: &str, shape: &[Option<usize>]) -> R<(Vec<usiz
             want.join(", ")
         ));
     }
-    let data: Vec<T> = ctx(ds.read_raw(), where_)?;
-    if data.len() != s.iter().product::<usize>() {
-        return Err(format!("{}: size does not match its shape", where_()));
-    }
-    Ok((s, data))
+    Ok(s)
 }
 
 fn get_f64(g: &Group, name: &str, len: Option<usize>) -> R<Vec<f64>> {
@@ -129,9 +193,41 @@ fn get_opt_idx(g: &Group, name: &str, len: usize) -> R<Vec<Option<usize>>> {
     Ok(d.into_iter().map(|v| usize::try_from(v).ok()).collect())
 }
 
+/// A dataset of strings: fixed-length (archives since the data's checksums) or
+/// variable-length (earlier archives).
 fn get_strs(g: &Group, name: &str, len: Option<usize>) -> R<Vec<String>> {
-    let (_, d) = get::<VarLenUnicode>(g, name, &[len])?;
-    Ok(d.iter().map(|s| s.as_str().to_string()).collect())
+    let where_ = || format!("{}/{name}", g.name().trim_end_matches('/'));
+    let ds = ctx(g.dataset(name), || format!("missing dataset {}", where_()))?;
+    let t = ctx(ds.dtype(), where_)?;
+    let Some(n) = fixed_len(&t, where_)? else {
+        let (_, d) = get::<VarLenUnicode>(g, name, &[len])?;
+        return Ok(d.iter().map(|s| s.as_str().to_string()).collect());
+    };
+    let s = check_shape(&ds, &[len], where_)?;
+    let mut bytes = text_buffer(g, n, s[0], where_)?;
+    if bytes.is_empty() {
+        return Ok(Vec::new());
+    }
+    // SAFETY: `bytes` has room for all the dataset's values in its own (fixed-length
+    // string) type, and both handles are open; the library's lock is held as the crate
+    // holds it.
+    let rc = h5::sync::sync(|| unsafe {
+        h5sys::h5d::H5Dread(
+            ds.id(),
+            t.id(),
+            h5sys::h5s::H5S_ALL,
+            h5sys::h5s::H5S_ALL,
+            h5sys::h5p::H5P_DEFAULT,
+            bytes.as_mut_ptr().cast(),
+        )
+    });
+    if rc < 0 {
+        return Err(format!(
+            "{}: the library could not read it (a checksum that does not match, or damage)",
+            where_()
+        ));
+    }
+    split_text(&bytes, n, where_)
 }
 
 fn get_array(g: &Group, name: &str, rank: usize) -> R<Array> {

@@ -1,9 +1,10 @@
 //! Writing the archive: attributes and datasets with their descriptions and units, one
 //! group per part of the [`RunRecord`].
 
-use h5::types::VarLenUnicode;
+use h5::types::TypeDescriptor;
 use h5::{Group, H5Type, Location};
 use hdf5_metno as h5;
+use hdf5_metno_sys as h5sys;
 use ndarray::{ArrayViewD, IxDyn};
 
 use crate::input::scene::Units;
@@ -48,19 +49,47 @@ impl U {
     }
 }
 
-fn vlu(s: &str) -> R<VarLenUnicode> {
-    s.replace('\0', "")
-        .parse::<VarLenUnicode>()
-        .map_err(|e| format!("text {s:?}: {e}"))
+/// Strings as fixed-length UTF-8, null-padded to `n` bytes each (the longest one's, at
+/// least one byte), and their bytes one after another: stored in the attribute or dataset
+/// itself, not in the global heap (which has no checksum), and written without the
+/// library's allocations of variable-length strings. NUL characters are dropped (a reader
+/// would cut the string there).
+fn fixed_text(values: &[&str]) -> (TypeDescriptor, Vec<u8>) {
+    let clean: Vec<String> = values.iter().map(|s| s.replace('\0', "")).collect();
+    let n = clean.iter().map(String::len).max().unwrap_or(0).max(1);
+    let mut bytes = vec![0u8; n * clean.len()];
+    for (slot, s) in bytes.chunks_exact_mut(n).zip(&clean) {
+        slot[..s.len()].copy_from_slice(s.as_bytes());
+    }
+    (TypeDescriptor::FixedUnicode(n), bytes)
+}
+
+/// Writes `bytes` (as from [`fixed_text`], as many strings as `a` holds) into attribute `a`.
+fn write_attr_bytes(a: &h5::Attribute, bytes: &[u8], name: &str) -> R<()> {
+    let t = ctx(a.dtype(), || format!("attribute {name}"))?;
+    if bytes.len() != t.size() * a.size() {
+        return Err(format!(
+            "attribute {name}: {} bytes for its strings",
+            bytes.len()
+        ));
+    }
+    // SAFETY: `bytes` holds exactly the attribute's values in its own (fixed-length string)
+    // type, and both handles are open; the library's lock is held as the crate holds it.
+    let rc =
+        h5::sync::sync(|| unsafe { h5sys::h5a::H5Awrite(a.id(), t.id(), bytes.as_ptr().cast()) });
+    if rc < 0 {
+        return Err(format!("attribute {name}: the library could not write it"));
+    }
+    Ok(())
 }
 
 fn put_attr_str(loc: &Location, name: &str, value: &str) -> R<()> {
-    let v = vlu(value)?;
+    let (t, bytes) = fixed_text(&[value]);
     let a = ctx(
-        loc.new_attr::<VarLenUnicode>().shape(()).create(name),
+        loc.new_attr_builder().empty_as(t).shape(()).create(name),
         || format!("attribute {name}"),
     )?;
-    ctx(a.write_scalar(&v), || format!("attribute {name}"))
+    write_attr_bytes(&a, &bytes, name)
 }
 
 fn put_attr<T: H5Type>(loc: &Location, name: &str, value: T) -> R<()> {
@@ -71,17 +100,34 @@ fn put_attr<T: H5Type>(loc: &Location, name: &str, value: T) -> R<()> {
 }
 
 fn put_attr_list(loc: &Location, name: &str, values: &[String]) -> R<()> {
-    let v = values.iter().map(|s| vlu(s)).collect::<R<Vec<_>>>()?;
-    ctx(
+    let v: Vec<&str> = values.iter().map(String::as_str).collect();
+    let (t, bytes) = fixed_text(&v);
+    let a = ctx(
         loc.new_attr_builder()
-            .with_data(&ndarray::Array1::from(v))
+            .empty_as(t)
+            .shape(v.len())
             .create(name),
         || format!("attribute {name}"),
-    )
-    .map(|_| ())
+    )?;
+    write_attr_bytes(&a, &bytes, name)
 }
 
-/// Writes dataset `name` of the given shape with its `description` and `units`; chunked and
+/// The chunk of a dataset of this shape: whole rows, at most `CHUNK_VALUES` values (`None`
+/// for a scalar or an empty dataset, which cannot be chunked).
+fn chunk_of(shape: &[usize]) -> Option<Vec<usize>> {
+    if shape.is_empty() || shape.contains(&0) {
+        return None;
+    }
+    let mut chunk = shape.to_vec();
+    let rest: usize = shape[1..].iter().product::<usize>().max(1);
+    // As many chunks as needed, equal in rows: the last one is stored whole (padding).
+    let rows = (CHUNK_VALUES / rest).clamp(1, shape[0]);
+    chunk[0] = shape[0].div_ceil(shape[0].div_ceil(rows));
+    Some(chunk)
+}
+
+/// Writes dataset `name` of the given shape with its `description` and `units`; chunked
+/// with the Fletcher-32 checksum of each chunk (all but scalars and empty datasets), and
 /// compressed when large and `compress`.
 fn put_with<T: H5Type>(
     g: &Group,
@@ -96,24 +142,20 @@ fn put_with<T: H5Type>(
     let view =
         ArrayViewD::from_shape(IxDyn(shape), data).map_err(|e| format!("{}: {e}", where_()))?;
     let n = data.len();
-    let builder = g.new_dataset_builder().with_data(view);
-    let ds = if compress
-        && COMPRESS.with(|c| c.get())
-        && n >= COMPRESS_FROM
-        && h5::filters::deflate_available()
-    {
-        let mut chunk = shape.to_vec();
-        let rest: usize = shape[1..].iter().product::<usize>().max(1);
-        chunk[0] = (CHUNK_VALUES / rest).clamp(1, shape[0]);
-        builder
-            .chunk(chunk)
-            .shuffle()
-            .deflate(DEFLATE_LEVEL)
-            .create(name)
-    } else {
-        builder.create(name)
-    };
-    let ds = ctx(ds, where_)?;
+    let mut builder = g.new_dataset_builder().with_data(view);
+    if let Some(chunk) = chunk_of(shape) {
+        builder = builder.chunk(chunk);
+        if compress
+            && COMPRESS.with(|c| c.get())
+            && n >= COMPRESS_FROM
+            && h5::filters::deflate_available()
+        {
+            builder = builder.shuffle().deflate(DEFLATE_LEVEL);
+        }
+        // Last: the checksum is of the bytes stored.
+        builder = builder.fletcher32();
+    }
+    let ds = ctx(builder.create(name), where_)?;
     put_attr_str(&ds, "description", description)?;
     put_attr_str(&ds, "units", units)
 }
@@ -145,9 +187,37 @@ fn put_opt_idx(g: &Group, name: &str, data: &[Option<usize>], d: &str) -> R<()> 
     put(g, name, &[v.len()], &v, d, "1")
 }
 
+/// A dataset of fixed-length strings (see [`fixed_text`]), chunked with Fletcher-32.
 fn put_strs(g: &Group, name: &str, data: &[String], d: &str) -> R<()> {
-    let v = data.iter().map(|s| vlu(s)).collect::<R<Vec<_>>>()?;
-    put(g, name, &[v.len()], &v, d, "")
+    let where_ = || format!("{}/{name}", g.name().trim_end_matches('/'));
+    let v: Vec<&str> = data.iter().map(String::as_str).collect();
+    let (t, bytes) = fixed_text(&v);
+    let mut builder = g.new_dataset_builder().empty_as(t).shape(v.len());
+    if let Some(chunk) = chunk_of(&[v.len()]) {
+        builder = builder.chunk(chunk).fletcher32();
+    }
+    let ds = ctx(builder.create(name), where_)?;
+    if !v.is_empty() {
+        let t = ctx(ds.dtype(), where_)?;
+        // SAFETY: `bytes` holds exactly the dataset's values in its own (fixed-length
+        // string) type, and both handles are open; the library's lock is held as the crate
+        // holds it.
+        let rc = h5::sync::sync(|| unsafe {
+            h5sys::h5d::H5Dwrite(
+                ds.id(),
+                t.id(),
+                h5sys::h5s::H5S_ALL,
+                h5sys::h5s::H5S_ALL,
+                h5sys::h5p::H5P_DEFAULT,
+                bytes.as_ptr().cast(),
+            )
+        });
+        if rc < 0 {
+            return Err(format!("{}: the library could not write it", where_()));
+        }
+    }
+    put_attr_str(&ds, "description", d)?;
+    put_attr_str(&ds, "units", "")
 }
 
 fn put_array(g: &Group, name: &str, a: &Array, d: &str, u: &str) -> R<()> {
