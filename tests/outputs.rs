@@ -979,7 +979,14 @@ fn inspect_fails(path: &Path, needle: &str) {
 fn damaged_copy(src: &Path, dir: &Path, name: &str, edit: impl FnOnce(&h5::File)) -> PathBuf {
     let p = dir.join(name);
     std::fs::copy(src, &p).unwrap();
-    let f = h5::File::open_rw(&p).unwrap();
+    // Without libhdf5's file lock, as the archive code opens files: a test running in
+    // parallel that starts `sgbem` while this file is open hands the child a copy of its
+    // descriptor (libhdf5 opens without O_CLOEXEC), and with it the lock, which then
+    // refuses the next open of this file here (errno 11) until that child ends.
+    let f = h5::File::with_options()
+        .with_fapl(|a| a.file_locking(false))
+        .open_rw(&p)
+        .unwrap();
     edit(&f);
     f.close().unwrap();
     p
