@@ -49,7 +49,7 @@ impl Search<'_, '_> {
             .iter()
             .filter(|t| t.stands)
             .map(|t| t.t)
-            .fold(None, |m: Option<f64>, t| Some(m.map_or(t, |m| m.max(t))));
+            .reduce(f64::max);
         let stood = match stood {
             Some(t) => format!("the largest t that stands so far is {}", fmt_num(t)),
             None => "no t stands so far".to_string(),
