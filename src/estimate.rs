@@ -157,6 +157,13 @@ const C_LEMKE: f64 = 9.0e-9;
 /// 2.8, 14 and 51 s for the 798-, 2 048- and 4 128-brick walls).
 const C_SPARSE: f64 = 5.7e-9;
 const SPARSE_PAIRS_PER_ITERATION: f64 = 1600.0;
+/// Seconds per convex programme of the full-row solver per `Σ n_u²` (220-stone wall, Σ n_u²
+/// ≈ 3e5 with the foundation: 0.8 s per programme of about 21 interior point iterations),
+/// and the programmes of a load step: with friction up to about 150 (Coulomb's fixed point:
+/// 52 on that wall at 0.04 g, 20 on the 5 × 3 wall near its collapse), without it 3.
+const C_EXACT: f64 = 2.8e-6;
+const EXACT_PROGRAMMES_FRICTION: f64 = 150.0;
+const EXACT_PROGRAMMES: f64 = 3.0;
 const SPARSE_MIN_ITERATIONS: f64 = 15.0;
 
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a
@@ -225,19 +232,32 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
                 let iterations = (p / SPARSE_PAIRS_PER_ITERATION).max(SPARSE_MIN_ITERATIONS);
                 C_SPARSE * k * iterations * squares.powf(1.18)
             }
+            Method::Exact => {
+                let frictional = model.interfaces.iter().any(|it| {
+                    it.spec.model == InterfaceModel::Unilateral
+                        && it.spec.tangential == Tangential::Friction
+                });
+                let programmes = if frictional {
+                    EXACT_PROGRAMMES_FRICTION
+                } else {
+                    EXACT_PROGRAMMES
+                };
+                C_EXACT * k * programmes * squares
+            }
             _ => C_PATH * k * s * s * s,
         };
     let mut per_cube = match scene.solve.method {
         // The evolutive cross-check runs up to 2000 rows only.
         Method::Sparse if rows > 2000 => 0.0,
         Method::Sparse => C_PATH / 10.0,
+        Method::Exact => 0.0,
         _ => C_ACTIVE,
     };
     if scene.solve.method == Method::Both {
         per_cube += C_QP + if rows <= 2000 { C_LEMKE } else { 0.0 };
     }
     let dense = match scene.solve.method {
-        Method::Lcp | Method::Sparse => 0.0,
+        Method::Lcp | Method::Sparse | Method::Exact => 0.0,
         _ => 3.0 * 8.0 * (rows as f64).powi(2),
     };
     // The sparse glued system: each body's dense block (n_u² values) in triplets, the matrix
@@ -248,6 +268,11 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     let glued = 5.0 * 16.0 * squares;
     let m = (switches as f64 / k).min(rows as f64);
     let mut opening = 8.0 * rows as f64 * m + 8.0 * m * m / 2.0;
+    if scene.solve.method == Method::Exact {
+        // No column of the opening stiffness: Clarabel's sparse KKT system over every dof
+        // and full row and its LDL factor, about three times the glued system's.
+        opening = 3.0 * glued;
+    }
     if scene.solve.method == Method::Sparse {
         // No column of the opening stiffness beyond the evolutive cross-check (up to 2000
         // rows); the sparse system of displacements and openings, its factor and the pinned

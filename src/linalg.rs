@@ -88,27 +88,35 @@ pub fn scaled_lu_solve(
 
 /// The solution of the 3 × 3 system `a x = b` by elimination with partial pivoting; None
 /// where a pivot vanishes against the largest entry.
-pub fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+pub fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+    let x = solve_small(a.iter().map(|r| r.to_vec()).collect(), b.to_vec())?;
+    Some([x[0], x[1], x[2]])
+}
+
+/// The solution of a small dense system `a x = b` (rows of `a`) by elimination with partial
+/// pivoting; None where a pivot vanishes against the largest entry.
+pub fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+    let n = b.len();
     let big = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
-    for k in 0..3 {
-        let p = (k..3).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
+    for k in 0..n {
+        let p = (k..n).max_by(|&i, &j| a[i][k].abs().total_cmp(&a[j][k].abs()))?;
         if a[p][k].abs() <= 1e-14 * big || big == 0.0 {
             return None;
         }
         a.swap(k, p);
         b.swap(k, p);
-        let pivot = a[k];
-        for i in k + 1..3 {
+        let pivot = a[k].clone();
+        for i in k + 1..n {
             let f = a[i][k] / pivot[k];
-            for (x, p) in a[i].iter_mut().zip(pivot).skip(k) {
+            for (x, p) in a[i].iter_mut().zip(&pivot).skip(k) {
                 *x -= f * p;
             }
             b[i] -= f * b[k];
         }
     }
-    let mut x = [0.0; 3];
-    for k in (0..3).rev() {
-        let s: f64 = (k + 1..3).map(|j| a[k][j] * x[j]).sum();
+    let mut x = vec![0.0; n];
+    for k in (0..n).rev() {
+        let s: f64 = (k + 1..n).map(|j| a[k][j] * x[j]).sum();
         x[k] = (b[k] - s) / a[k][k];
     }
     Some(x)

@@ -33,6 +33,7 @@ enum MethodArg {
     Qp,
     Both,
     Sparse,
+    Exact,
 }
 
 #[derive(Subcommand)]
@@ -330,6 +331,7 @@ fn main() -> ExitCode {
                     MethodArg::Qp => Method::Qp,
                     MethodArg::Both => Method::Both,
                     MethodArg::Sparse => Method::Sparse,
+                    MethodArg::Exact => Method::Exact,
                 }),
                 quiet,
                 sets: set,

@@ -190,7 +190,7 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
         assemble.push_str(&format!("; body-force loads for {}", fx.loaded.join(", ")));
     }
     stages.push(("assemble", assemble));
-    stages.push(("condense", condense_stage(model)));
+    stages.push(("condense", condense_stage(model, scene.solve.method)));
     let steps_note = if steps > 1 {
         format!(", {steps} load steps")
     } else {
@@ -326,7 +326,7 @@ fn effects<'m>(scene: &Scene, model: &'m Model) -> Result<Effects<'m>> {
 
 /// The condensation stage: onto the interface nodes, with the junctions where several
 /// bodies meet; none without an interface.
-fn condense_stage(model: &Model) -> String {
+fn condense_stage(model: &Model, method: Method) -> String {
     let pairs = model.pair_count();
     if model.interfaces.is_empty() {
         "none (no interface): one solve per body".into()
@@ -336,9 +336,14 @@ fn condense_stage(model: &Model) -> String {
             String::new()
         } else {
             let most = junctions.iter().map(|j| j.1.len()).max().unwrap_or(0);
+            let rows = if method == Method::Exact {
+                "every joint component there keeps its own row"
+            } else {
+                "the dependent joint components there are implied by the others, see \
+                 contact.junctions"
+            };
             format!(
-                "; {} junctions (points where up to {most} bodies meet: the dependent joint \
-                 components there are implied by the others, see contact.junctions)",
+                "; {} junctions (points where up to {most} bodies meet: {rows})",
                 junctions.len()
             )
         };
@@ -467,6 +472,21 @@ impl Solve<'_> {
                         "active set on the sparse system of displacements and openings \
                          ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
                          {coulomb}{steps_note}"
+                    ),
+                ));
+            }
+            if scene.solve.method == Method::Exact {
+                let coulomb = if frictional {
+                    "; Coulomb's law as a fixed point on the slip bounds (Anderson-accelerated)"
+                } else {
+                    ""
+                };
+                stages.push((
+                    "contact_exact",
+                    format!(
+                        "every pair component its own row, junctions included ({what}): one \
+                         sparse convex programme per set of slip bounds with Clarabel, an \
+                         unbounded one is the mechanism{coulomb}{steps_note}"
                     ),
                 ));
             }

@@ -303,6 +303,12 @@ pub struct CollapseSummary {
 pub struct CollapseTrial {
     pub stands: bool,
     pub t: f64,
+    /// Neither an equilibrium nor its absence is shown: a "no equilibrium" that the
+    /// rigid-block statics cannot confirm, a friction fixed point that did not settle, a
+    /// convex programme without progress. Counted as not standing, so the multiplier is a
+    /// lower bound there; left out where false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub undecided: bool,
 }
 
 /// The rigid motion of one body in a mechanism: the velocity `translation` of the point

@@ -93,9 +93,12 @@ impl Search<'_, '_> {
         // A "no equilibrium" that the rigid-block check leaves undecided fails the trial
         // too (its message says so; the bracket stays [multiplier, upper_bound]).
         let undecided = a.statics == Some(Verdict::Feasible);
+        // A solver that could not decide the step (no verdict either way) fails the trial
+        // too, said so in the trial's record.
+        let unsettled = a.failure.is_some() && !a.mechanism && a.undecided;
         let outcome = match a.failure {
             None => None,
-            Some(e) if a.mechanism || undecided => Some((e, a.motion)),
+            Some(e) if a.mechanism || undecided || unsettled => Some((e, a.motion)),
             Some(e) => {
                 return Err(Error::numerical(format!(
                     "the collapse search failed at t = {} ({}): {}",
@@ -106,6 +109,7 @@ impl Search<'_, '_> {
             }
         };
         self.trials.push(CollapseTrial {
+            undecided: undecided || unsettled,
             stands: outcome.is_none(),
             t,
         });

@@ -166,6 +166,7 @@ fn solvers(method: Method, open_rows: usize) -> (Solver, Vec<Solver>) {
     let main = match method {
         Method::Qp => Solver::Qp,
         Method::Sparse => Solver::Sparse,
+        Method::Exact => return (Solver::Exact, Vec::new()),
         _ => Solver::Evolutive,
     };
     if method == Method::Sparse {
@@ -317,12 +318,16 @@ fn finish(
         return Err(Error::numerical("the contact stage produced no state"));
     };
     let junctions = session.model.junctions();
-    let junctions = (!junctions.is_empty()).then(|| {
-        let implied = &session.problem.implied;
-        Junctions {
-            implied_slipping: Some(implied_slipping(session.model, implied, &sol.interfaces)),
-            ..junctions_summary(session.model, &junctions, implied)
-        }
+    // The full-row solver gives every pair component its own row: none is implied.
+    let none = Vec::new();
+    let implied = if main == Solver::Exact {
+        &none
+    } else {
+        &session.problem.implied
+    };
+    let junctions = (!junctions.is_empty()).then(|| Junctions {
+        implied_slipping: Some(implied_slipping(session.model, implied, &sol.interfaces)),
+        ..junctions_summary(session.model, &junctions, implied)
     });
     let contact = ContactSummary::Contact(Box::new(ContactSolveSummary {
         collapse,
@@ -334,8 +339,14 @@ fn finish(
         junctions,
         load_steps: steps,
         opening_stiffness_columns: session.cols.computed(),
-        problem: "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare \
-                  stiffness (one LCP; Tresca fixed point for friction)",
+        problem: if main == Solver::Exact {
+            "every pair component its own row (junctions exact): the bodies' energy on the \
+             symmetric Steklov-Poincare stiffness, minimised under every pair's law (one convex \
+             programme per set of slip bounds; Coulomb's fixed point for friction)"
+        } else {
+            "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare \
+             stiffness (one LCP; Tresca fixed point for friction)"
+        },
         solver: main.name(),
     }));
     Ok(ContactRun {
@@ -659,6 +670,7 @@ impl StepAcc {
         self.recorded = m.recorded;
         self.failure = None;
         self.mechanism = false;
+        self.undecided = false;
         self.motion = None;
         self.statics = None;
     }
@@ -686,6 +698,9 @@ pub(super) struct StepAcc {
     pub(super) motion: Option<Vec<BodyMotion>>,
     /// The rigid-block check's verdict on that "no equilibrium", where it ran.
     pub(super) statics: Option<Verdict>,
+    /// The failure leaves the step undecided (a fixed point that did not settle, a solver
+    /// without progress): neither an equilibrium nor its absence is shown.
+    pub(super) undecided: bool,
     /// Substeps solved since the last load step that was subdivided.
     substeps: usize,
 }
@@ -787,6 +802,7 @@ fn contact_step(
     if let Some(e) = r.failure {
         acc.failure = Some(e);
         acc.mechanism = r.mechanism;
+        acc.undecided = r.undecided;
         acc.motion = r.motion;
         acc.statics = verdict;
     }

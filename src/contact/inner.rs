@@ -114,6 +114,10 @@ pub(super) fn inner_solve(
             };
             Ok(out)
         }
+        // The full-row solver solves whole steps (`Session::solve_step_full`).
+        Solver::Exact => Err(InnerFailure::State {
+            message: "the full-row solver has no inner problem of the eliminated rows".into(),
+        }),
         Solver::Qp => {
             let (q, out, finish, resolves) = qp_outcome(inner, cols)?;
             lp.finishing += finish;

@@ -181,7 +181,15 @@ pub(super) fn motion(
     let Some(dw) = sparse::mechanism_motion(inner, sys, &open, &sign, &st.s) else {
         return (String::new(), None);
     };
-    let motions = inner.problem.rigid_motions(model, &dw);
+    motion_of(model, inner.problem.rigid_motions(model, &dw))
+}
+
+/// The words and the scaled motions of the bodies that move in `motions` (every body's
+/// rigid motion along a mechanism's direction), as [`motion`] gives them.
+pub(super) fn motion_of(
+    model: &Model,
+    motions: Vec<BodyMotion>,
+) -> (String, Option<Vec<BodyMotion>>) {
     let size = model.scale.max(f64::MIN_POSITIVE);
     let amount =
         |m: &BodyMotion| m.translation[0].hypot(m.translation[1]) + m.rotation.abs() * size;

@@ -32,6 +32,7 @@ pub mod active_set;
 mod collapse;
 pub mod driver;
 pub mod evolutive;
+pub mod exact;
 mod inner;
 pub mod interface;
 pub mod lcp;
@@ -66,6 +67,9 @@ pub enum Solver {
     Qp,
     /// The active set on the sparse system of displacements and openings (`sparse`).
     Sparse,
+    /// Every pair component its own row, one convex programme per set of slip bounds
+    /// (`exact`).
+    Exact,
 }
 
 impl Solver {
@@ -76,6 +80,7 @@ impl Solver {
             Solver::Lemke => "lemke",
             Solver::Qp => "qp",
             Solver::Sparse => "sparse",
+            Solver::Exact => "exact",
         }
     }
 
@@ -87,6 +92,7 @@ impl Solver {
             Solver::Lemke => "contact_lemke",
             Solver::Qp => "contact_qp",
             Solver::Sparse => "contact_sparse",
+            Solver::Exact => "contact_exact",
         }
     }
 }
@@ -110,6 +116,11 @@ pub struct StepState {
     pub cohesion: Vec<Vec<f64>>,
     /// Pairs that have opened (their cohesion is lost for good).
     pub broken: Vec<Vec<bool>>,
+    /// The full-row solver's (`exact`): per full row, the relative displacement at the end
+    /// of the last step (the anchor of tied and Tresca rows) and the accumulated slip path;
+    /// empty before its first step.
+    pub full_anchor: Vec<f64>,
+    pub full_path: Vec<f64>,
 }
 
 /// The solution after one iteration, kept for output.
@@ -283,6 +294,8 @@ impl<'a> Session<'a> {
             bound: Vec::new(),
             cohesion,
             broken,
+            full_anchor: Vec::new(),
+            full_path: Vec::new(),
         }
     }
 
@@ -604,6 +617,9 @@ impl<'a> Session<'a> {
         factor: f64,
         record: bool,
     ) -> ContactResult {
+        if method == Solver::Exact {
+            return self.solve_step_full(start, load_step, factor, record);
+        }
         let n = self.problem.n_open_rows;
         let mut st = start.clone();
         let mut notes = Vec::new();

@@ -550,6 +550,7 @@ mod tests {
                 state: "largest",
                 tolerance: 0.25,
                 trials: vec![CollapseTrial {
+                    undecided: false,
                     stands: true,
                     t: 0.0,
                 }],

@@ -74,6 +74,7 @@ use crate::solution::{BodyField, BodyMotion, InterfaceResult};
 pub(crate) use mechanism::body_has_support;
 pub use mechanism::mechanism_hint;
 pub use opening::Opening;
+pub use state::FullRowSolution;
 
 use body::{body_operators, glued_matrix, BodyOperators};
 use rows::{candidates, eliminate, final_rows, glued_maps};
@@ -127,6 +128,15 @@ pub struct Row {
     pub weight: f64,
 }
 
+/// A candidate row with its coefficients over the dofs, before any elimination: every pair
+/// component with a displacement unknown on both sides, junctions included
+/// (`[u]_r = Σ coef·U_d`, B's dofs positive). The full rows of `contact::exact`.
+#[derive(Debug, Clone)]
+pub struct FullRow {
+    pub row: Row,
+    pub coefs: Vec<(usize, f64)>,
+}
+
 /// A pair component at a junction left without a row (see [`Problem::new`]).
 #[derive(Debug, Clone, Copy)]
 pub struct Implied {
@@ -160,6 +170,8 @@ pub struct Problem {
     /// fix while they are closed (a cycle of pairs around the point): no row of their own.
     pub implied: Vec<Implied>,
     implied_at: std::collections::HashSet<(usize, usize, usize)>,
+    /// Every candidate row, junctions included, over the dofs.
+    pub full: Vec<FullRow>,
     n_glued: usize,
     factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
     /// Each global dof's node (body-local) and direction.
@@ -205,6 +217,7 @@ impl Problem {
     pub fn new(model: &Model, prepared: &Operators) -> Result<Problem> {
         let bodies = body_operators(model, prepared)?;
         let cands = candidates(model, &bodies.node_dofs)?;
+        let full = cands.iter().map(rows::Candidate::full).collect();
         let (expr, kept) = eliminate(&cands, bodies.n_dofs);
         let set = final_rows(model, &cands, &kept);
         let glued = glued_maps(&expr, &set.index_of, set.rows.len());
@@ -241,6 +254,7 @@ impl Problem {
             row_t: glued.row_t,
             implied: set.implied,
             implied_at: set.implied_at,
+            full,
             n_glued: glued.n_glued,
             factor,
             dof_at,
@@ -331,6 +345,23 @@ impl Problem {
     /// translation and rotation of its interface dofs' displacements.
     pub fn rigid_motions(&self, model: &Model, dw: &[f64]) -> Vec<BodyMotion> {
         let (dv, ds) = dw.split_at(self.n_glued.min(dw.len()));
+        let du: Vec<f64> = (0..self.n_dofs)
+            .map(|d| {
+                let mut u: f64 = self.tmap[d].iter().map(|&(g, x)| x * dv[g]).sum();
+                for &(r, x) in &self.offs[d] {
+                    if r < self.n_open_rows {
+                        u += x * ds[r];
+                    }
+                }
+                u
+            })
+            .collect();
+        self.rigid_fit(model, &du)
+    }
+
+    /// Per body the least-squares translation and rotation of the dof displacements `du`
+    /// (over every dof in order).
+    pub fn rigid_fit(&self, model: &Model, du: &[f64]) -> Vec<BodyMotion> {
         let scale = model.scale.max(f64::MIN_POSITIVE);
         let mut out = Vec::with_capacity(self.ops.len());
         for (b, op) in self.ops.iter().enumerate() {
@@ -341,12 +372,7 @@ impl Problem {
             let mut h = [0.0f64; 3];
             for l in 0..op.u_idx.len() {
                 let d = self.dof_start[b] + l;
-                let mut u: f64 = self.tmap[d].iter().map(|&(g, x)| x * dv[g]).sum();
-                for &(r, x) in &self.offs[d] {
-                    if r < self.n_open_rows {
-                        u += x * ds[r];
-                    }
-                }
+                let u = du[d];
                 let (node, e) = self.dof_at[d];
                 let x = nodes.get(node).copied().unwrap_or(c.point());
                 let a = mechanism::rigid_row(x, &c, e, scale);

@@ -19,6 +19,15 @@ pub(super) struct Candidate {
     n_b: usize,
 }
 
+impl Candidate {
+    pub(super) fn full(&self) -> super::FullRow {
+        super::FullRow {
+            row: self.row,
+            coefs: self.coefs.clone(),
+        }
+    }
+}
+
 /// One eliminated dof: `U_d = Σ m·U_master + Σ r·(s_q − h_q)` over candidate rows q.
 #[derive(Debug, Clone, Default)]
 pub(super) struct Expr {

@@ -63,7 +63,7 @@ impl Problem {
     }
 
     /// The boundary solution of every body for the dofs `u`, and its X0.
-    fn body_fields(
+    pub(crate) fn body_fields(
         &self,
         model: &Model,
         prepared: &Operators,
@@ -193,4 +193,111 @@ fn pair_jump(it: &Interface, pr: &Pair, fields: &[BodyField]) -> [f64; 2] {
         d[0] * pr.tangent[0] + d[1] * pr.tangent[1],
         d[0] * pr.normal[0] + d[1] * pr.normal[1],
     ]
+}
+
+/// What the full-row solver (`contact::exact`) gives for every full row (`Problem::full`).
+pub struct FullRowSolution<'s> {
+    /// Every dof's displacement.
+    pub u: &'s [f64],
+    /// `λ_r = ∂E/∂[u]_r` with the cohesion term (normal rows: compression positive).
+    pub force: &'s [f64],
+    pub closed: &'s [bool],
+    pub slipping: &'s [bool],
+    /// The cohesion term `c w` of every full row (zero but on unilateral normal rows).
+    pub cohesion: &'s [f64],
+}
+
+impl Problem {
+    /// The boundary solution of every body and the interface results of a full-row
+    /// solution: each pair's traction from its own rows' forces (junctions included), the
+    /// nodal normal force of each pair (on B, compression positive).
+    pub fn full_row_state(
+        &self,
+        model: &Model,
+        prepared: &Operators,
+        factor: f64,
+        sol: &FullRowSolution,
+    ) -> (Vec<BodyField>, Vec<InterfaceResult>, Vec<Vec<f64>>) {
+        let u: Vec<Vec<f64>> = self
+            .ops
+            .iter()
+            .enumerate()
+            .map(|(b, op)| sol.u[self.dof_start[b]..self.dof_start[b] + op.u_idx.len()].to_vec())
+            .collect();
+        let (fields, tractions) = self.body_fields(model, prepared, factor, &u);
+        let mut full_of = std::collections::HashMap::new();
+        for (r, f) in self.full.iter().enumerate() {
+            full_of.insert((f.row.iface, f.row.pair, f.row.comp), r);
+        }
+        let mut nodal = Vec::with_capacity(model.interfaces.len());
+        let interfaces = model
+            .interfaces
+            .iter()
+            .enumerate()
+            .map(|(k, it)| {
+                let mut nk = Vec::with_capacity(it.pairs.len());
+                let pairs = (0..it.pairs.len())
+                    .map(|j| {
+                        let pr = &it.pairs[j];
+                        let rn = full_of.get(&(k, j, 1)).copied();
+                        let rt = full_of.get(&(k, j, 0)).copied();
+                        let closed = match rn {
+                            Some(r) => sol.closed[r],
+                            None => !(it.independent() && pr.partners.is_empty()),
+                        };
+                        nk.push(rn.map_or(0.0, |r| {
+                            if closed {
+                                sol.force[r] - sol.cohesion[r]
+                            } else {
+                                0.0
+                            }
+                        }));
+                        let mut traction = [0.0; 2];
+                        for (c, t) in traction.iter_mut().enumerate() {
+                            let row = if c == 1 { rn } else { rt };
+                            match row {
+                                // An open pair carries nothing (its rows' forces are the
+                                // interior point's residue).
+                                Some(_) if !closed => {}
+                                Some(r) => {
+                                    *t = -(sol.force[r] - sol.cohesion[r]) / self.full[r].row.weight
+                                }
+                                None => {
+                                    let slide = c == 0
+                                        && it.spec.model == InterfaceModel::Unilateral
+                                        && it.spec.tangential == Tangential::Slide;
+                                    if !slide {
+                                        if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true)
+                                        {
+                                            *t = tractions[it.body_a][i];
+                                        }
+                                    }
+                                }
+                            }
+                        }
+                        let slipping = match rt {
+                            Some(r) if self.full[r].row.kind == RowKind::Friction => {
+                                Some(closed && sol.slipping[r])
+                            }
+                            _ => None,
+                        };
+                        PairResult {
+                            status: if closed {
+                                PairStatus::Closed
+                            } else {
+                                PairStatus::Open
+                            },
+                            traction,
+                            jump: pair_jump(it, pr, &fields),
+                            slipping,
+                            slip: 0.0,
+                        }
+                    })
+                    .collect();
+                nodal.push(nk);
+                InterfaceResult { pairs }
+            })
+            .collect();
+        (fields, interfaces, nodal)
+    }
 }

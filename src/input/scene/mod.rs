@@ -210,6 +210,9 @@ pub enum Method {
     /// The active set iteration on the sparse system of displacements and openings (no
     /// dense column of the opening stiffness: for scenes of many bodies).
     Sparse,
+    /// Every pair component its own row (junctions exact), one convex programme per set of
+    /// slip bounds (interior point).
+    Exact,
 }
 
 impl Method {
@@ -219,6 +222,7 @@ impl Method {
             Method::Qp => "qp",
             Method::Both => "both",
             Method::Sparse => "sparse",
+            Method::Exact => "exact",
         }
     }
 }

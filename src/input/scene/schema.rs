@@ -200,7 +200,10 @@ fn solve() -> Value {
         &[
             (
                 "method",
-                choice(&["lcp", "qp", "both", "sparse"], "the contact solver"),
+                choice(
+                    &["lcp", "qp", "both", "sparse", "exact"],
+                    "the contact solver",
+                ),
             ),
             (
                 "tolerance",

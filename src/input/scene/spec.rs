@@ -380,11 +380,12 @@ pub(super) fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
         Some("qp") => Method::Qp,
         Some("both") => Method::Both,
         Some("sparse") => Method::Sparse,
+        Some("exact") => Method::Exact,
         Some(other) => {
             return Err(err(choice_error(
                 "solve.method",
                 other,
-                &["lcp", "qp", "both", "sparse"],
+                &["lcp", "qp", "both", "sparse", "exact"],
             )))
         }
     };

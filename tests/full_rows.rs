@@ -1,0 +1,294 @@
+//! The full-row solver (`method = "exact"`, `contact::exact`): every pair component its own
+//! row, junctions included, one convex programme per set of slip bounds (Clarabel).
+//!
+//! * Where no row is implied it solves the same discrete problem as the evolutive path:
+//!   on shipped scenes the same statuses pair by pair and the same tractions.
+//! * At junctions every closed friction pair obeys Coulomb's law on its own rows (the
+//!   evolutive path leaves implied components without a force: they slip freely).
+//! * Stick from open starts; μ → ∞ tends to stick like 1/μ; mechanisms from the
+//!   programme's certificate of unboundedness; collapse searches on it.
+//!
+//! Run with `cargo test --release --test full_rows -- --nocapture` to see the numbers.
+
+mod support;
+
+use std::path::{Path, PathBuf};
+
+use support::{read_interface_csv, read_summary, root, sgbem, tmpdir, write, InterfaceRow};
+
+/// `sgbem run SCENE --out OUT --quiet` with extra arguments: exit code and stderr.
+fn run(scene: &Path, out: &Path, extra: &[&str]) -> (i32, String) {
+    let (s, o) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let mut args = vec!["run", s, "--out", o, "--quiet"];
+    args.extend_from_slice(extra);
+    let (code, _, err) = sgbem(&args);
+    assert!(!err.contains("panicked"), "{err}");
+    (code, err)
+}
+
+/// Every interface table of a run folder, by file name.
+fn tables(out: &Path) -> Vec<(String, Vec<InterfaceRow>)> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(out.join("interfaces"))
+        .expect("interfaces folder")
+        .map(|e| e.expect("entry").path())
+        .filter(|p| p.extension().is_some_and(|e| e == "csv"))
+        .collect();
+    files.sort();
+    files
+        .into_iter()
+        .map(|p| {
+            let name = p.file_name().unwrap().to_string_lossy().to_string();
+            (name, read_interface_csv(&p))
+        })
+        .collect()
+}
+
+/// Pair-by-pair comparison of two runs: (differing statuses, largest traction difference
+/// over the largest traction, largest jump difference over the largest jump).
+fn compare(a: &Path, b: &Path) -> (usize, f64, f64) {
+    let (ta, tb) = (tables(a), tables(b));
+    assert_eq!(ta.len(), tb.len());
+    let (mut differ, mut dt, mut tmax, mut du, mut umax) = (0, 0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    for ((na, ra), (nb, rb)) in ta.iter().zip(&tb) {
+        assert_eq!(na, nb);
+        assert_eq!(ra.len(), rb.len(), "{na}");
+        for (x, y) in ra.iter().zip(rb) {
+            let both = x.tangential_status.is_some() && y.tangential_status.is_some();
+            if x.closed != y.closed || (both && x.tangential_status != y.tangential_status) {
+                differ += 1;
+            }
+            for (p, q) in [(x.tn, y.tn), (x.tt, y.tt)] {
+                tmax = tmax.max(p.abs());
+                dt = dt.max((p - q).abs());
+            }
+            for (p, q) in [(x.opening, y.opening), (x.slip, y.slip)] {
+                umax = umax.max(p.abs());
+                du = du.max((p - q).abs());
+            }
+        }
+    }
+    // Jumps relative to the largest, or to 1 nm where every jump vanishes (two_blocks).
+    (
+        differ,
+        dt / tmax.max(f64::MIN_POSITIVE),
+        du / umax.max(1e-9),
+    )
+}
+
+/// The running-bond wall of `pipelines/wall_collapse.toml` (5 courses of 3 bricks, 61
+/// junction components) under a fixed lateral acceleration `ax` (× 20 kN/m³) with the
+/// interface law `law` (TOML lines of `[defaults.interface]`).
+fn wall_scene(dir: &Path, name: &str, ax: f64, law: &str, solve: &str) -> PathBuf {
+    let geo = root().join("geo/wall.geo");
+    let text = format!(
+        "plane = \"strain\"\nunits = {{ length = \"m\", force = \"kN\" }}\n\
+         [mesh]\nfile = \"{}\"\ncourses = 5\nbricks = 3\n\
+         [defaults.body]\nyoung = 5.0e6\npoisson = 0.2\nbody_force = [\"{}\", -20.0]\n\
+         [defaults.interface]\nmodel = \"unilateral\"\n{law}\n\
+         [boundary.base]\nux = 0.0\nuy = 0.0\n{solve}\n\
+         [output]\ndirectory = \"out\"\nhistory = \"final\"\n",
+        geo.display(),
+        ax
+    );
+    write(dir, &format!("{name}.toml"), &text)
+}
+
+#[test]
+fn where_no_row_is_implied_it_agrees_with_the_evolutive_path() {
+    let dir = tmpdir("full_rows_agree");
+    // Measured: tractions agree to 7e-12 .. 3e-8 of the largest, jumps to 1e-9.
+    for name in [
+        "two_blocks",
+        "incline_block",
+        "beam_on_blocks_friction",
+        "vault_friction",
+        "arch",
+        "wall",
+        "hertz_contact",
+    ] {
+        let scene = root().join("pipelines").join(format!("{name}.toml"));
+        let (a, b) = (
+            dir.join(format!("{name}_lcp")),
+            dir.join(format!("{name}_exact")),
+        );
+        let (ca, ea) = run(&scene, &a, &["--method", "lcp"]);
+        let (cb, eb) = run(&scene, &b, &["--method", "exact"]);
+        assert_eq!((ca, cb), (0, 0), "{name}: {ea} {eb}");
+        let (differ, dt, du) = compare(&a, &b);
+        eprintln!("{name}: {differ} statuses differ, tractions {dt:.1e}, jumps {du:.1e}");
+        assert_eq!(differ, 0, "{name}");
+        assert!(
+            dt < 1e-7,
+            "{name}: tractions differ by {dt:.2e} of the largest"
+        );
+        assert!(du < 1e-7, "{name}: jumps differ by {du:.2e} of the largest");
+        let s = read_summary(&b);
+        assert_eq!(s["contact"]["solver"], "exact", "{name}");
+        assert_eq!(s["status"], "converged", "{name}");
+    }
+}
+
+/// The closed friction pairs of a run whose tangential traction breaks Coulomb's law: above
+/// μ|t_n|, or slipping below it (relative margin `tol` of the largest traction).
+fn coulomb_breaches(out: &Path, mu: f64, tol: f64) -> (usize, usize, usize) {
+    let all = tables(out);
+    let scale = all
+        .iter()
+        .flat_map(|(_, r)| r.iter())
+        .map(|r| r.tn.abs().max(r.tt.abs()))
+        .fold(0.0f64, f64::max);
+    let (mut above, mut free_slip, mut slipping) = (0, 0, 0);
+    // Friction pairs only ("none": the tangential component is held on both sides).
+    let friction = |r: &&InterfaceRow| r.closed && r.tangential_status.as_deref() != Some("none");
+    for r in all.iter().flat_map(|(_, r)| r.iter()).filter(friction) {
+        let bound = mu * (-r.tn).max(0.0);
+        if r.tt.abs() > bound + tol * scale {
+            above += 1;
+        }
+        if r.tangential_status.as_deref() == Some("slip") {
+            slipping += 1;
+            if r.tt.abs() < bound - 1e-3 * scale {
+                free_slip += 1;
+            }
+        }
+    }
+    (above, free_slip, slipping)
+}
+
+#[test]
+fn every_pair_at_a_junction_obeys_coulomb_on_its_own_rows() {
+    let dir = tmpdir("full_rows_junctions");
+    let mu = 0.8;
+    let law = format!("tangential = \"friction\"\nfriction = {mu}");
+    let scene = wall_scene(&dir, "wall", 9.0, &law, "");
+    let (a, b) = (dir.join("lcp"), dir.join("exact"));
+    let (ca, ea) = run(&scene, &a, &["--method", "lcp"]);
+    let (cb, eb) = run(&scene, &b, &["--method", "exact"]);
+    assert_eq!((ca, cb), (0, 0), "{ea} {eb}");
+    // Measured: 32 pairs slip, none above μ|t_n| by more than 1e-8 of the largest traction.
+    let (above, free_slip, slipping) = coulomb_breaches(&b, mu, 1e-7);
+    eprintln!("exact: {slipping} pairs slip, {above} above μ|t_n|, {free_slip} slip below it");
+    assert!(slipping > 0, "the load makes pairs slip");
+    assert_eq!((above, free_slip), (0, 0));
+    let s = read_summary(&b);
+    let j = &s["contact"]["junctions"];
+    assert_eq!(j["implied_components"], 0, "{j}");
+    // Every brick balances with its pairs' forces (junctions included).
+    let worst = s["equilibrium"]
+        .as_object()
+        .expect("equilibrium")
+        .values()
+        .map(|v| v["relative_imbalance"].as_f64().unwrap())
+        .fold(0.0f64, f64::max);
+    // Measured 7e-8: the interior point's accuracy (1e-10 in its scaled variables).
+    eprintln!("exact: largest relative imbalance of a brick {worst:.1e}");
+    assert!(worst < 5e-7, "{worst}");
+    // The evolutive path's implied components slip without a force of their own (17 closed
+    // pairs at this load); the full rows' summary has none.
+    let lcp = read_summary(&a);
+    let slipping = &lcp["contact"]["junctions"]["implied_slipping"]["count"];
+    eprintln!("lcp: {slipping} implied components slip without a force");
+    assert!(slipping.as_u64().unwrap_or(0) > 0, "{slipping}");
+    assert_eq!(j["implied_slipping"]["count"], 0, "{j}");
+}
+
+#[test]
+fn stick_from_an_open_start_with_zero_gap_is_the_closed_start() {
+    let dir = tmpdir("full_rows_open_start");
+    let arch = root().join("pipelines/arch.toml");
+    let (a, b) = (dir.join("closed"), dir.join("open"));
+    let nv = ["--set", "mesh.nv=6"];
+    let (ca, ea) = run(&arch, &a, &[&nv[..], &["--method", "exact"]].concat());
+    let open = [
+        "--set",
+        "defaults.interface.initial=\"open\"",
+        "--set",
+        "defaults.interface.gap=0.0",
+        "--method",
+        "exact",
+    ];
+    let (cb, eb) = run(&arch, &b, &[&nv[..], &open[..]].concat());
+    assert_eq!((ca, cb), (0, 0), "{ea} {eb}");
+    let (differ, dt, du) = compare(&a, &b);
+    eprintln!("arch, open start: {differ} statuses differ, tractions {dt:.1e}, jumps {du:.1e}");
+    assert_eq!(differ, 0);
+    assert!(dt < 1e-8 && du < 1e-8, "{dt} {du}");
+}
+
+#[test]
+fn coulomb_friction_tends_to_stick_as_mu_grows() {
+    let dir = tmpdir("full_rows_mu");
+    let stick = wall_scene(&dir, "stick", 6.0, "tangential = \"stick\"", "");
+    let s = dir.join("stick_out");
+    let (c, e) = run(&stick, &s, &["--method", "exact"]);
+    assert_eq!(c, 0, "{e}");
+    let mut diffs = Vec::new();
+    // Measured: 0.49, 0.23, 2.5e-3, 2.5e-4 of the largest traction at μ = 1, 10, 100, 1000.
+    for mu in [100.0, 1000.0] {
+        let law = format!("tangential = \"friction\"\nfriction = {mu}");
+        let scene = wall_scene(&dir, &format!("mu{mu}"), 6.0, &law, "");
+        let out = dir.join(format!("mu{mu}_out"));
+        let (c, e) = run(&scene, &out, &["--method", "exact"]);
+        assert_eq!(c, 0, "μ = {mu}: {e}");
+        let (differ, dt, du) = compare(&s, &out);
+        eprintln!(
+            "μ = {mu}: {differ} statuses differ from stick, tractions {dt:.2e}, jumps {du:.1e}"
+        );
+        assert_eq!(differ, 0, "μ = {mu}");
+        assert!(du < 1e-6, "μ = {mu}: {du}");
+        diffs.push(dt);
+    }
+    // The difference falls like 1/μ.
+    let ratio = diffs[0] / diffs[1];
+    assert!((5.0..20.0).contains(&ratio), "{diffs:?}");
+    assert!(diffs[1] < 1e-3, "{diffs:?}");
+}
+
+#[test]
+fn a_mechanism_is_the_programmes_certificate() {
+    let dir = tmpdir("full_rows_mechanism");
+    let scene = root().join("pipelines/incline_block_slides.toml");
+    let (code, err) = run(&scene, &dir.join("out"), &["--method", "exact"]);
+    eprintln!("{}", err.trim());
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("found no equilibrium"), "{err}");
+    assert!(err.contains("body \"upper\""), "{err}");
+    assert!(err.contains("the rigid-block check confirms it"), "{err}");
+}
+
+#[test]
+fn collapse_of_a_tilting_block_and_of_a_wall_on_the_full_rows() {
+    let dir = support::two_blocks_mesh("full_rows_collapse");
+    let scene = support::two_blocks_scene(
+        "[\"t\", -1.0]",
+        10.0,
+        "[solve]\ncollapse = { max = 5.0, tolerance = 0.001 }",
+        false,
+    );
+    let scene = write(&dir, "col.toml", &scene);
+    let out = dir.join("block");
+    let (code, err) = run(&scene, &out, &["--method", "exact"]);
+    assert_eq!(code, 0, "{err}");
+    let c = read_summary(&out)["contact"]["collapse"].clone();
+    let lo = c["multiplier"].as_f64().unwrap();
+    eprintln!("tilting block on the full rows: multiplier {lo:.4} (rigid block 2)");
+    assert!((lo / 2.0 - 1.0).abs() < 0.01, "{lo}");
+    let mech = c["mechanism"].as_str().unwrap();
+    assert!(mech.contains("body \"upper\""), "{mech}");
+    // The 5 × 3 wall: junction rows with friction of their own stand at least as long as
+    // the evolutive path's (whose implied components slip freely), and no longer than the
+    // rigid-block statics allows.
+    let wall = root().join("pipelines/wall_collapse.toml");
+    let (a, b) = (dir.join("wall_lcp"), dir.join("wall_exact"));
+    let (ca, ea) = run(&wall, &a, &["--method", "lcp"]);
+    let (cb, eb) = run(&wall, &b, &["--method", "exact"]);
+    assert_eq!((ca, cb), (0, 0), "{ea} {eb}");
+    let (sa, sb) = (read_summary(&a), read_summary(&b));
+    let (ma, mb) = (
+        sa["contact"]["collapse"]["multiplier"].as_f64().unwrap(),
+        sb["contact"]["collapse"]["multiplier"].as_f64().unwrap(),
+    );
+    let bound = sb["contact"]["collapse"]["upper_bound"].as_f64().unwrap();
+    eprintln!("wall: multiplier {mb:.4} on the full rows, {ma:.4} on the evolutive path, bound {bound:.4}");
+    assert!(ma <= mb + 0.001 && mb <= bound, "{ma} {mb} {bound}");
+}
