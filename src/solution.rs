@@ -309,6 +309,10 @@ pub struct CollapseTrial {
     /// lower bound there; left out where false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub undecided: bool,
+    /// Not solved: more than 10 % above the rigid-block statics' bound, where no equilibrium
+    /// exists by proof; left out where false.
+    #[serde(skip_serializing_if = "std::ops::Not::not")]
+    pub by_statics: bool,
 }
 
 /// The rigid motion of one body in a mechanism: the velocity `translation` of the point

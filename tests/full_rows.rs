@@ -291,4 +291,72 @@ fn collapse_of_a_tilting_block_and_of_a_wall_on_the_full_rows() {
     let bound = sb["contact"]["collapse"]["upper_bound"].as_f64().unwrap();
     eprintln!("wall: multiplier {mb:.4} on the full rows, {ma:.4} on the evolutive path, bound {bound:.4}");
     assert!(ma <= mb + 0.001 && mb <= bound, "{ma} {mb} {bound}");
+    // Trials are marked undecided exactly where neither an equilibrium nor its absence was
+    // shown: on the evolutive path every failing trial at or below the bound (its mechanism
+    // the statics cannot confirm), none above it; no standing trial is.
+    let trials = sa["contact"]["collapse"]["trials"]
+        .as_array()
+        .expect("trials");
+    for t in trials {
+        let (at, stands) = (t["t"].as_f64().unwrap(), t["stands"] == true);
+        let undecided = t["undecided"] == true;
+        assert_eq!(undecided, !stands && at <= bound, "lcp trial {t}");
+        // More than 10 % above the bound a trial fails by proof, unsolved.
+        assert_eq!(t["by_statics"] == true, at > 1.1 * bound, "lcp trial {t}");
+    }
+}
+
+/// The 4 × 5 running-bond wall (`wall_collapse` with 4 courses of 5 bricks, 0.4 × 0.2, half
+/// bricks 0.2 × 0.2 at the ends of every other course) on stick joints under t·g sideways:
+/// on the full rows it collapses when the top course's end half brick tips about its toe,
+/// the rigid-block limit b/h = 0.2/0.2 = 1 (the evolutive path, whose implied components
+/// slide freely, stops at 0.7305).
+#[test]
+fn a_stick_wall_collapses_at_its_end_half_brick_tipping_limit() {
+    let dir = tmpdir("full_rows_stick_wall");
+    let text = std::fs::read_to_string(root().join("pipelines/wall_collapse.toml"))
+        .expect("wall_collapse.toml")
+        .replace("friction = 0.8", "")
+        .replace(
+            "\"../geo/wall.geo\"",
+            &format!("\"{}\"", root().join("geo/wall.geo").display()),
+        );
+    let scene = write(&dir, "stick.toml", &text);
+    let out = dir.join("out");
+    let (code, err) = run(
+        &scene,
+        &out,
+        &[
+            "--method",
+            "exact",
+            "--set",
+            "mesh.courses=4",
+            "--set",
+            "mesh.bricks=5",
+            "--set",
+            "defaults.interface.tangential=\"stick\"",
+        ],
+    );
+    assert_eq!(code, 0, "{err}");
+    let c = read_summary(&out)["contact"]["collapse"].clone();
+    let (lo, hi) = (
+        c["multiplier"].as_f64().unwrap(),
+        c["collapses_at"].as_f64().unwrap(),
+    );
+    eprintln!("4 x 5 stick wall on the full rows: stands at {lo}, collapses at {hi} (rigid 1)");
+    assert!(
+        lo <= 1.0 + 1e-9 && hi >= 1.0 - 1e-9 && hi - lo <= 0.001 + 1e-12,
+        "{c}"
+    );
+    let motion = c["motion"].as_array().expect("motion");
+    assert_eq!(motion.len(), 1, "{motion:?}");
+    assert_eq!(motion[0]["sense"], "clockwise");
+    let centre = [
+        motion[0]["centre"][0].as_f64().unwrap(),
+        motion[0]["centre"][1].as_f64().unwrap(),
+    ];
+    assert!(
+        (centre[0] - 2.0).abs() < 1e-6 && (centre[1] - 0.6).abs() < 1e-6,
+        "{centre:?}"
+    );
 }

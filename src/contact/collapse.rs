@@ -20,6 +20,9 @@ use crate::input::scene::Collapse;
 use crate::solution::{BodyMotion, CollapseSummary, CollapseTrial};
 use crate::timings::Timings;
 
+/// Trials above this multiple of the rigid-block bound are not solved (failing by proof).
+const STATICS_MARGIN: f64 = 1.1;
+
 /// What the search found: the multiplier, the summary's `contact.collapse` block and the
 /// motion of the mechanism at `collapses_at`, where it was found.
 pub(super) struct Found {
@@ -73,6 +76,28 @@ impl Search<'_, '_> {
         timings: &mut Timings,
         reassembled: &mut Option<Operators>,
     ) -> Result<Option<Collapsed>> {
+        // Well above the rigid-block bound no equilibrium exists by proof: not solved (a
+        // solver there only finds its mechanism or, with Coulomb joints, often nothing in
+        // minutes). Within 10 % above it the trial is solved, so that the bisection's
+        // `collapses_at` next to a tight bound has the solver's mechanism and motion.
+        if let Bound::Value(b) = self.bound {
+            if t > STATICS_MARGIN * b {
+                self.trials.push(CollapseTrial {
+                    undecided: false,
+                    by_statics: true,
+                    stands: false,
+                    t,
+                });
+                let e = Error::numerical(format!(
+                    "no equilibrium exists at t = {}: it is above the rigid-block statics' bound \
+                     t = {} (no interface forces within the pairs' laws balance every body); \
+                     not solved",
+                    fmt_num(t),
+                    fmt_num(b)
+                ));
+                return Ok(Some((e, None)));
+            }
+        }
         let mut st = session.initial();
         let mut a = StepAcc::default();
         let t0 = Instant::now();
@@ -109,6 +134,7 @@ impl Search<'_, '_> {
             }
         };
         self.trials.push(CollapseTrial {
+            by_statics: false,
             undecided: undecided || unsettled,
             stands: outcome.is_none(),
             t,

@@ -166,11 +166,19 @@ impl<'a> Exact<'a> {
             .collect()
     }
 
-    /// Whether the direction of `u` lowers the energy without end: every body moves rigidly
-    /// along it (its elastic forces vanish against its stiffness), no closed gap closes
-    /// further and no tie moves (to 1e-6 of the motion), and the loads do more work than
-    /// the slip bounds dissipate.
-    fn is_recession(&self, factor: f64, cohesion: &[f64], laws: &[Law], u: &[f64]) -> bool {
+    /// Whether the direction of `u` lowers the energy without end (`strict`) or leaves it
+    /// unchanged (a neutral one): every body moves rigidly along it (its elastic forces
+    /// vanish against its stiffness), no closed gap closes further and no tie moves (to 1e-6
+    /// of the motion), and the loads do more work than the slip bounds dissipate (or as much,
+    /// to 1e-6 of either).
+    fn is_recession(
+        &self,
+        factor: f64,
+        cohesion: &[f64],
+        laws: &[Law],
+        u: &[f64],
+        strict: bool,
+    ) -> bool {
         let pb = self.problem;
         let big = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
         if !(big > 0.0 && big.is_finite()) {
@@ -178,6 +186,7 @@ impl<'a> Exact<'a> {
         }
         let du: Vec<f64> = u.iter().map(|v| v / big).collect();
         let mut work = 0.0;
+        let mut size = 0.0f64;
         for (b, op) in pb.ops.iter().enumerate() {
             let s0 = pb.dof_start[b];
             let n = op.u_idx.len();
@@ -188,20 +197,29 @@ impl<'a> Exact<'a> {
                     return false;
                 }
                 work += factor * op.p[i] * du[s0 + i];
+                size += (factor * op.p[i] * du[s0 + i]).abs();
             }
         }
         let jumps = self.jumps(&du);
         for (r, law) in laws.iter().enumerate() {
             let j = jumps[r];
             work += cohesion[r] * j;
+            size += (cohesion[r] * j).abs();
             match *law {
                 Law::Tie(_) if j.abs() > 1e-6 => return false,
                 Law::Gap if j < -1e-6 => return false,
-                Law::Tresca { bound, .. } => work += bound * j.abs(),
+                Law::Tresca { bound, .. } => {
+                    work += bound * j.abs();
+                    size += bound * j.abs();
+                }
                 _ => {}
             }
         }
-        work < 0.0
+        if strict {
+            work < 0.0
+        } else {
+            work <= 1e-6 * size
+        }
     }
 
     /// The largest imbalance of a dof, `|∂E/∂U_d + Σ c_r coef − Σ λ_r coef|`, relative to
@@ -277,11 +295,26 @@ impl<'a> Exact<'a> {
             s => return ProgrammeOutcome::Failed(format!("Clarabel's status {s:?}")),
         }
         let read = self.read(sol, &c, laws, qs);
+        // In the scaled unknowns an elastic solution is of order one; a point 1e8 times
+        // farther has drifted along a direction that costs nothing (a body free to slide at
+        // zero force, Clarabel's analytic centre of an unbounded set of minimisers): a
+        // mechanism of neutral equilibrium where that direction is one, else no verdict.
+        let drift = sol.x[..n].iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        if drift > DRIFT_LIMIT {
+            if self.is_recession(factor, cohesion, laws, &read.u, false) {
+                return ProgrammeOutcome::Mechanism(read.u);
+            }
+            return ProgrammeOutcome::Failed(format!(
+                "Clarabel's status {:?} at a point {drift:.1e} times the elastic scale: the \
+                 minimisers are not bounded",
+                sol.status
+            ));
+        }
         let balance = self.balance_residual(factor, cohesion, &read.u, &read.force);
         if balance.is_nan() || balance > BALANCE_TOLERANCE {
             // Where the programme is unbounded Clarabel may stop at a huge point instead of
             // its certificate: that point's direction is then the mechanism.
-            if self.is_recession(factor, cohesion, laws, &read.u) {
+            if self.is_recession(factor, cohesion, laws, &read.u, true) {
                 return ProgrammeOutcome::Mechanism(read.u);
             }
             return ProgrammeOutcome::Failed(format!(
@@ -1177,6 +1210,10 @@ struct Verdict {
 /// The imbalance of a dof, relative to the largest load or row force, above which a
 /// programme's solution is refused.
 const BALANCE_TOLERANCE: f64 = 1e-6;
+
+/// How far (in the scaled unknowns, where an elastic solution is of order one) a solution
+/// may lie before it is taken for a drift along a direction that costs nothing.
+const DRIFT_LIMIT: f64 = 1e8;
 
 /// The convex programmes a load step of the full-row solver may take.
 const FULL_ROW_PROGRAMMES: usize = 500;

@@ -551,6 +551,7 @@ mod tests {
                 tolerance: 0.25,
                 trials: vec![CollapseTrial {
                     undecided: false,
+                    by_statics: false,
                     stands: true,
                     t: 0.0,
                 }],
