@@ -60,8 +60,9 @@ def run(scene, out=None, set=None, mesh=None, method=None, exe=None):  # noqa: A
 
     `out` the output folder (else the scene's `output.directory`), `set` a dict of scene
     overrides {"interface.joint.cohesion": 2.0} (values as Python bool, number, string or
-    list), `mesh` a mesh file, `method` "lcp", "qp" or "both", `exe` the executable (see
-    `executable`). Raises `SgbemError` with the command line's message on a non-zero exit.
+    list), `mesh` a mesh file, `method` "lcp", "qp", "both", "sparse" or "exact", `exe` the
+    executable (see `executable`). Raises `SgbemError` with the command line's message on a
+    non-zero exit.
     """
     argv = [executable(exe), "run", str(scene)]
     if out is not None:
