@@ -29,6 +29,7 @@ use clarabel::solver::{
 
 use crate::contact::problem::{Problem, RowKind};
 use crate::input::model::Model;
+use crate::linalg::matvec;
 
 /// The law of one full row in one convex programme.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -73,8 +74,9 @@ pub struct StepOutcome {
     /// Convex programmes solved and interior point iterations in all.
     pub programmes: usize,
     pub ipm_iterations: u64,
-    /// The last change of the slip bounds relative to the largest (Coulomb).
-    pub bound_change: f64,
+    /// The last residual of Coulomb's law relative to the largest normal force
+    /// (`coulomb_residual`).
+    pub residual: f64,
 }
 
 pub enum StepFailure {
@@ -191,11 +193,11 @@ impl<'a> Exact<'a> {
             let s0 = pb.dof_start[b];
             let n = op.u_idx.len();
             let stiff = (0..n).map(|i| op.s[(i, i)].abs()).fold(0.0f64, f64::max);
+            let elastic = matvec(&op.s, &du[s0..s0 + n]);
+            if elastic.iter().any(|f| f.abs() > 1e-6 * stiff) {
+                return false;
+            }
             for i in 0..n {
-                let f: f64 = (0..n).map(|j| op.s[(i, j)] * du[s0 + j]).sum();
-                if f.abs() > 1e-6 * stiff {
-                    return false;
-                }
                 work += factor * op.p[i] * du[s0 + i];
                 size += (factor * op.p[i] * du[s0 + i]).abs();
             }
@@ -233,11 +235,11 @@ impl<'a> Exact<'a> {
         for (b, op) in pb.ops.iter().enumerate() {
             let s0 = pb.dof_start[b];
             let n = op.u_idx.len();
-            let ub = &u[s0..s0 + n];
-            for (i, gi) in g[s0..s0 + n].iter_mut().enumerate() {
-                let load = factor * op.p[i];
+            let elastic = matvec(&op.s, &u[s0..s0 + n]);
+            for ((gi, p), e) in g[s0..s0 + n].iter_mut().zip(&op.p).zip(elastic) {
+                let load = factor * p;
                 scale = scale.max(load.abs());
-                *gi = load + (0..n).map(|j| op.s[(i, j)] * ub[j]).sum::<f64>();
+                *gi = load + e;
             }
         }
         for (r, f) in pb.full.iter().enumerate() {
@@ -626,7 +628,11 @@ impl<'a> Exact<'a> {
         max_outer: usize,
     ) -> StepOutcome {
         let full = &self.problem.full;
-        let normal = normal_rows(full);
+        // The normal row of every full row's pair.
+        let normal: Vec<Option<usize>> = full
+            .iter()
+            .map(|f| self.problem.full_of[f.row.iface][f.row.pair][1])
+            .collect();
         let friction: Vec<usize> = (0..full.len())
             .filter(|&r| full[r].row.kind == RowKind::Friction && normal[r].is_some())
             .collect();
@@ -645,7 +651,7 @@ impl<'a> Exact<'a> {
             result,
             programmes,
             ipm_iterations: ipm,
-            bound_change: change,
+            residual: change,
         };
         for _ in 0..max_outer.max(1) {
             let sol = match self.programme(factor, cohesion, &laws) {
@@ -734,19 +740,6 @@ impl<'a> Exact<'a> {
         };
         fail(result, programmes, ipm, change)
     }
-}
-
-/// The normal row of every full row's pair.
-fn normal_rows(full: &[crate::contact::problem::FullRow]) -> Vec<Option<usize>> {
-    let mut normal_of = std::collections::HashMap::new();
-    for (r, f) in full.iter().enumerate() {
-        if f.row.comp == 1 {
-            normal_of.insert((f.row.iface, f.row.pair), r);
-        }
-    }
-    full.iter()
-        .map(|f| normal_of.get(&(f.row.iface, f.row.pair)).copied())
-        .collect()
 }
 
 /// The laws of a step's first programme: bonded rows tied, normal rows unilateral, every
@@ -870,14 +863,11 @@ fn coulomb_residual(
     }
     let mut worst = 0.0f64;
     for (i, &r) in friction.iter().enumerate() {
-        let t = sol.force[r].abs();
-        let e = if x[i].is_nan() {
-            // Tied: holds where within its new bound.
-            (t - gx[i]).max(0.0)
-        } else if sol.slipping[r] {
+        // A tied row (x NaN) holds like a sticking one: within its new bound.
+        let e = if sol.slipping[r] && !x[i].is_nan() {
             (x[i] - gx[i]).abs()
         } else {
-            (t - gx[i]).max(0.0)
+            (sol.force[r].abs() - gx[i]).max(0.0)
         };
         worst = worst.max(e);
     }
@@ -1022,7 +1012,7 @@ impl super::Session<'_> {
             ..Default::default()
         };
         let mut notes = Vec::new();
-        let (programmes, residual) = (out.programmes, out.bound_change);
+        let (programmes, residual) = (out.programmes, out.residual);
         let Verdict {
             sol,
             failure,
@@ -1061,15 +1051,18 @@ impl super::Session<'_> {
             pb.full_row_state(model, self.prepared, factor, &frs);
         // The next step's anchors and the slip paths of closed friction pairs.
         let jumps = ex.jumps(&sol.u);
-        let mut path = path0.clone();
-        for (r, f) in pb.full.iter().enumerate() {
-            if f.row.kind == RowKind::Friction && solved {
-                let res = &mut interfaces[f.row.iface].pairs[f.row.pair];
-                if res.status == crate::solution::PairStatus::Closed {
-                    path[r] += (jumps[r] - anchor[r]).abs();
-                }
-                res.slip = path[r];
+        let mut path = path0;
+        let friction = pb
+            .full
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.row.kind == RowKind::Friction);
+        for (r, f) in friction.filter(|_| solved) {
+            let res = &mut interfaces[f.row.iface].pairs[f.row.pair];
+            if res.status == crate::solution::PairStatus::Closed {
+                path[r] += (jumps[r] - anchor[r]).abs();
             }
+            res.slip = path[r];
         }
         let mut state = start.clone();
         if solved {
@@ -1116,11 +1109,7 @@ impl super::Session<'_> {
             outer_iterations: out.programmes,
             converged: failure.is_none(),
             solver: method.name(),
-            residual: if solved {
-                out.bound_change
-            } else {
-                f64::INFINITY
-            },
+            residual: if solved { out.residual } else { f64::INFINITY },
             rows,
             states,
             notes,

@@ -172,6 +172,8 @@ pub struct Problem {
     implied_at: std::collections::HashSet<(usize, usize, usize)>,
     /// Every candidate row, junctions included, over the dofs.
     pub full: Vec<FullRow>,
+    /// `full_of[k][j][c]`: the full row of a pair component, if any.
+    pub full_of: Vec<Vec<[Option<usize>; 2]>>,
     n_glued: usize,
     factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
     /// Each global dof's node (body-local) and direction.
@@ -217,7 +219,15 @@ impl Problem {
     pub fn new(model: &Model, prepared: &Operators) -> Result<Problem> {
         let bodies = body_operators(model, prepared)?;
         let cands = candidates(model, &bodies.node_dofs)?;
-        let full = cands.iter().map(rows::Candidate::full).collect();
+        let full: Vec<FullRow> = cands.iter().map(rows::Candidate::full).collect();
+        let mut full_of: Vec<Vec<[Option<usize>; 2]>> = model
+            .interfaces
+            .iter()
+            .map(|it| vec![[None; 2]; it.pairs.len()])
+            .collect();
+        for (r, f) in full.iter().enumerate() {
+            full_of[f.row.iface][f.row.pair][f.row.comp] = Some(r);
+        }
         let (expr, kept) = eliminate(&cands, bodies.n_dofs);
         let set = final_rows(model, &cands, &kept);
         let glued = glued_maps(&expr, &set.index_of, set.rows.len());
@@ -255,6 +265,7 @@ impl Problem {
             implied: set.implied,
             implied_at: set.implied_at,
             full,
+            full_of,
             n_glued: glued.n_glued,
             factor,
             dof_at,

@@ -157,20 +157,30 @@ impl Problem {
                 }
                 // Implied at a junction: the kept rows carry its force.
                 None if self.implied_at.contains(&(k, j, c)) => {}
-                None => {
-                    // Frictionless tangential component: no row, no force.
-                    let slide = c == 0
-                        && it.spec.model == InterfaceModel::Unilateral
-                        && it.spec.tangential == Tangential::Slide;
-                    if !slide {
-                        if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true) {
-                            *t = solved.tractions[it.body_a][i];
-                        }
-                    }
-                }
+                None => *t = traction_without_row(prepared, solved.tractions, it, k, j, c),
             }
         }
         traction
+    }
+}
+
+/// Component `c` of pair `j` of interface `k` where it has no row: zero for the tangential
+/// component of a frictionless pair, else the body A's own traction hat there (a component
+/// prescribed on both sides), from the bodies' X0 `tractions`.
+fn traction_without_row(
+    prepared: &Operators,
+    tractions: &[Vec<f64>],
+    it: &Interface,
+    k: usize,
+    j: usize,
+    c: usize,
+) -> f64 {
+    let slide = c == 0
+        && it.spec.model == InterfaceModel::Unilateral
+        && it.spec.tangential == Tangential::Slide;
+    match prepared.maps[it.body_a].get(k, j, c, true) {
+        Some(i) if !slide => tractions[it.body_a][i],
+        _ => 0.0,
     }
 }
 
@@ -225,10 +235,6 @@ impl Problem {
             .map(|(b, op)| sol.u[self.dof_start[b]..self.dof_start[b] + op.u_idx.len()].to_vec())
             .collect();
         let (fields, tractions) = self.body_fields(model, prepared, factor, &u);
-        let mut full_of = std::collections::HashMap::new();
-        for (r, f) in self.full.iter().enumerate() {
-            full_of.insert((f.row.iface, f.row.pair, f.row.comp), r);
-        }
         let mut nodal = Vec::with_capacity(model.interfaces.len());
         let interfaces = model
             .interfaces
@@ -239,8 +245,7 @@ impl Problem {
                 let pairs = (0..it.pairs.len())
                     .map(|j| {
                         let pr = &it.pairs[j];
-                        let rn = full_of.get(&(k, j, 1)).copied();
-                        let rt = full_of.get(&(k, j, 0)).copied();
+                        let [rt, rn] = self.full_of[k][j];
                         let closed = match rn {
                             Some(r) => sol.closed[r],
                             None => !(it.independent() && pr.partners.is_empty()),
@@ -263,15 +268,7 @@ impl Problem {
                                     *t = -(sol.force[r] - sol.cohesion[r]) / self.full[r].row.weight
                                 }
                                 None => {
-                                    let slide = c == 0
-                                        && it.spec.model == InterfaceModel::Unilateral
-                                        && it.spec.tangential == Tangential::Slide;
-                                    if !slide {
-                                        if let Some(i) = prepared.maps[it.body_a].get(k, j, c, true)
-                                        {
-                                            *t = tractions[it.body_a][i];
-                                        }
-                                    }
+                                    *t = traction_without_row(prepared, &tractions, it, k, j, c)
                                 }
                             }
                         }
