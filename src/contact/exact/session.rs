@@ -1,0 +1,229 @@
+//! The full-row solver as a load step of the contact session: its result in the form every
+//! solver gives, and the verdict on a step that did not settle (docs/formulation.md §6.10).
+
+use super::{Exact, Programme, StepFailure, FULL_ROW_PROGRAMMES};
+use crate::contact::problem::RowKind;
+
+impl crate::contact::Session<'_> {
+    /// One load step of the full-row solver from `start` (see the module doc): the result
+    /// in the form every solver gives, one recorded state per step.
+    pub(in crate::contact) fn solve_step_full(
+        &mut self,
+        start: &crate::contact::StepState,
+        load_step: usize,
+        factor: f64,
+        record: bool,
+    ) -> crate::contact::ContactResult {
+        use crate::contact::{ContactResult, Iterate, Solver};
+        let (model, pb) = (self.model, &self.problem);
+        let ex = Exact::new(pb);
+        let n_full = pb.full.len();
+        // Before the solver's first step: no slip yet.
+        let or_zeros = |v: &[f64]| {
+            if v.len() == n_full {
+                v.to_vec()
+            } else {
+                vec![0.0; n_full]
+            }
+        };
+        let (anchor, path0) = (or_zeros(&start.full_anchor), or_zeros(&start.full_path));
+        // The cohesion term c w of unilateral normal rows, with the cohesion left.
+        let mut cohesion: Vec<f64> = pb
+            .full
+            .iter()
+            .map(|f| match f.row.kind {
+                RowKind::Normal => start.cohesion[f.row.iface][f.row.pair] * f.row.weight,
+                _ => 0.0,
+            })
+            .collect();
+        let out = ex.step(model, factor, &anchor, &mut cohesion, FULL_ROW_PROGRAMMES);
+        let info = crate::solution::SolverInfo {
+            iterations: Some(u32::try_from(out.ipm_iterations).unwrap_or(u32::MAX)),
+            variables: Some(pb.n_dofs),
+            constraints: Some(n_full),
+            ..Default::default()
+        };
+        let mut notes = Vec::new();
+        let (programmes, residual) = (out.programmes, out.residual);
+        let Verdict {
+            sol,
+            failure,
+            mechanism,
+            motion,
+            undecided,
+        } = self.verdict(out.result, load_step, programmes, residual);
+        if out.programmes > 1 {
+            notes.push(format!(
+                "load step {}: the full-row solver took {} convex programmes ({} interior \
+                 point iterations)",
+                load_step + 1,
+                out.programmes,
+                out.ipm_iterations
+            ));
+        }
+        // Without a solution (a mechanism, a failure): the state of every pair tied, for
+        // the record, at zero displacement.
+        let zero = Programme {
+            u: vec![0.0; pb.n_dofs],
+            force: vec![0.0; n_full],
+            closed: vec![true; n_full],
+            slipping: vec![false; n_full],
+            iterations: 0,
+        };
+        let solved = sol.is_some();
+        let sol = sol.unwrap_or(zero);
+        let frs = crate::contact::problem::FullRowSolution {
+            u: &sol.u,
+            force: &sol.force,
+            closed: &sol.closed,
+            slipping: &sol.slipping,
+            cohesion: &cohesion,
+        };
+        let (fields, mut interfaces, nodal_force) =
+            pb.full_row_state(model, self.prepared, factor, &frs);
+        // The next step's anchors and the slip paths of closed friction pairs.
+        let jumps = ex.jumps(&sol.u);
+        let mut path = path0;
+        let friction = pb
+            .full
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| f.row.kind == RowKind::Friction);
+        for (r, f) in friction.filter(|_| solved) {
+            let res = &mut interfaces[f.row.iface].pairs[f.row.pair];
+            if res.status == crate::solution::PairStatus::Closed {
+                path[r] += (jumps[r] - anchor[r]).abs();
+            }
+            res.slip = path[r];
+        }
+        let mut state = start.clone();
+        if solved {
+            state.full_anchor = jumps;
+            state.full_path = path;
+            for (k, it) in interfaces.iter().enumerate() {
+                for (j, p) in it.pairs.iter().enumerate() {
+                    if p.status == crate::solution::PairStatus::Open {
+                        state.cohesion[k][j] = 0.0;
+                        state.broken[k][j] = true;
+                    }
+                }
+            }
+        }
+        let method = Solver::Exact;
+        let rows = vec![crate::contact::history_row(
+            model,
+            &interfaces,
+            load_step,
+            factor,
+            out.programmes,
+            method.name(),
+        )];
+        let states = if record {
+            vec![Iterate {
+                load_step,
+                load_factor: factor,
+                time: model.time,
+                body_force: self.body_forces(),
+                iteration: out.programmes,
+                index: 0,
+                fields: fields.clone(),
+                interfaces: interfaces.clone(),
+            }]
+        } else {
+            Vec::new()
+        };
+        ContactResult {
+            state,
+            fields,
+            interfaces,
+            nodal_force,
+            iterations: out.programmes,
+            outer_iterations: out.programmes,
+            converged: failure.is_none(),
+            solver: method.name(),
+            residual: if solved { out.residual } else { f64::INFINITY },
+            rows,
+            states,
+            notes,
+            failure,
+            mechanism,
+            motion,
+            undecided,
+            info,
+            recorded: Vec::new(),
+            start: start.clone(),
+            load_step,
+            load_factor: factor,
+        }
+    }
+
+    /// The step's solution and its failure, if any, from the full-row step's result.
+    fn verdict(
+        &self,
+        result: Result<Programme, StepFailure>,
+        load_step: usize,
+        programmes: usize,
+        residual: f64,
+    ) -> Verdict {
+        let step = load_step + 1;
+        let failed = |message: String, sol, undecided| Verdict {
+            sol,
+            failure: Some(crate::error::Error::numerical(message)),
+            mechanism: false,
+            motion: None,
+            undecided,
+        };
+        match result {
+            Ok(sol) => Verdict {
+                sol: Some(sol),
+                failure: None,
+                mechanism: false,
+                motion: None,
+                undecided: false,
+            },
+            Err(StepFailure::NotSettled(sol)) => failed(
+                format!(
+                    "the contact solver (exact) did not settle Coulomb's law at load step \
+                     {step} in {programmes} convex programmes: the last relative residual of \
+                     the law was {residual:.1e}; use smaller load steps (more values in \
+                     solve.time or load_factors)"
+                ),
+                Some(sol),
+                true,
+            ),
+            Err(StepFailure::Mechanism(du)) => {
+                let motions = self.problem.rigid_fit(self.model, &du);
+                let (words, found) = crate::contact::mechanism::motion_of(self.model, motions);
+                Verdict {
+                    sol: None,
+                    failure: Some(crate::error::Error::numerical(format!(
+                        "the contact solver (exact) found no equilibrium at load step {step}: \
+                         the bodies' energy with every pair's law has no minimum (a \
+                         mechanism){words}"
+                    ))),
+                    mechanism: true,
+                    motion: found,
+                    undecided: false,
+                }
+            }
+            Err(StepFailure::Failed(m)) => failed(
+                format!(
+                    "the contact solver (exact) failed at load step {step}: the convex \
+                     programme did not solve ({m})"
+                ),
+                None,
+                true,
+            ),
+        }
+    }
+}
+
+/// What a full-row step gives the driver: its solution (none at a mechanism or a failure)
+/// and its failure.
+struct Verdict {
+    sol: Option<Programme>,
+    failure: Option<crate::error::Error>,
+    mechanism: bool,
+    motion: Option<Vec<crate::solution::BodyMotion>>,
+    undecided: bool,
+}
