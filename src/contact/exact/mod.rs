@@ -18,8 +18,9 @@
 //! with a_r the relative displacement the row keeps (the step's start). Dependent rows are
 //! allowed: the interior point method needs no independent constraints, and the forces at a
 //! junction are one of the admissible distributions (the central one). Coulomb's law is the
-//! fixed point `g_r = μ (λ_n − c w)⁺` of the pair's normal force; `stick` ties the tangential
-//! row of every pair that the last iterate closed. An unbounded programme (Clarabel's
+//! fixed point `g_r = μ (λ_n − c w)⁺` of the pair's normal force (`fixed_point`), finished
+//! where its statuses hold by one linear solve of Coulomb's law (`newton`); `stick` ties the
+//! tangential row of every pair that the last iterate closed. An unbounded programme (Clarabel's
 //! certificate of dual infeasibility) is a mechanism: its direction is the motion.
 
 use clarabel::algebra::CscMatrix;
@@ -32,6 +33,7 @@ use crate::input::model::Model;
 use crate::linalg::matvec;
 
 mod fixed_point;
+mod newton;
 mod session;
 
 use fixed_point::{coulomb_residual, SlipBounds, SETTLED};
@@ -82,6 +84,9 @@ pub struct StepOutcome {
     /// The last residual of Coulomb's law relative to the largest normal force
     /// (`coulomb_residual`).
     pub residual: f64,
+    /// Whether Coulomb's law was settled by the linear solve of the last statuses
+    /// (`newton`) rather than by the fixed point itself.
+    pub finished: bool,
 }
 
 pub enum StepFailure {
@@ -649,11 +654,15 @@ impl<'a> Exact<'a> {
         let mut settled = false;
         let mut mixer = SlipBounds::new();
         let mut flips = vec![0u8; full.len()];
+        let mut seen: Option<(Vec<bool>, Vec<bool>)> = None;
+        let mut tried: Option<usize> = None;
+        let mut finished = false;
         let fail = |result, programmes, ipm, change| StepOutcome {
             result,
             programmes,
             ipm_iterations: ipm,
             residual: change,
+            finished: false,
         };
         for _ in 0..max_outer.max(1) {
             let sol = match self.programme(factor, cohesion, &laws) {
@@ -684,27 +693,32 @@ impl<'a> Exact<'a> {
             };
             tie.update(&sol, &laws, &mut next, &mut flips);
             // Coulomb's bounds from the normal forces: G(x).
-            let x: Vec<f64> = friction
-                .iter()
-                .map(|&r| match laws[r] {
-                    Law::Tresca { bound, .. } => bound,
-                    Law::Tie(_) => f64::NAN,
-                    _ => 0.0,
-                })
-                .collect();
-            let gx: Vec<f64> = friction
-                .iter()
-                .map(|&r| {
-                    let nr = normal[r].unwrap_or(r);
-                    let pair = &model.interfaces[full[r].row.iface].pairs[full[r].row.pair];
-                    if sol.closed[nr] {
-                        pair.friction * (sol.force[nr] - cohesion[nr]).max(0.0)
-                    } else {
-                        0.0
-                    }
-                })
-                .collect();
+            let (x, gx) = self.bounds(model, &friction, &normal, &laws, &sol, cohesion);
             change = coulomb_residual(&friction, &normal, &sol, &x, &gx);
+            // Where the statuses held since the last programme, Coulomb's law with these
+            // statuses is one linear solve (`newton`).
+            let statuses = (sol.closed.clone(), sol.slipping.clone());
+            let repeat = seen.as_ref() == Some(&statuses)
+                && tried.is_none_or(|t| programmes >= t + RETRY_FINISH);
+            if programmes > 1 && !broke && change > SETTLED && repeat {
+                tried = Some(programmes);
+                let fin = newton::Finish {
+                    model,
+                    factor,
+                    cohesion,
+                    normal: &normal,
+                    start,
+                };
+                if let Some((done, done_laws)) = self.finish(&fin, &laws, &sol) {
+                    let bx: Vec<f64> = friction.iter().map(|&r| bound_of(&done_laws[r])).collect();
+                    change = coulomb_residual(&friction, &normal, &done, &bx, &bx);
+                    (finished, settled) = (true, true);
+                    laws = done_laws;
+                    last = Some(done);
+                    break;
+                }
+            }
+            seen = Some(statuses);
             let mixed = mixer.next(&friction, &sol, &x, &gx);
             for (i, &r) in friction.iter().enumerate() {
                 next[r] = if mixed[i] > 0.0 {
@@ -740,7 +754,48 @@ impl<'a> Exact<'a> {
         } else {
             Err(StepFailure::NotSettled(sol))
         };
-        fail(result, programmes, ipm, change)
+        StepOutcome {
+            finished,
+            ..fail(result, programmes, ipm, change)
+        }
+    }
+}
+
+impl Exact<'_> {
+    /// The bounds `x` of the Coulomb rows `friction` in `laws` (NaN where tied) and the new
+    /// ones `G(x) = μ (λ_n − c w)⁺` of the programme `sol`'s normal forces (zero where the
+    /// pair is open).
+    fn bounds(
+        &self,
+        model: &Model,
+        friction: &[usize],
+        normal: &[Option<usize>],
+        laws: &[Law],
+        sol: &Programme,
+        cohesion: &[f64],
+    ) -> (Vec<f64>, Vec<f64>) {
+        let full = &self.problem.full;
+        let x = friction
+            .iter()
+            .map(|&r| match laws[r] {
+                Law::Tresca { bound, .. } => bound,
+                Law::Tie(_) => f64::NAN,
+                _ => 0.0,
+            })
+            .collect();
+        let gx = friction
+            .iter()
+            .map(|&r| {
+                let nr = normal[r].unwrap_or(r);
+                let pair = &model.interfaces[full[r].row.iface].pairs[full[r].row.pair];
+                if sol.closed[nr] {
+                    pair.friction * (sol.force[nr] - cohesion[nr]).max(0.0)
+                } else {
+                    0.0
+                }
+            })
+            .collect();
+        (x, gx)
     }
 }
 
@@ -755,6 +810,17 @@ fn first_laws(full: &[crate::contact::problem::FullRow], start: &[f64]) -> Vec<L
             RowKind::Bonded | RowKind::Stick | RowKind::Friction => Law::Tie(start[r]),
         })
         .collect()
+}
+
+/// Programmes after a linear solve of the statuses that did not settle before the next try.
+const RETRY_FINISH: usize = 5;
+
+/// The slip bound of a Coulomb row's law (zero where it is free).
+fn bound_of(law: &Law) -> f64 {
+    match *law {
+        Law::Tresca { bound, .. } => bound,
+        _ => 0.0,
+    }
 }
 
 /// Whether two sets of laws have the same kind row by row.

@@ -55,10 +55,15 @@ impl crate::contact::Session<'_> {
         if out.programmes > 1 {
             notes.push(format!(
                 "load step {}: the full-row solver took {} convex programmes ({} interior \
-                 point iterations)",
+                 point iterations){}",
                 load_step + 1,
                 out.programmes,
-                out.ipm_iterations
+                out.ipm_iterations,
+                if out.finished {
+                    "; Coulomb's law settled by the linear solve of the last statuses"
+                } else {
+                    ""
+                }
             ));
         }
         // Without a solution (a mechanism, a failure): the state of every pair tied, for

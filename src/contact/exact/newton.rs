@@ -1,0 +1,372 @@
+//! The finish of Coulomb's fixed point: once a programme's statuses are known, Coulomb's law
+//! is linear, and one sparse solve gives the step's solution (docs/formulation.md §6.10).
+//!
+//! With each row's status fixed — open (no force), fixed (`[u]_r = v_r`: tied rows, closed
+//! normal rows at `[u] = −h`, sticking Coulomb rows at their anchor) or slipping
+//! (`λ_t = σ μ (λ_n − c w)`, σ the sense of its force) — the step's equations are
+//!
+//! ```text
+//!   S U − Σ_r λ_r b_r = −(t p̂ + Σ_r c_r b_r)      (every dof)
+//!   b_rᵀ U = v_r                                   (fixed rows)
+//!   λ_r − σ_r μ_r λ_n(r) = −σ_r μ_r c_n(r)         (slipping rows)
+//! ```
+//!
+//! a square sparse system, not symmetric where rows slip. Rows at a junction are dependent
+//! (the forces of a closed cycle are not unique): the fixed rows get a compliance ε ≪ 1 in
+//! the scaled unknowns, and iterative refinement against the unregularised equations
+//! removes its effect on the displacements. The solution is checked against every law
+//! (closed rows push, open rows do not penetrate, sticking rows within the bound, slipping
+//! rows slip against their force); where one fails its status changes and the system is
+//! solved again (a primal-dual active set, Hüeber–Stadler–Wohlmuth's form of Coulomb's
+//! law), at most `ROUNDS` times. Where it does not settle, the fixed point goes on: this is
+//! an acceleration, never a verdict.
+
+use faer::linalg::solvers::Solve;
+use faer::sparse::{SparseColMat, Triplet};
+use faer::Mat;
+
+use super::{Exact, Law, Programme};
+use crate::contact::problem::RowKind;
+use crate::input::model::Model;
+
+/// The status of one full row in the linear system.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Status {
+    /// No force.
+    Off,
+    /// `[u]_r = v`.
+    Fixed(f64),
+    /// `λ_r = σ μ (λ_n − c)`.
+    Slip(f64),
+}
+
+/// What the finish needs besides the solver's data.
+pub(super) struct Finish<'f> {
+    pub model: &'f Model,
+    pub factor: f64,
+    pub cohesion: &'f [f64],
+    /// The normal row of every row's pair.
+    pub normal: &'f [Option<usize>],
+    /// The anchors (relative displacements at the step's start).
+    pub start: &'f [f64],
+}
+
+/// Solves of the linear system with changed statuses before the finish gives up.
+const ROUNDS: usize = 8;
+
+/// The compliance of the fixed rows in the scaled unknowns (unit diagonal, unit rows).
+const COMPLIANCE: f64 = 1e-10;
+
+/// Iterative refinement steps against the unregularised equations.
+const REFINE: usize = 4;
+
+/// Relative tolerance of the law checks (forces against the largest normal force,
+/// displacements against the largest displacement).
+const LAW_TOLERANCE: f64 = 1e-9;
+
+impl Exact<'_> {
+    /// The step's solution from the statuses of the programme `sol` solved with `laws`, or
+    /// None where the linear system with corrected statuses does not give one that obeys
+    /// every law within `ROUNDS` solves. Returns the solution and the laws it obeys (for the
+    /// distribution of junction forces).
+    pub(super) fn finish(
+        &self,
+        f: &Finish,
+        laws: &[Law],
+        sol: &Programme,
+    ) -> Option<(Programme, Vec<Law>)> {
+        let full = &self.problem.full;
+        let mut status: Vec<Status> = (0..full.len())
+            .map(|r| self.first_status(f, laws, sol, r))
+            .collect();
+        let mut seen: Vec<Vec<Status>> = Vec::new();
+        let mut prior = sol.force.clone();
+        for _ in 0..ROUNDS {
+            let (u, force) = self.solve_statuses(f, &status, &prior)?;
+            let jumps = self.jumps(&u);
+            let next = self.corrected(f, &status, &u, &jumps, &force);
+            if next == status {
+                // Slipping rows need a positive normal force beyond the cohesion term.
+                let (tol_f, _) = self.tolerances(f, &u, &force);
+                let pushed = (0..full.len()).all(|r| match (status[r], f.normal[r]) {
+                    (Status::Slip(_), Some(n)) => force[n] - f.cohesion[n] >= -tol_f,
+                    _ => true,
+                });
+                // And the bodies balance in their own units (as every programme's solution).
+                let balanced = self.balance_residual(f.factor, f.cohesion, &u, &force)
+                    <= super::BALANCE_TOLERANCE;
+                return (pushed && balanced).then(|| self.programme_of(f, &status, u, force));
+            }
+            // A pair with cohesion that would open changes the loads (cohesion is brittle):
+            // the fixed point handles that.
+            if next
+                .iter()
+                .zip(f.cohesion)
+                .any(|(s, c)| *c != 0.0 && *s == Status::Off)
+            {
+                return None;
+            }
+            seen.push(std::mem::replace(&mut status, next));
+            prior = force;
+            if seen.contains(&status) {
+                return None;
+            }
+        }
+        None
+    }
+
+    /// A row's status from the programme's.
+    fn first_status(&self, f: &Finish, laws: &[Law], sol: &Programme, r: usize) -> Status {
+        let row = &self.problem.full[r].row;
+        let normal_closed = f.normal[r].is_some_and(|n| sol.closed[n]);
+        match (laws[r], row.kind) {
+            (Law::Tie(v), RowKind::Bonded) => Status::Fixed(v),
+            (Law::Tie(v), RowKind::Stick) => Status::Fixed(v),
+            (Law::Gap, _) if sol.closed[r] => Status::Fixed(-row.gap),
+            (_, RowKind::Friction) if normal_closed => {
+                if sol.slipping[r] || matches!(laws[r], Law::Free) {
+                    let slip = self.jumps_row(r, &sol.u) - f.start[r];
+                    let sense = if sol.force[r] != 0.0 {
+                        sol.force[r].signum()
+                    } else if slip != 0.0 {
+                        -slip.signum()
+                    } else {
+                        1.0
+                    };
+                    Status::Slip(sense)
+                } else {
+                    Status::Fixed(f.start[r])
+                }
+            }
+            _ => Status::Off,
+        }
+    }
+
+    /// The relative displacement of one full row.
+    fn jumps_row(&self, r: usize, u: &[f64]) -> f64 {
+        self.problem.full[r]
+            .coefs
+            .iter()
+            .map(|&(k, c)| c * u[k])
+            .sum()
+    }
+
+    /// The friction coefficient of a row's pair.
+    fn mu(&self, f: &Finish, r: usize) -> f64 {
+        let row = &self.problem.full[r].row;
+        f.model.interfaces[row.iface].pairs[row.pair].friction
+    }
+
+    /// Every dof's displacement and every row's force for the statuses, or None where the
+    /// system is singular or its solution is not finite. Where the forces are not unique
+    /// (dependent rows at junctions) they are the ones nearest `prior` (the compliance pulls
+    /// them there): the last programme's, which obey the laws.
+    fn solve_statuses(
+        &self,
+        f: &Finish,
+        status: &[Status],
+        prior: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>)> {
+        let pb = self.problem;
+        let n = pb.n_dofs;
+        let (q, qs) = self.linear_term(f.factor, f.cohesion);
+        // Unknowns: x (U = d qs x), then y_r = λ_r ρ_r / qs of the rows with a force.
+        let mut var = vec![usize::MAX; pb.full.len()];
+        let mut nv = n;
+        for (r, s) in status.iter().enumerate() {
+            if *s != Status::Off {
+                var[r] = nv;
+                nv += 1;
+            }
+        }
+        let mut exact: Vec<Triplet<usize, usize, f64>> = Vec::new();
+        for (j, w) in self.p_cols.windows(2).enumerate() {
+            for k in w[0]..w[1] {
+                let i = self.p_rows[k];
+                exact.push(Triplet::new(i, j, self.p_vals[k]));
+                if i != j {
+                    exact.push(Triplet::new(j, i, self.p_vals[k]));
+                }
+            }
+        }
+        let mut rhs = vec![0.0; nv];
+        for k in 0..n {
+            rhs[k] = -q[k] / qs;
+        }
+        let mut compliance = Vec::new();
+        for (r, s) in status.iter().enumerate() {
+            let i = var[r];
+            if i == usize::MAX {
+                continue;
+            }
+            let rho = self.rho[r];
+            for &(k, c) in &pb.full[r].coefs {
+                let a = c * self.d[k] / rho;
+                exact.push(Triplet::new(k, i, -a));
+                if let Status::Fixed(_) = s {
+                    exact.push(Triplet::new(i, k, a));
+                }
+            }
+            match *s {
+                Status::Fixed(v) => {
+                    rhs[i] = v / (rho * qs);
+                    compliance.push(Triplet::new(i, i, -COMPLIANCE));
+                }
+                Status::Slip(sense) => {
+                    let nr = f.normal[r]?;
+                    let jn = var[nr];
+                    if jn == usize::MAX {
+                        return None;
+                    }
+                    let mu = self.mu(f, r);
+                    exact.push(Triplet::new(i, i, 1.0));
+                    exact.push(Triplet::new(i, jn, -sense * mu * rho / self.rho[nr]));
+                    rhs[i] = -sense * mu * rho * f.cohesion[nr] / qs;
+                }
+                Status::Off => {}
+            }
+        }
+        let k_exact = SparseColMat::<usize, f64>::try_new_from_triplets(nv, nv, &exact).ok()?;
+        let mut reg = exact;
+        reg.extend(compliance);
+        let k_reg = SparseColMat::<usize, f64>::try_new_from_triplets(nv, nv, &reg).ok()?;
+        let lu = k_reg.sp_lu().ok()?;
+        // z = z₀ + w with z₀ the prior forces: w the least-norm correction (refinement
+        // against the unregularised system converges to it).
+        let mut z0 = Mat::<f64>::zeros(nv, 1);
+        for (r, &i) in var.iter().enumerate() {
+            if i != usize::MAX {
+                z0[(i, 0)] = prior[r] * self.rho[r] / qs;
+            }
+        }
+        let b = Mat::<f64>::from_fn(nv, 1, |i, _| rhs[i]) - &k_exact * &z0;
+        let mut z = lu.solve(&b);
+        for _ in 0..REFINE {
+            let res = &b - &k_exact * &z;
+            z += lu.solve(&res);
+        }
+        z += &z0;
+        let z: Vec<f64> = (0..nv).map(|i| z[(i, 0)]).collect();
+        if z.iter().any(|v| !v.is_finite()) || z[..n].iter().any(|v| v.abs() > super::DRIFT_LIMIT) {
+            return None;
+        }
+        let u: Vec<f64> = (0..n).map(|k| self.d[k] * qs * z[k]).collect();
+        let force: Vec<f64> = (0..pb.full.len())
+            .map(|r| match var[r] {
+                usize::MAX => 0.0,
+                i => z[i] * qs / self.rho[r],
+            })
+            .collect();
+        Some((u, force))
+    }
+
+    /// The statuses the solution `u`, `force` of `status` calls for: the same where every
+    /// law holds.
+    fn corrected(
+        &self,
+        f: &Finish,
+        status: &[Status],
+        u: &[f64],
+        jumps: &[f64],
+        force: &[f64],
+    ) -> Vec<Status> {
+        let full = &self.problem.full;
+        let (tol_f, tol_u) = self.tolerances(f, u, force);
+        let mut next = status.to_vec();
+        // Normal rows first: the tangential rows follow their pair.
+        for (r, fr) in full.iter().enumerate() {
+            if fr.row.kind != RowKind::Normal {
+                continue;
+            }
+            next[r] = match status[r] {
+                Status::Fixed(_) if force[r] < -tol_f => Status::Off,
+                Status::Off if jumps[r] + fr.row.gap < -tol_u => Status::Fixed(-fr.row.gap),
+                s => s,
+            };
+        }
+        for (r, fr) in full.iter().enumerate() {
+            let closed = f.normal[r].map(|n| next[n] != Status::Off);
+            // A stick row follows its pair where the pair's status changed (one that the
+            // fixed point left untied at a closed pair stays so).
+            let moved = f.normal[r].is_some_and(|n| next[n] != status[n]);
+            next[r] = match (fr.row.kind, closed) {
+                (RowKind::Stick, Some(true)) if moved => Status::Fixed(f.start[r]),
+                (RowKind::Stick, Some(false)) => Status::Off,
+                (RowKind::Friction, Some(false)) => Status::Off,
+                (RowKind::Friction, Some(true)) => {
+                    let nr = f.normal[r].unwrap_or(r);
+                    let bound = self.mu(f, r) * (force[nr] - f.cohesion[nr]).max(0.0);
+                    let slip = jumps[r] - f.start[r];
+                    match status[r] {
+                        Status::Fixed(_) if force[r].abs() > bound + tol_f => {
+                            Status::Slip(force[r].signum())
+                        }
+                        Status::Slip(sense) if sense * slip > tol_u => Status::Fixed(f.start[r]),
+                        Status::Off => Status::Slip(if slip != 0.0 { -slip.signum() } else { 1.0 }),
+                        s => s,
+                    }
+                }
+                _ => next[r],
+            };
+        }
+        next
+    }
+
+    /// The forces' and displacements' tolerances of the law checks.
+    fn tolerances(&self, f: &Finish, u: &[f64], force: &[f64]) -> (f64, f64) {
+        let big_f = f
+            .normal
+            .iter()
+            .flatten()
+            .map(|&n| force[n].abs())
+            .fold(0.0f64, f64::max);
+        let big_u = u.iter().fold(0.0f64, |m, v| m.max(v.abs()));
+        (
+            LAW_TOLERANCE * big_f.max(f64::MIN_POSITIVE),
+            LAW_TOLERANCE * big_u.max(f64::MIN_POSITIVE),
+        )
+    }
+
+    /// The programme-like result of settled statuses, and the laws it obeys.
+    fn programme_of(
+        &self,
+        f: &Finish,
+        status: &[Status],
+        u: Vec<f64>,
+        force: Vec<f64>,
+    ) -> (Programme, Vec<Law>) {
+        let full = &self.problem.full;
+        let m = full.len();
+        let mut closed = vec![false; m];
+        let mut slipping = vec![false; m];
+        let mut laws = vec![Law::Free; m];
+        for (r, fr) in full.iter().enumerate() {
+            let s = status[r];
+            closed[r] = s != Status::Off;
+            laws[r] = match (fr.row.kind, s) {
+                (RowKind::Normal, _) => Law::Gap,
+                (RowKind::Friction, Status::Off) => Law::Free,
+                (RowKind::Friction, s) => {
+                    let nr = f.normal[r].unwrap_or(r);
+                    slipping[r] = matches!(s, Status::Slip(_));
+                    Law::Tresca {
+                        bound: self.mu(f, r) * (force[nr] - f.cohesion[nr]).max(0.0),
+                        anchor: f.start[r],
+                    }
+                }
+                (_, Status::Fixed(v)) => Law::Tie(v),
+                _ => Law::Free,
+            };
+        }
+        (
+            Programme {
+                u,
+                force,
+                closed,
+                slipping,
+                iterations: 0,
+            },
+            laws,
+        )
+    }
+}
