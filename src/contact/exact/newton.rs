@@ -337,6 +337,7 @@ impl Exact<'_> {
     ) -> (Programme, Vec<Law>) {
         let full = &self.problem.full;
         let m = full.len();
+        let (_, tol_u) = self.tolerances(f, &u, &force);
         let mut closed = vec![false; m];
         let mut slipping = vec![false; m];
         let mut laws = vec![Law::Free; m];
@@ -348,7 +349,10 @@ impl Exact<'_> {
                 (RowKind::Friction, Status::Off) => Law::Free,
                 (RowKind::Friction, s) => {
                     let nr = f.normal[r].unwrap_or(r);
-                    slipping[r] = matches!(s, Status::Slip(_));
+                    // A row at its bound that does not move is sticking as well: the
+                    // distribution of junction forces keeps it within its cone, not on it.
+                    slipping[r] = matches!(s, Status::Slip(_))
+                        && (self.jumps_row(r, &u) - f.start[r]).abs() > tol_u;
                     Law::Tresca {
                         bound: self.mu(f, r) * (force[nr] - f.cohesion[nr]).max(0.0),
                         anchor: f.start[r],

@@ -52,12 +52,13 @@ impl crate::contact::Session<'_> {
             motion,
             undecided,
         } = self.verdict(out.result, load_step, programmes, residual);
-        if out.programmes > 1 {
+        if out.programmes > 1 || out.finished {
             notes.push(format!(
-                "load step {}: the full-row solver took {} convex programmes ({} interior \
+                "load step {}: the full-row solver took {} convex programme{} ({} interior \
                  point iterations){}",
                 load_step + 1,
                 out.programmes,
+                if out.programmes == 1 { "" } else { "s" },
                 out.ipm_iterations,
                 if out.finished {
                     "; Coulomb's law settled by the linear solve of the last statuses"
@@ -189,9 +190,14 @@ impl crate::contact::Session<'_> {
             Err(StepFailure::NotSettled(sol)) => failed(
                 format!(
                     "the contact solver (exact) did not settle Coulomb's law at load step \
-                     {step} in {programmes} convex programmes: the last relative residual of \
-                     the law was {residual:.1e}; use smaller load steps (more values in \
-                     solve.time or load_factors)"
+                     {step} in {programmes} convex programmes{}: the last relative residual \
+                     of the law was {residual:.1e}; use smaller load steps (more values in \
+                     solve.time or load_factors)",
+                    if programmes < FULL_ROW_PROGRAMMES {
+                        " (the last 50 did not halve its residual)"
+                    } else {
+                        ""
+                    }
                 ),
                 Some(sol),
                 true,
