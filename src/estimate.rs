@@ -157,14 +157,17 @@ const C_LEMKE: f64 = 9.0e-9;
 /// 2.8, 14 and 51 s for the 798-, 2 048- and 4 128-brick walls).
 const C_SPARSE: f64 = 5.7e-9;
 const SPARSE_PAIRS_PER_ITERATION: f64 = 1600.0;
-/// Seconds per convex programme of the full-row solver per `Σ n_u²` (105-brick wall,
-/// Σ n_u² ≈ 4.2e5: 0.56 s per programme of about 10 interior point iterations, quiet
-/// machine; 220-stone wall, ≈ 3e5: 0.8 s of about 21, busy machine), and the programmes of a
-/// load step with friction: 8 on the 105-brick wall under wind, 20 on the 5 × 3 wall near its
-/// collapse, 52 on the stone wall at 0.04 g, up to 500 where the fixed point crawls next to a
-/// collapse; without friction about 3.
-const C_EXACT: f64 = 2.0e-6;
-const EXACT_PROGRAMMES_FRICTION: f64 = 60.0;
+/// Seconds per convex programme of the full-row solver, `C_EXACT · (Σ n_u² / EXACT_REF)^1.6`
+/// (its sparse factorisations fill in faster than the operators grow): 0.64 s per programme
+/// of about 10 interior point iterations on the 105-brick wall (Σ n_u² ≈ 4.2e5), 8.5 s on the
+/// 410-brick wall (≈ 2.0e6; 6 programmes, 51 s), 40 ms per iteration on the 220-stone wall
+/// (≈ 3e5; programmes of about 20 iterations); and the programmes of a load step with
+/// friction: 1 on the 105-brick wall under wind, 6 on the 410-brick one, 10 on the 5 × 3 wall
+/// near its collapse, 23 on the stone wall at 0.04 g, 100 where the fixed point stalls next to
+/// a collapse (a search's trials beyond it); without friction about 3.
+const C_EXACT: f64 = 0.64;
+const EXACT_REF: f64 = 4.2e5;
+const EXACT_PROGRAMMES_FRICTION: f64 = 30.0;
 const EXACT_PROGRAMMES: f64 = 3.0;
 const SPARSE_MIN_ITERATIONS: f64 = 15.0;
 
@@ -244,7 +247,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
                 } else {
                     EXACT_PROGRAMMES
                 };
-                C_EXACT * k * programmes * squares
+                C_EXACT * k * programmes * (squares / EXACT_REF).powf(1.6)
             }
             _ => C_PATH * k * s * s * s,
         };

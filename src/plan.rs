@@ -477,7 +477,7 @@ impl Solve<'_> {
             }
             if scene.solve.method == Method::Exact {
                 let coulomb = if frictional {
-                    "; Coulomb's law as a fixed point on the slip bounds (Anderson-accelerated)"
+                    "; Coulomb's law as a fixed point on the slip bounds (Anderson-accelerated), finished by a linear solve of its statuses"
                 } else {
                     ""
                 };
