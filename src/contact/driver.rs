@@ -342,7 +342,9 @@ fn finish(
         problem: if main == Solver::Exact {
             "every pair component its own row (junctions exact): the bodies' energy on the \
              symmetric Steklov-Poincare stiffness, minimised under every pair's law (one convex \
-             programme per set of slip bounds; Coulomb's fixed point for friction)"
+             programme per set of slip bounds; Coulomb's fixed point for friction), or one \
+             linear solve of the law where the statuses are known (from the sparse solver on a \
+             first step, from the programmes after)"
         } else {
             "nodal contact forces against nodal gaps on the symmetric Steklov-Poincare \
              stiffness (one LCP; Tresca fixed point for friction)"

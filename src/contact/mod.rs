@@ -618,7 +618,7 @@ impl<'a> Session<'a> {
         record: bool,
     ) -> ContactResult {
         if method == Solver::Exact {
-            return self.solve_step_full(start, load_step, factor, record);
+            return self.solve_step_full(start, (tol, max_iterations), load_step, factor, record);
         }
         let n = self.problem.n_open_rows;
         let mut st = start.clone();

@@ -37,6 +37,7 @@ mod newton;
 mod session;
 
 use fixed_point::{coulomb_residual, SlipBounds, SETTLED};
+pub use newton::Seed;
 
 /// The law of one full row in one convex programme.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -629,11 +630,14 @@ impl<'a> Exact<'a> {
     /// estimate of the normal forces); then `stick` rows are tied where their pair is closed
     /// and Coulomb's bounds follow the normal forces, the fixed point accelerated by
     /// Anderson's mixing of the last bounds while the statuses hold.
+    ///
+    /// With a `seed` (statuses and forces of every full row, from another solver) the linear
+    /// solve of Coulomb's law is tried first; where it settles no programme is solved.
     pub fn step(
         &self,
         model: &Model,
         factor: f64,
-        start: &[f64],
+        (start, seed): (&[f64], Option<Seed>),
         cohesion: &mut [f64],
         max_outer: usize,
     ) -> StepOutcome {
@@ -665,7 +669,17 @@ impl<'a> Exact<'a> {
             residual: change,
             finished: false,
         };
-        for _ in 0..max_outer.max(1) {
+        if let Some(seed) = seed {
+            let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
+            if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior) {
+                change = settled_residual(&friction, &normal, &done, &done_laws);
+                (finished, settled) = (true, true);
+                laws = done_laws;
+                last = Some(done);
+            }
+        }
+        let rounds = if settled { 0 } else { max_outer.max(1) };
+        for _ in 0..rounds {
             let sol = match self.programme(factor, cohesion, &laws) {
                 ProgrammeOutcome::Solved(s) => s,
                 ProgrammeOutcome::Mechanism(du) => {
@@ -703,16 +717,9 @@ impl<'a> Exact<'a> {
                 && tried.is_none_or(|t| programmes >= t + RETRY_FINISH);
             if !broke && change > SETTLED && repeat {
                 tried = Some(programmes);
-                let fin = newton::Finish {
-                    model,
-                    factor,
-                    cohesion,
-                    normal: &normal,
-                    start,
-                };
+                let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
                 if let Some((done, done_laws)) = self.finish(&fin, &laws, &sol) {
-                    let bx: Vec<f64> = friction.iter().map(|&r| bound_of(&done_laws[r])).collect();
-                    change = coulomb_residual(&friction, &normal, &done, &bx, &bx);
+                    change = settled_residual(&friction, &normal, &done, &done_laws);
                     (finished, settled) = (true, true);
                     laws = done_laws;
                     last = Some(done);
@@ -834,12 +841,22 @@ const STALL_WINDOW: usize = 50;
 /// Programmes after a linear solve of the statuses that did not settle before the next try.
 const RETRY_FINISH: usize = 5;
 
-/// The slip bound of a Coulomb row's law (zero where it is free).
-fn bound_of(law: &Law) -> f64 {
-    match *law {
-        Law::Tresca { bound, .. } => bound,
-        _ => 0.0,
-    }
+/// Coulomb's residual of a solution settled by the linear solve, whose laws carry the
+/// bounds of its own normal forces.
+fn settled_residual(
+    friction: &[usize],
+    normal: &[Option<usize>],
+    done: &Programme,
+    laws: &[Law],
+) -> f64 {
+    let bounds: Vec<f64> = friction
+        .iter()
+        .map(|&r| match laws[r] {
+            Law::Tresca { bound, .. } => bound,
+            _ => 0.0,
+        })
+        .collect();
+    coulomb_residual(friction, normal, done, &bounds, &bounds)
 }
 
 /// Whether two sets of laws have the same kind row by row.

@@ -28,10 +28,11 @@ use faer::Mat;
 use super::{Exact, Law, Programme};
 use crate::contact::problem::RowKind;
 use crate::input::model::Model;
+use crate::solution::{InterfaceResult, PairStatus};
 
 /// The status of one full row in the linear system.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Status {
+pub(super) enum Status {
     /// No force.
     Off,
     /// `[u]_r = v`.
@@ -49,6 +50,78 @@ pub(super) struct Finish<'f> {
     pub normal: &'f [Option<usize>],
     /// The anchors (relative displacements at the step's start).
     pub start: &'f [f64],
+}
+
+impl<'f> Finish<'f> {
+    pub(super) fn new(
+        model: &'f Model,
+        factor: f64,
+        cohesion: &'f [f64],
+        normal: &'f [Option<usize>],
+        start: &'f [f64],
+    ) -> Finish<'f> {
+        Finish {
+            model,
+            factor,
+            cohesion,
+            normal,
+            start,
+        }
+    }
+}
+
+/// Statuses and forces of every full row from another solver's step: where the linear
+/// solve starts.
+pub struct Seed {
+    pub(super) status: Vec<Status>,
+    pub(super) prior: Vec<f64>,
+}
+
+impl Exact<'_> {
+    /// The seed of the pair results `interfaces` of another solver (the sparse one) for the
+    /// same step: each row's status from its pair's (closed, slipping with the sense of its
+    /// traction), each row's force from its pair's traction, `λ_r = −t w + c w`.
+    pub fn seed(
+        &self,
+        model: &Model,
+        interfaces: &[InterfaceResult],
+        cohesion: &[f64],
+        start: &[f64],
+    ) -> Seed {
+        let full = &self.problem.full;
+        let mut status = vec![Status::Off; full.len()];
+        let mut prior = vec![0.0; full.len()];
+        for (r, fr) in full.iter().enumerate() {
+            let row = &fr.row;
+            let Some(pair) = interfaces
+                .get(row.iface)
+                .and_then(|i| i.pairs.get(row.pair))
+            else {
+                continue;
+            };
+            let closed = pair.status == PairStatus::Closed;
+            let t = pair.traction[row.comp];
+            if closed || row.kind == RowKind::Bonded {
+                prior[r] = -t * row.weight + cohesion[r];
+            }
+            status[r] = match row.kind {
+                RowKind::Bonded if row.comp == 1 => Status::Fixed(-row.gap),
+                RowKind::Bonded => Status::Fixed(start[r]),
+                _ if !closed => Status::Off,
+                RowKind::Normal => Status::Fixed(-row.gap),
+                RowKind::Stick => Status::Fixed(start[r]),
+                RowKind::Friction => {
+                    let mu = model.interfaces[row.iface].pairs[row.pair].friction;
+                    if pair.slipping == Some(true) && mu > 0.0 {
+                        Status::Slip(if prior[r] < 0.0 { -1.0 } else { 1.0 })
+                    } else {
+                        Status::Fixed(start[r])
+                    }
+                }
+            };
+        }
+        Seed { status, prior }
+    }
 }
 
 /// Solves of the linear system with changed statuses before the finish gives up.
@@ -75,12 +148,23 @@ impl Exact<'_> {
         laws: &[Law],
         sol: &Programme,
     ) -> Option<(Programme, Vec<Law>)> {
-        let full = &self.problem.full;
-        let mut status: Vec<Status> = (0..full.len())
+        let status: Vec<Status> = (0..self.problem.full.len())
             .map(|r| self.first_status(f, laws, sol, r))
             .collect();
+        self.settle(f, status, sol.force.clone())
+    }
+
+    /// The statuses' linear solve from `status` and the forces `prior` (where the forces
+    /// are not unique the solve keeps the nearest), corrected until every law holds: the
+    /// solution and its laws, or None.
+    pub(super) fn settle(
+        &self,
+        f: &Finish,
+        mut status: Vec<Status>,
+        mut prior: Vec<f64>,
+    ) -> Option<(Programme, Vec<Law>)> {
+        let full = &self.problem.full;
         let mut seen: Vec<Vec<Status>> = Vec::new();
-        let mut prior = sol.force.clone();
         for _ in 0..ROUNDS {
             let (u, force) = self.solve_statuses(f, &status, &prior)?;
             let jumps = self.jumps(&u);
@@ -338,15 +422,30 @@ impl Exact<'_> {
         let full = &self.problem.full;
         let m = full.len();
         let (_, tol_u) = self.tolerances(f, &u, &force);
+        // A normal row without force whose gap is closed (to 1e-9 of the largest
+        // displacement) touches: at a junction it may carry force as well (the distribution
+        // of junction forces is then the least-norm one over every admissible set, not only
+        // over the rows the statuses happened to close).
+        let jumps = self.jumps(&u);
+        let touching: Vec<bool> = (0..m)
+            .map(|r| {
+                let row = &full[r].row;
+                row.kind == RowKind::Normal
+                    && (status[r] != Status::Off || (jumps[r] + row.gap).abs() <= tol_u)
+            })
+            .collect();
         let mut closed = vec![false; m];
         let mut slipping = vec![false; m];
         let mut laws = vec![Law::Free; m];
         for (r, fr) in full.iter().enumerate() {
             let s = status[r];
-            closed[r] = s != Status::Off;
+            let pair_touches = f.normal[r].is_some_and(|n| touching[n]);
+            let tangential = matches!(fr.row.kind, RowKind::Friction | RowKind::Stick);
+            closed[r] = s != Status::Off || touching[r] || (tangential && pair_touches);
             laws[r] = match (fr.row.kind, s) {
                 (RowKind::Normal, _) => Law::Gap,
-                (RowKind::Friction, Status::Off) => Law::Free,
+                (RowKind::Stick, Status::Off) if pair_touches => Law::Tie(f.start[r]),
+                (RowKind::Friction, Status::Off) if !pair_touches => Law::Free,
                 (RowKind::Friction, s) => {
                     let nr = f.normal[r].unwrap_or(r);
                     // A row at its bound that does not move is sticking as well: the

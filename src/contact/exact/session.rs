@@ -7,14 +7,34 @@ use crate::contact::problem::RowKind;
 impl crate::contact::Session<'_> {
     /// One load step of the full-row solver from `start` (see the module doc): the result
     /// in the form every solver gives, one recorded state per step.
+    ///
+    /// On the solver's first step (no anchors yet) the sparse solver's statuses for the same
+    /// step are the seed of the linear solve of Coulomb's law (`newton`): where they settle
+    /// there, no convex programme is needed (the sparse solver leaves a junction's dependent
+    /// components without a row; the linear solve gives each its own law).
     pub(in crate::contact) fn solve_step_full(
         &mut self,
         start: &crate::contact::StepState,
+        (tol, max_iterations): (f64, usize),
         load_step: usize,
         factor: f64,
         record: bool,
     ) -> crate::contact::ContactResult {
         use crate::contact::{ContactResult, Iterate, Solver};
+        let warm = if start.full_anchor.is_empty() {
+            let x = self.solve_step(
+                start,
+                Solver::Sparse,
+                tol,
+                max_iterations.min(SEED_ITERATIONS),
+                load_step,
+                factor,
+                false,
+            );
+            (x.converged && x.failure.is_none()).then_some(x.interfaces)
+        } else {
+            None
+        };
         let (model, pb) = (self.model, &self.problem);
         let ex = Exact::new(pb);
         let n_full = pb.full.len();
@@ -36,7 +56,14 @@ impl crate::contact::Session<'_> {
                 _ => 0.0,
             })
             .collect();
-        let out = ex.step(model, factor, &anchor, &mut cohesion, FULL_ROW_PROGRAMMES);
+        let seed = warm.map(|w| ex.seed(model, &w, &cohesion, &anchor));
+        let out = ex.step(
+            model,
+            factor,
+            (&anchor, seed),
+            &mut cohesion,
+            FULL_ROW_PROGRAMMES,
+        );
         let info = crate::solution::SolverInfo {
             iterations: Some(u32::try_from(out.ipm_iterations).unwrap_or(u32::MAX)),
             variables: Some(pb.n_dofs),
@@ -60,10 +87,10 @@ impl crate::contact::Session<'_> {
                 out.programmes,
                 if out.programmes == 1 { "" } else { "s" },
                 out.ipm_iterations,
-                if out.finished {
-                    "; Coulomb's law settled by the linear solve of the last statuses"
-                } else {
-                    ""
+                match (out.finished, out.programmes) {
+                    (true, 0) => "; settled by the linear solve of the sparse solver's statuses",
+                    (true, _) => "; Coulomb's law settled by the linear solve of the last statuses",
+                    _ => "",
                 }
             ));
         }
@@ -238,3 +265,8 @@ struct Verdict {
     motion: Option<Vec<crate::solution::BodyMotion>>,
     undecided: bool,
 }
+
+/// The iterations the sparse solver may spend on the seed of a step (its walls of up to 4 128
+/// bricks take 12–32; a step without equilibrium can take thousands in its evolutive
+/// fallback, and the seed is only a start).
+const SEED_ITERATIONS: usize = 60;
