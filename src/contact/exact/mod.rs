@@ -487,13 +487,17 @@ impl<'a> Exact<'a> {
     /// sticking Coulomb rows hold |λ_t| ≤ μ(λ_n − c w), slipping ones λ_t = ±μ(λ_n − c w)
     /// with the sense they slip against (with the final normal forces: Coulomb's law exactly),
     /// tied rows anything. None where Clarabel does not solve it (the forces stay).
+    ///
+    /// `strict`: the forces of `sol` may break the laws (the linear solve's forces at a
+    /// junction, one of many distributions): the laws are then imposed as they are, to 1e-9
+    /// of the largest force, and None says that no admissible distribution exists.
     fn distribute(
         &self,
         model: &Model,
         laws: &[Law],
         normal: &[Option<usize>],
         cohesion: &[f64],
-        sol: &Programme,
+        (sol, strict): (&Programme, bool),
     ) -> Option<Vec<f64>> {
         let pb = self.problem;
         let full = &pb.full;
@@ -507,6 +511,15 @@ impl<'a> Exact<'a> {
         // (their interior point residue is dropped from both sides of the balance).
         let l0: Vec<f64> = sol.force.iter().map(|v| v / scale).collect();
         let coh: Vec<f64> = cohesion.iter().map(|v| v / scale).collect();
+        // The margin of an inequality at δ = 0: at least zero (it holds there, to round-off)
+        // unless `strict`.
+        let admit = |margin: f64| {
+            if strict {
+                margin + LAW_MARGIN
+            } else {
+                margin.max(0.0)
+            }
+        };
         let carries = |r: usize| match laws[r] {
             Law::Tie(_) => true,
             Law::Gap => sol.closed[r],
@@ -553,7 +566,7 @@ impl<'a> Exact<'a> {
                     // λ₀ + δ ≥ 0 (λ holds the cohesion term: a cohesive row pulls up to c w).
                     let i = bin.len();
                     ineq.push((i, j, -1.0));
-                    bin.push(l0[r].max(0.0));
+                    bin.push(admit(l0[r]));
                 }
                 (Law::Tresca { .. }, RowKind::Friction) => {
                     let Some(n) = normal[r] else { continue };
@@ -580,7 +593,7 @@ impl<'a> Exact<'a> {
                             let i = bin.len();
                             ineq.push((i, jn, -mu));
                             ineq.push((i, j, sign));
-                            bin.push((mu * (l0[n] - coh[n]) - sign * l0[r]).max(0.0));
+                            bin.push(admit(mu * (l0[n] - coh[n]) - sign * l0[r]));
                         }
                     }
                 }
@@ -756,7 +769,7 @@ impl<'a> Exact<'a> {
         };
         let result = if settled {
             let mut sol = sol;
-            if let Some(force) = self.distribute(model, &laws, &normal, cohesion, &sol) {
+            if let Some(force) = self.distribute(model, &laws, &normal, cohesion, (&sol, false)) {
                 sol.force = force;
             }
             Ok(sol)
@@ -918,6 +931,10 @@ fn csc(m: usize, n: usize, mut trip: Vec<(usize, usize, f64)>) -> CscMatrix<f64>
     }
     CscMatrix::new(m, n, colptr, rowval, nzval)
 }
+
+/// The margin (relative to the largest force) within which a strict distribution of junction
+/// forces holds every law.
+const LAW_MARGIN: f64 = 1e-9;
 
 /// The imbalance of a dof, relative to the largest load or row force, above which a
 /// programme's solution is refused.
