@@ -172,11 +172,24 @@ impl<'a> Exact<'a> {
 
     /// The relative displacement of every full row for the dofs `u`.
     pub fn jumps(&self, u: &[f64]) -> Vec<f64> {
-        self.problem
-            .full
-            .iter()
-            .map(|f| f.coefs.iter().map(|&(k, c)| c * u[k]).sum())
+        (0..self.problem.full.len())
+            .map(|r| self.jump(r, u))
             .collect()
+    }
+
+    /// The relative displacement of the full row `r` for the dofs `u`.
+    fn jump(&self, r: usize, u: &[f64]) -> f64 {
+        self.problem.full[r]
+            .coefs
+            .iter()
+            .map(|&(k, c)| c * u[k])
+            .sum()
+    }
+
+    /// The friction coefficient of the pair of the full row `r`.
+    fn mu(&self, model: &Model, r: usize) -> f64 {
+        let row = &self.problem.full[r].row;
+        model.interfaces[row.iface].pairs[row.pair].friction
     }
 
     /// Whether the direction of `u` lowers the energy without end (`strict`) or leaves it
@@ -574,7 +587,7 @@ impl<'a> Exact<'a> {
                     if jn == usize::MAX {
                         continue;
                     }
-                    let mu = model.interfaces[f.row.iface].pairs[f.row.pair].friction;
+                    let mu = self.mu(model, r);
                     // Every constraint holds at δ = 0 exactly (the step's residual of
                     // Coulomb's law, below 1e-8, stays): the balance and these equalities
                     // are dependent, and a right-hand side off by round-off would leave
@@ -796,7 +809,6 @@ impl Exact<'_> {
         sol: &Programme,
         cohesion: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
-        let full = &self.problem.full;
         let x = friction
             .iter()
             .map(|&r| match laws[r] {
@@ -809,9 +821,8 @@ impl Exact<'_> {
             .iter()
             .map(|&r| {
                 let nr = normal[r].unwrap_or(r);
-                let pair = &model.interfaces[full[r].row.iface].pairs[full[r].row.pair];
                 if sol.closed[nr] {
-                    pair.friction * (sol.force[nr] - cohesion[nr]).max(0.0)
+                    self.mu(model, r) * (sol.force[nr] - cohesion[nr]).max(0.0)
                 } else {
                     0.0
                 }

@@ -43,13 +43,13 @@ pub(super) enum Status {
 
 /// What the finish needs besides the solver's data.
 pub(super) struct Finish<'f> {
-    pub model: &'f Model,
-    pub factor: f64,
-    pub cohesion: &'f [f64],
+    model: &'f Model,
+    factor: f64,
+    cohesion: &'f [f64],
     /// The normal row of every row's pair.
-    pub normal: &'f [Option<usize>],
+    normal: &'f [Option<usize>],
     /// The anchors (relative displacements at the step's start).
-    pub start: &'f [f64],
+    start: &'f [f64],
 }
 
 impl<'f> Finish<'f> {
@@ -111,8 +111,7 @@ impl Exact<'_> {
                 RowKind::Normal => Status::Fixed(-row.gap),
                 RowKind::Stick => Status::Fixed(start[r]),
                 RowKind::Friction => {
-                    let mu = model.interfaces[row.iface].pairs[row.pair].friction;
-                    if pair.slipping == Some(true) && mu > 0.0 {
+                    if pair.slipping == Some(true) && self.mu(model, r) > 0.0 {
                         Status::Slip(if prior[r] < 0.0 { -1.0 } else { 1.0 })
                     } else {
                         Status::Fixed(start[r])
@@ -133,8 +132,7 @@ const COMPLIANCE: f64 = 1e-10;
 /// Iterative refinement steps against the unregularised equations.
 const REFINE: usize = 4;
 
-/// Relative tolerance of the law checks (forces against the largest normal force,
-/// displacements against the largest displacement).
+/// Relative tolerance of the checks on forces (against the largest normal force).
 const LAW_TOLERANCE: f64 = 1e-9;
 
 /// Relative tolerance of the checks on displacements (a slip against its force, a
@@ -229,12 +227,11 @@ impl Exact<'_> {
         let row = &self.problem.full[r].row;
         let normal_closed = f.normal[r].is_some_and(|n| sol.closed[n]);
         match (laws[r], row.kind) {
-            (Law::Tie(v), RowKind::Bonded) => Status::Fixed(v),
-            (Law::Tie(v), RowKind::Stick) => Status::Fixed(v),
+            (Law::Tie(v), RowKind::Bonded | RowKind::Stick) => Status::Fixed(v),
             (Law::Gap, _) if sol.closed[r] => Status::Fixed(-row.gap),
             (_, RowKind::Friction) if normal_closed => {
                 if sol.slipping[r] || matches!(laws[r], Law::Free) {
-                    let slip = self.jumps_row(r, &sol.u) - f.start[r];
+                    let slip = self.jump(r, &sol.u) - f.start[r];
                     let sense = if sol.force[r] != 0.0 {
                         sol.force[r].signum()
                     } else if slip != 0.0 {
@@ -249,21 +246,6 @@ impl Exact<'_> {
             }
             _ => Status::Off,
         }
-    }
-
-    /// The relative displacement of one full row.
-    fn jumps_row(&self, r: usize, u: &[f64]) -> f64 {
-        self.problem.full[r]
-            .coefs
-            .iter()
-            .map(|&(k, c)| c * u[k])
-            .sum()
-    }
-
-    /// The friction coefficient of a row's pair.
-    fn mu(&self, f: &Finish, r: usize) -> f64 {
-        let row = &self.problem.full[r].row;
-        f.model.interfaces[row.iface].pairs[row.pair].friction
     }
 
     /// Every dof's displacement and every row's force for the statuses, or None where the
@@ -327,7 +309,7 @@ impl Exact<'_> {
                     if jn == usize::MAX {
                         return None;
                     }
-                    let mu = self.mu(f, r);
+                    let mu = self.mu(f.model, r);
                     exact.push(Triplet::new(i, i, 1.0));
                     exact.push(Triplet::new(i, jn, -sense * mu * rho / self.rho[nr]));
                     rhs[i] = -sense * mu * rho * f.cohesion[nr] / qs;
@@ -406,7 +388,7 @@ impl Exact<'_> {
                 (RowKind::Friction, Some(false)) => Status::Off,
                 (RowKind::Friction, Some(true)) => {
                     let nr = f.normal[r].unwrap_or(r);
-                    let bound = self.mu(f, r) * (force[nr] - f.cohesion[nr]).max(0.0);
+                    let bound = self.mu(f.model, r) * (force[nr] - f.cohesion[nr]).max(0.0);
                     let slip = jumps[r] - f.start[r];
                     match status[r] {
                         Status::Fixed(_) if force[r].abs() > bound + tol_f => {
@@ -449,7 +431,7 @@ impl Exact<'_> {
         let full = &self.problem.full;
         let m = full.len();
         let (_, tol_u) = self.tolerances(f, &u, &force);
-        // A normal row without force whose gap is closed (to 1e-9 of the largest
+        // A normal row without force whose gap is closed (to MOTION_TOLERANCE of the largest
         // displacement) touches: at a junction it may carry force as well (the distribution
         // of junction forces is then the least-norm one over every admissible set, not only
         // over the rows the statuses happened to close).
@@ -477,10 +459,10 @@ impl Exact<'_> {
                     let nr = f.normal[r].unwrap_or(r);
                     // A row at its bound that does not move is sticking as well: the
                     // distribution of junction forces keeps it within its cone, not on it.
-                    slipping[r] = matches!(s, Status::Slip(_))
-                        && (self.jumps_row(r, &u) - f.start[r]).abs() > tol_u;
+                    slipping[r] =
+                        matches!(s, Status::Slip(_)) && (jumps[r] - f.start[r]).abs() > tol_u;
                     Law::Tresca {
-                        bound: self.mu(f, r) * (force[nr] - f.cohesion[nr]).max(0.0),
+                        bound: self.mu(f.model, r) * (force[nr] - f.cohesion[nr]).max(0.0),
                         anchor: f.start[r],
                     }
                 }
