@@ -438,3 +438,46 @@ fn a_wall_settles_from_the_sparse_solvers_statuses() {
     eprintln!("wall on the seed: jumps differ from the sparse solver's by {du:.1e}");
     assert!(du > 1e-3, "{du}");
 }
+
+/// The 220-stone wall (`pipelines/stone_wall.toml`, joints found from the drawing, 401
+/// junctions) with Coulomb joints, μ = 0.7, under its weight and 0.1171875 g sideways (a trial
+/// of its collapse search, docs/stone_wall_collapse.md). The fixed point stalls there; the
+/// statuses of its programmes leave a stone free, and the linear solve of Coulomb's law goes
+/// on with a proximal spring until they hold (docs/formulation.md §6.10; measured: 31
+/// programmes). Without that spring this trial of the collapse search ended undecided after
+/// 100 programmes (8a35717). The state obeys Coulomb's law pair by pair and every stone
+/// balances.
+#[test]
+fn the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free() {
+    let dir = tmpdir("full_rows_stones");
+    let scene = root().join("pipelines/stone_wall.toml");
+    let out = dir.join("run");
+    let args = [
+        "--method",
+        "exact",
+        "--set",
+        "defaults.interface.tangential=\"friction\"",
+        "--set",
+        "defaults.interface.friction=0.7",
+        "--set",
+        "defaults.body.body_force=[2.9296875,-25.0]",
+        "--set",
+        "output.vtk=false",
+        "--set",
+        "output.history=final",
+    ];
+    let (code, err) = run(&scene, &out, &args);
+    assert_eq!(code, 0, "{err}");
+    assert!(err.contains("settled by the linear solve"), "{err}");
+    let s = read_summary(&out);
+    assert_eq!(s["contact"]["junctions"]["implied_components"], 0);
+    let (above, free_slip, slipping) = coulomb_breaches(&out, 0.7, 1e-7);
+    eprintln!(
+        "stone wall at 0.117 g: {slipping} pairs slip, {above} above the cone, {free_slip} below"
+    );
+    assert!(slipping > 100, "{slipping}");
+    assert_eq!((above, free_slip), (0, 0));
+    let worst = worst_imbalance(&s);
+    eprintln!("stone wall at 0.117 g: largest relative imbalance of a stone {worst:.1e}");
+    assert!(worst < 1e-6, "{worst}");
+}

@@ -697,7 +697,7 @@ impl<'a> Exact<'a> {
         };
         if let Some(seed) = seed {
             let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
-            if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior) {
+            if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior, false) {
                 change = settled_residual(&friction, &normal, &done, &done_laws);
                 (finished, settled) = (true, true);
                 laws = done_laws;
