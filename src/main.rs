@@ -76,6 +76,9 @@ enum Command {
         /// like the file).
         #[arg(long = "set", value_name = "KEY=VALUE")]
         set: Vec<String>,
+        /// Contact solver, as `run --method`: the plan and cost of that run.
+        #[arg(long, value_enum)]
+        method: Option<MethodArg>,
         /// Print the report as JSON (bodies, boundary parts, interfaces, plan, cost) instead
         /// of text.
         #[arg(long)]
@@ -310,9 +313,15 @@ fn main() -> ExitCode {
             scene,
             mesh,
             set,
+            method,
             json,
             allow_geo_shell,
-        } => check_command(&scene, mesh, set, json, allow_geo_shell),
+        } => check_command(
+            &scene,
+            (mesh, set, method.map(method_of)),
+            json,
+            allow_geo_shell,
+        ),
         Command::Run {
             scene,
             mesh,
@@ -326,13 +335,7 @@ fn main() -> ExitCode {
             let opts = pipeline::RunOptions {
                 mesh,
                 out: out_dir,
-                method: method.map(|m| match m {
-                    MethodArg::Lcp => Method::Lcp,
-                    MethodArg::Qp => Method::Qp,
-                    MethodArg::Both => Method::Both,
-                    MethodArg::Sparse => Method::Sparse,
-                    MethodArg::Exact => Method::Exact,
-                }),
+                method: method.map(method_of),
                 quiet,
                 sets: set,
             };
@@ -405,10 +408,22 @@ fn fail(e: &Error) -> ExitCode {
 /// `sgbem check`: reads and validates the scene, prints the report (`json`: as JSON), and
 /// refuses what `run` would refuse for memory or disk space (after the report, which shows
 /// the estimates), in the same words.
+/// The scene's contact method of a `--method` argument.
+fn method_of(m: MethodArg) -> Method {
+    match m {
+        MethodArg::Lcp => Method::Lcp,
+        MethodArg::Qp => Method::Qp,
+        MethodArg::Both => Method::Both,
+        MethodArg::Sparse => Method::Sparse,
+        MethodArg::Exact => Method::Exact,
+    }
+}
+
+/// `sgbem check`: the scene read, planned and costed as `run` would (with `--method`
+/// applied as `run` applies it), nothing computed.
 fn check_command(
     scene: &std::path::Path,
-    mesh: Option<PathBuf>,
-    sets: Vec<String>,
+    (mesh, sets, method): (Option<PathBuf>, Vec<String>, Option<Method>),
     json: bool,
     allow_geo_shell: bool,
 ) -> sgbem::error::Result<()> {
@@ -421,6 +436,7 @@ fn check_command(
             mesh,
             sets,
             mesh_dir: Some(tmp.path().to_path_buf()),
+            method,
         },
     );
     // The report reads the mesh file's size (the outputs' estimate): the folder goes after

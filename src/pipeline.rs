@@ -59,6 +59,9 @@ pub struct LoadOptions {
     /// Where a `.geo` mesh is meshed; by default the `mesh` folder of the scene's output
     /// directory.
     pub mesh_dir: Option<PathBuf>,
+    /// Replaces the scene's `solve.method` (`--method`), before the defaults that depend on
+    /// it (the method for the scene's size, the history's level).
+    pub method: Option<crate::input::scene::Method>,
 }
 
 /// [`load`] with `--set` overrides; a `.geo` mesh is meshed with gmsh first.
@@ -69,7 +72,12 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             "no such scene file: give the path of a .toml scene",
         ));
     }
-    let scene = scene::read_scene_with(scene_path, &opts.sets)?;
+    let mut scene = scene::read_scene_with(scene_path, &opts.sets)?;
+    // `--method` over the scene's, before the defaults that depend on it.
+    if let Some(m) = opts.method {
+        scene.solve.method = m;
+        scene.solve.method_given = true;
+    }
     let mut mesh_path: PathBuf = match (&opts.mesh, &scene.mesh) {
         (Some(m), _) => m.clone(),
         (None, Some(m)) => m.clone(),
@@ -95,7 +103,6 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     }
     let mesh = mesh::read_msh(&mesh_path)?;
     let model = model::build(&scene, &mesh, &mesh_path)?;
-    let mut scene = scene;
     scene.solve.choose_method(model.unilateral_pair_count());
     let scaled = crate::estimate::scale_history(&mut scene, &model);
     let mut plan = plan::plan(&scene, &model)?;
@@ -284,13 +291,9 @@ fn load_for_run(
             mesh: opts.mesh.clone(),
             sets: opts.sets.clone(),
             mesh_dir: Some(mesh_dir.to_path_buf()),
+            method: opts.method,
         },
     )?;
-    if let Some(m) = opts.method {
-        loaded.scene.solve.method = m;
-        loaded.scene.solve.method_given = true;
-        loaded.plan = plan::plan(&loaded.scene, &loaded.model)?;
-    }
     if let Some(o) = &opts.out {
         loaded.scene.output.directory = o.clone();
     }

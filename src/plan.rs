@@ -187,7 +187,7 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
         scene.solve.quadrature.name()
     );
     if !fx.loaded.is_empty() {
-        assemble.push_str(&format!("; body-force loads for {}", fx.loaded.join(", ")));
+        assemble.push_str(&format!("; body-force loads for {}", named(&fx.loaded)));
     }
     stages.push(("assemble", assemble));
     stages.push(("condense", condense_stage(model, scene.solve.method)));
@@ -563,4 +563,14 @@ fn advice(scene: &Scene, model: &Model) -> (Vec<String>, (f64, String)) {
     }
     advice.extend(crate::post::plausibility::input_notes(scene, model));
     (advice, worst)
+}
+
+/// Up to 8 names in full; more as their count with the first three and the last.
+fn named(names: &[&str]) -> String {
+    match names {
+        [a, b, c, .., z] if names.len() > 8 => {
+            format!("{} bodies ({a}, {b}, {c}, …, {z})", names.len())
+        }
+        _ => names.join(", "),
+    }
 }

@@ -766,3 +766,39 @@ fn man_page_lists_every_command_and_option() {
         Err(_) => eprintln!("groff not installed: the page was not formatted (skipped)"),
     }
 }
+
+/// `check --method` plans and costs the run that `run --method` makes (the same report as
+/// the scene key `solve.method`); a many-body scene's loaded bodies are counted, not listed
+/// (the 798-brick wall printed 798 names on one line).
+#[test]
+fn check_plans_the_method_of_the_command_line() {
+    let scene = root().join("pipelines/wall_running_bond.toml");
+    let s = scene.to_str().unwrap();
+    let (code, default, err) = sgbem(&["check", s]);
+    assert_eq!(code, 0, "{err}");
+    assert!(default.contains("contact_lcp"), "{default}");
+    for m in ["exact", "sparse", "qp"] {
+        let (code, by_flag, err) = sgbem(&["check", s, "--method", m]);
+        assert_eq!(code, 0, "{err}");
+        assert!(by_flag.contains(&format!("contact_{m}")), "{m}: {by_flag}");
+        assert!(!by_flag.contains("contact_lcp "), "{m}: {by_flag}");
+        let key = format!("solve.method=\"{m}\"");
+        let (_, by_key, _) = sgbem(&["check", s, "--set", &key]);
+        // The same report but for the temporary folder of the .geo's mesh.
+        let lines = |t: &str| -> Vec<String> {
+            t.lines()
+                .filter(|l| !l.starts_with("mesh ") && !l.starts_with("overrides "))
+                .map(String::from)
+                .collect()
+        };
+        assert!(lines(&by_flag) == lines(&by_key), "{m}");
+    }
+    assert!(
+        default
+            .contains("body-force loads for 105 bodies (brick_1, brick_2, brick_3, …, brick_105)"),
+        "{default}"
+    );
+    let (code, _, err) = sgbem(&["check", s, "--method", "newton"]);
+    assert_eq!(code, 2, "{err}");
+    assert!(err.contains("newton") && err.contains("exact"), "{err}");
+}

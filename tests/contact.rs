@@ -501,6 +501,7 @@ fn stick_joints_that_start_open_every_solver_ties_them_as_they_close() {
             mesh: mesh.map(|m| m.to_path_buf()),
             sets: sets.iter().map(|s| s.to_string()).collect(),
             mesh_dir: Some(dir.clone()),
+            method: None,
         };
         let l = sgbem::pipeline::load_with(&root().join(format!("pipelines/{scene}.toml")), &opts)
             .unwrap_or_else(|e| panic!("{scene}: {e}"));
