@@ -168,6 +168,12 @@ const SPARSE_PAIRS_PER_ITERATION: f64 = 1600.0;
 const C_EXACT: f64 = 0.64;
 const EXACT_REF: f64 = 4.2e5;
 const EXACT_PROGRAMMES_FRICTION: f64 = 30.0;
+/// Bytes per Σ n_u² of the full-row solver's LU of its statuses' system at Σ n_u² =
+/// EXACT_REF, growing as (Σ n_u² / EXACT_REF)^0.24: fitted to the peak memory of
+/// running-bond walls with friction 0.15 and wind, history "final", no VTK, less the rest of
+/// the estimate (329 MB, 1.31 GB and 2.90 GB measured by `/usr/bin/time` at 105, 410 and 798
+/// bricks, where the estimate had 244 MB, 833 MB and 1.6 GB), with 10 % to spare.
+const EXACT_LU_BYTES: f64 = 222.0;
 const EXACT_PROGRAMMES: f64 = 3.0;
 const SPARSE_MIN_ITERATIONS: f64 = 15.0;
 
@@ -275,8 +281,10 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     let mut opening = 8.0 * rows as f64 * m + 8.0 * m * m / 2.0;
     if scene.solve.method == Method::Exact {
         // No column of the opening stiffness: Clarabel's sparse KKT system over every dof
-        // and full row and its LDL factor, about three times the glued system's.
-        opening = 3.0 * glued;
+        // and full row and its LDL factor, about three times the glued system's; and the
+        // sparse LU of the statuses' linear system (the finish), whose fill grows faster
+        // than the operators.
+        opening = 3.0 * glued + EXACT_LU_BYTES * squares * (squares / EXACT_REF).powf(0.24);
     }
     if scene.solve.method == Method::Sparse {
         // No column of the opening stiffness beyond the evolutive cross-check (up to 2000
