@@ -272,6 +272,42 @@ fn a_mechanism_is_the_programmes_certificate() {
     assert!(err.contains("the rigid-block check confirms it"), "{err}");
 }
 
+/// A 51-brick wall (6 courses of 8) without friction under wind slides: the certificate's motion of every
+/// moving brick is worded and recorded as a translation along the wind (its rotation, about
+/// 1e-4 of the translation over the model, is the interior point's, not the wall's).
+#[test]
+fn a_sliding_wall_is_worded_as_translations() {
+    let dir = tmpdir("full_rows_sliding_wall");
+    let scene = root().join("pipelines/wall_running_bond.toml");
+    let out = dir.join("out");
+    let extra = [
+        "--method",
+        "exact",
+        "--set",
+        "defaults.interface.friction=0.0",
+        "--set",
+        "mesh.courses=6",
+        "--set",
+        "mesh.bricks=8",
+    ];
+    let (code, err) = run(&scene, &out, &extra);
+    assert_eq!(code, 3, "{err}");
+    assert!(err.contains("found no equilibrium"), "{err}");
+    assert!(err.contains("moves along (1.000, "), "{err}");
+    assert!(!err.contains(" turns "), "{err}");
+    let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
+    let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let moving = summary["mechanism"]
+        .as_array()
+        .expect("the mechanism's bodies");
+    assert!(moving.len() > 25, "{}", moving.len());
+    for m in moving {
+        assert_eq!(m["kind"], "translation", "{m}");
+        let dx = m["direction"][0].as_f64().unwrap();
+        assert!(dx > 0.999, "{m}");
+    }
+}
+
 #[test]
 fn collapse_of_a_tilting_block_and_of_a_wall_on_the_full_rows() {
     let dir = support::two_blocks_mesh("full_rows_collapse");
