@@ -168,14 +168,14 @@ const SPARSE_PAIRS_PER_ITERATION: f64 = 1600.0;
 const C_EXACT: f64 = 0.64;
 const EXACT_REF: f64 = 4.2e5;
 const EXACT_PROGRAMMES_FRICTION: f64 = 30.0;
-/// Bytes per Σ n_u² of the full-row solver's LU of its statuses' system at Σ n_u² =
-/// EXACT_REF, growing as (Σ n_u² / EXACT_REF)^0.24: fitted to the peak memory of
-/// running-bond walls under wind (friction 0.15 at 105 bricks, 0.7 at 410 and 798), history
-/// "final", no VTK, less the rest of
-/// the estimate (329 MB, 1.31 GB and 2.90 GB measured by `/usr/bin/time` at 105, 410 and 798
-/// bricks, where the estimate had 244 MB, 833 MB and 1.6 GB), with 10 % to spare.
-const EXACT_LU_BYTES: f64 = 222.0;
 const EXACT_PROGRAMMES: f64 = 3.0;
+/// Bytes per Σ n_u² of the full-row solver's LU of its statuses' system at Σ n_u² =
+/// EXACT_REF, growing as (Σ n_u² / EXACT_REF)^0.24: fitted to the peak memory of running-bond
+/// walls under wind (friction 0.15 at 105 bricks, 0.7 at 410 and 798), history "final", no
+/// VTK, less the rest of the estimate (329 MB, 1.31 GB and 2.90 GB measured by
+/// `/usr/bin/time` at 105, 410 and 798 bricks, where the estimate had 244 MB, 833 MB and
+/// 1.6 GB), with 10 % to spare.
+const EXACT_LU_BYTES: f64 = 222.0;
 const SPARSE_MIN_ITERATIONS: f64 = 15.0;
 
 /// The contact stage of a run of `scene` on `model` (see the module doc); None without a

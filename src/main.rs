@@ -405,9 +405,6 @@ fn fail(e: &Error) -> ExitCode {
     ExitCode::from(e.exit_code() as u8)
 }
 
-/// `sgbem check`: reads and validates the scene, prints the report (`json`: as JSON), and
-/// refuses what `run` would refuse for memory or disk space (after the report, which shows
-/// the estimates), in the same words.
 /// The scene's contact method of a `--method` argument.
 fn method_of(m: MethodArg) -> Method {
     match m {
@@ -419,8 +416,10 @@ fn method_of(m: MethodArg) -> Method {
     }
 }
 
-/// `sgbem check`: the scene read, planned and costed as `run` would (with `--method`
-/// applied as `run` applies it), nothing computed.
+/// `sgbem check`: reads and validates the scene as `run` would (with `--method` applied as
+/// `run` applies it), prints the report (`json`: as JSON), and refuses what `run` would
+/// refuse for memory or disk space (after the report, which shows the estimates), in the
+/// same words; nothing computed.
 fn check_command(
     scene: &std::path::Path,
     (mesh, sets, method): (Option<PathBuf>, Vec<String>, Option<Method>),

@@ -253,9 +253,7 @@ fn coulomb_friction_tends_to_stick_as_mu_grows() {
         assert_eq!(differ, 0, "μ = {mu}");
         assert!(du < 1e-6, "μ = {mu}: {du}");
         // The state is the linear solve's of its statuses, not the interior point's.
-        let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
-        let summary: serde_json::Value = serde_json::from_str(&text).unwrap();
-        let imbalance = worst_imbalance(&summary);
+        let imbalance = worst_imbalance(&read_summary(&out));
         eprintln!("μ = {mu}: worst imbalance {imbalance:.1e}");
         assert!(imbalance < 1e-8, "μ = {mu}: {imbalance:e}");
         diffs.push(dt);
@@ -288,9 +286,7 @@ fn running_bond_exact(name: &str, sets: &[&str]) -> (i32, String, PathBuf, serde
     }
     let scene = root().join("pipelines/wall_running_bond.toml");
     let (code, err) = run(&scene, &out, &extra);
-    let text =
-        std::fs::read_to_string(out.join("summary.json")).unwrap_or_else(|e| panic!("{e}: {err}"));
-    let summary = serde_json::from_str(&text).unwrap();
+    let summary = read_summary(&out);
     (code, err, out, summary)
 }
 
