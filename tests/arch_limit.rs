@@ -577,7 +577,7 @@ fn a_mechanism_that_the_statics_cannot_confirm_is_undecided() {
     assert_eq!(code, 3, "{stderr}");
     assert!(
         stderr.contains("undecided: the solver found no equilibrium, but interface forces")
-            && stderr.contains("method = \"sparse\"")
+            && stderr.contains("method = \"exact\"")
             && !stderr.contains("no equilibrium exists"),
         "{stderr}"
     );

@@ -132,3 +132,53 @@ fn the_collapse_search_upper_bound_lies_above_the_multiplier() {
         assert!(!mech.contains("no equilibrium exists"), "{mech}");
     }
 }
+
+/// A frictionless 6 × 8 running-bond wall under wind (`pipelines/wall_running_bond.toml`,
+/// default method): the evolutive path ends at a mechanism, the rigid-block LP proves it
+/// (no forces without tension balance the wind) and the run reports it without the sparse
+/// solver's retry (which on the 105-brick wall took 176 s of the run's 192 s): no
+/// `contact_sparse` stage in timings.json, the LP's stage present, the confirmation in the
+/// message and every moving brick translating along +x. (Fails before: the retry ran and
+/// the message had no confirmation without Coulomb pairs.)
+#[test]
+fn a_proven_mechanism_is_reported_without_the_sparse_retry() {
+    let dir = support::tmpdir("statics_frictionless_wall");
+    let out = dir.join("out");
+    let scene = support::root().join("pipelines/wall_running_bond.toml");
+    let mut args = vec!["run", scene.to_str().unwrap()];
+    for set in [
+        "defaults.interface.friction=0.0",
+        "mesh.courses=6",
+        "mesh.bricks=8",
+        "output.vtk=false",
+    ] {
+        args.extend(["--set", set]);
+    }
+    args.extend(["--out", out.to_str().unwrap(), "--quiet"]);
+    let (code, _, stderr) = support::sgbem(&args);
+    assert_eq!(code, 3, "{stderr}");
+    assert!(stderr.contains("no equilibrium exists"), "{stderr}");
+    let summary = support::read_summary(&out);
+    let failure = summary["failure"].as_str().expect("failure");
+    // A long message keeps its head and tail (error.rs): the confirmation's end.
+    assert!(
+        failure.contains(
+            "where a pair has it) balance every body that no displacement condition holds; \
+             the motion: "
+        ),
+        "{failure}"
+    );
+    let timings: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(out.join("timings.json")).expect("timings.json"),
+    )
+    .expect("timings.json is JSON");
+    let stages = timings["stages"].as_object().expect("stages");
+    assert!(stages.contains_key("contact_statics"), "{timings}");
+    assert!(!stages.contains_key("contact_sparse"), "{timings}");
+    let moving = summary["mechanism"].as_array().expect("the mechanism");
+    assert!(moving.len() > 25, "{}", moving.len());
+    for m in moving {
+        assert_eq!(m["kind"], "translation", "{m}");
+        assert!(m["direction"][0].as_f64().unwrap() > 0.999, "{m}");
+    }
+}

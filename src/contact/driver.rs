@@ -4,8 +4,11 @@
 //! [`solve`] runs every load step from the state the previous one left (docs/formulation.md
 //! §6, §10): the main solver gives the answer and the history, the cross-check solvers solve the
 //! same step from the same state and their statuses are compared pair by pair. A
-//! "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (`statics`):
-//! confirmed, or undecided. A step that does not converge for a reason other than a
+//! "no equilibrium" of the evolutive path or the QP is first put to the rigid-block statics
+//! (`statics`): where that LP is infeasible no equilibrium exists and the run reports the
+//! mechanism at once; otherwise the sparse solver tries the step from the same state. With
+//! Coulomb pairs the LP's verdict then confirms the "no equilibrium", or leaves it
+//! undecided. A step that does not converge for a reason other than a
 //! mechanism (confirmed or undecided) is solved again in substeps; with
 //! `[solve] time` and loads that depend on t, every step is assembled at its pseudo-time (the
 //! operators are those of the bodies; the columns of the opening stiffness are kept). With
@@ -724,7 +727,16 @@ fn contact_step(
     let full = scene.output.history != HistoryLevel::Final;
     let mut r = session.solve_step(state, main, ctx.tol, ctx.maxit, step, f, full);
     timings.add(main.timing_key(), t.elapsed().as_secs_f64());
-    if (r.mechanism || r.undecided) && matches!(main, Solver::Evolutive | Solver::Qp) {
+    let rescuable = matches!(main, Solver::Evolutive | Solver::Qp);
+    // A "no equilibrium" that the rigid-block statics proves (an infeasible LP, a fraction
+    // of a second) needs no rescue: no solver can find an equilibrium there.
+    let known = (rescuable && r.mechanism).then(|| {
+        let t = Instant::now();
+        let v = super::statics::certify(session.model, f);
+        timings.add("contact_statics", t.elapsed().as_secs_f64());
+        v
+    });
+    if (r.mechanism || r.undecided) && rescuable && known != Some(Verdict::Infeasible) {
         // The pivoting path, or the QP's statuses checked exactly, can stop at a row that
         // cannot open without leaving a body free although an equilibrium exists, and the
         // QP may find no statuses that keep the stick law at closure (it poses each row
@@ -753,10 +765,12 @@ fn contact_step(
             ));
         }
     }
-    // A "no equilibrium" with Coulomb pairs is checked by the rigid-block statics.
+    // A "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (the
+    // verdict above holds where the rescue found none either: the same model and load).
     let t = Instant::now();
-    let verdict = super::statics::judge_step(session.model, f, &mut r);
-    if verdict.is_some() {
+    let fresh = known.is_none();
+    let verdict = super::statics::judge_step(session.model, f, &mut r, known);
+    if verdict.is_some() && fresh {
         timings.add("contact_statics", t.elapsed().as_secs_f64());
     }
     let t = Instant::now();

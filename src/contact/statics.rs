@@ -38,7 +38,9 @@
 //! come from an elastic state (with Coulomb's law, whose slip is not normal to the cone,
 //! the LP's associative cone is only an upper bound), so a feasible LP leaves a solver's
 //! "no equilibrium" undecided. Frictionless, stick and cohesive problems are convex and
-//! their solvers decide them exactly: only Coulomb friction calls for the check.
+//! their solvers decide them exactly: only Coulomb friction calls for the check of what a
+//! solver found. The driver still puts every "no equilibrium" of the evolutive path or the
+//! QP to the LP first, with any law: an infeasible LP spares the sparse solver's retry.
 //!
 //! **Scaling.** Forces are in units of the largest load (force, or moment over the model's
 //! size), lengths in the model's size; the growing load's multiplier in units of the
@@ -50,7 +52,7 @@ use clarabel::solver::{
 };
 
 use super::problem::body_has_support;
-use super::ContactResult;
+use super::{ContactResult, Solver};
 use crate::error::Error;
 use crate::input::model::wrench::{body_load, centroid, cross, pair_arm, Wrench};
 use crate::input::model::{DofClass, Interface, Model};
@@ -282,9 +284,10 @@ pub struct Decision {
 
 /// The verdict on a solver's "no equilibrium" (its message `found`) given the LP's `v`:
 /// confirmed (infeasible), undecided (feasible: the message no longer says that no
-/// equilibrium exists, and gives a hint), or kept with Clarabel's status (unknown). The
-/// words are put before the motion that ends a mechanism's message.
-pub fn decide(found: &str, v: &Verdict) -> Decision {
+/// equilibrium exists, and gives a hint: the full-row solver unless `solver`, the one that
+/// found it, is that one), or kept with Clarabel's status (unknown). The words are put
+/// before the motion that ends a mechanism's message.
+pub fn decide(found: &str, v: &Verdict, solver: &str) -> Decision {
     let insert = |words: &str| match found.find("; the motion: ") {
         Some(i) => format!("{}; {words}{}", &found[..i], &found[i..]),
         None => format!("{found}; {words}"),
@@ -293,7 +296,7 @@ pub fn decide(found: &str, v: &Verdict) -> Decision {
         Verdict::Infeasible => Decision {
             message: insert(
                 "the rigid-block check confirms it: no interface forces within the pairs' laws \
-                 (Coulomb's cone, no tension) balance every body that no displacement \
+                 (no tension; friction within Coulomb's cone where a pair has it) balance every body that no displacement \
                  condition holds",
             ),
             mechanism: true,
@@ -309,7 +312,13 @@ pub fn decide(found: &str, v: &Verdict) -> Decision {
                 "undecided: the solver found no equilibrium, but interface forces that balance \
                  every body within Coulomb's law exist (rigid-block check), so whether an \
                  equilibrium exists is not decided; more load steps ([solve] load_factors, or \
-                 time) or method = \"sparse\" may find one; what the solver found: {}",
+                 time){} may find one; what the solver found: {}",
+                if solver == Solver::Exact.name() {
+                    ""
+                } else {
+                    " or method = \"exact\" (every pair component its own row, Coulomb's law \
+                     settled by a linear solve)"
+                },
                 found.replacen("no equilibrium exists", "no equilibrium found", 1)
             ),
             mechanism: false,
@@ -317,21 +326,34 @@ pub fn decide(found: &str, v: &Verdict) -> Decision {
     }
 }
 
-/// The check of a step's "no equilibrium": where the step `r` on `model` at load factor `f` ended at a
-/// mechanism and the model has Coulomb pairs, the LP decides its message and whether it
-/// stays a mechanism (an undecided step is no mechanism, though, like one, not solved again
-/// in substeps); the verdict, where the check ran.
-pub(super) fn judge_step(model: &Model, f: f64, r: &mut ContactResult) -> Option<Verdict> {
-    if !r.mechanism || !has_coulomb(model) {
+/// The check of a step's "no equilibrium": where the step `r` on `model` at load factor `f`
+/// ended at a mechanism, the LP decides its message and whether it stays a mechanism (an
+/// undecided step is no mechanism, though, like one, not solved again in substeps); the
+/// verdict, where the check ran. `known` is the LP's verdict at this `model` and `f` where
+/// the driver already has it. With Coulomb pairs the LP always runs; without them (convex
+/// problems, which their solvers decide) a known infeasible LP only adds its confirmation.
+pub(super) fn judge_step(
+    model: &Model,
+    f: f64,
+    r: &mut ContactResult,
+    known: Option<Verdict>,
+) -> Option<Verdict> {
+    if !r.mechanism {
         return None;
     }
-    let v = certify(model, f);
+    let v = if has_coulomb(model) {
+        known.unwrap_or_else(|| certify(model, f))
+    } else if known == Some(Verdict::Infeasible) {
+        Verdict::Infeasible
+    } else {
+        return None;
+    };
     let found = r
         .failure
         .as_ref()
         .map(|e| e.message().to_string())
         .unwrap_or_default();
-    let d = decide(&found, &v);
+    let d = decide(&found, &v, r.solver);
     r.failure = Some(Error::numerical(d.message));
     r.mechanism = d.mechanism;
     r.undecided |= !d.mechanism;
@@ -659,7 +681,7 @@ mod tests {
         let found = "the contact solver (lcp) did not converge at load step 1; no equilibrium \
                      exists (a sliding mechanism): body \"upper\" slides; the motion: body \
                      \"upper\" moves along (1.000, 0.000)";
-        let d = decide(found, &Verdict::Infeasible);
+        let d = decide(found, &Verdict::Infeasible, "lcp");
         assert!(d.mechanism);
         assert!(d.message.starts_with(
             "the contact solver (lcp) did not converge at load step 1; no equilibrium exists"
@@ -672,12 +694,12 @@ mod tests {
             "{}",
             d.message
         );
-        let d = decide(found, &Verdict::Unknown("MaxIterations".into()));
+        let d = decide(found, &Verdict::Unknown("MaxIterations".into()), "lcp");
         assert!(d.mechanism && d.message.contains("could not confirm it"));
         assert!(d.message.contains("MaxIterations"));
         // Forces exist: no longer "no equilibrium exists" (scripts look for those words), a
         // hint, and what the solver found.
-        let d = decide(found, &Verdict::Feasible);
+        let d = decide(found, &Verdict::Feasible, "lcp");
         assert!(!d.mechanism);
         assert!(d
             .message
@@ -687,9 +709,13 @@ mod tests {
             "{}",
             d.message
         );
-        assert!(d.message.contains("method = \"sparse\""));
+        assert!(d.message.contains("or method = \"exact\" (every pair"));
         assert!(d.message.contains("body \"upper\" slides"));
-        let d = decide("a body is free", &Verdict::Infeasible);
+        // Found by the full-row solver itself: only more load steps are suggested.
+        let d = decide(found, &Verdict::Feasible, "exact");
+        assert!(d.message.contains("(rigid-block check)"));
+        assert!(!d.message.contains("method = "), "{}", d.message);
+        let d = decide("a body is free", &Verdict::Infeasible, "lcp");
         assert!(d
             .message
             .starts_with("a body is free; the rigid-block check confirms it"));
