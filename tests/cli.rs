@@ -667,14 +667,7 @@ fn progress_moves_on_a_terminal() {
         scene.display(),
         out.display()
     );
-    let status = std::process::Command::new("script")
-        .args(["-qfec", &command, log.to_str().unwrap()])
-        .stdout(std::process::Stdio::null())
-        .status()
-        .expect("script (util-linux) runs");
-    assert!(status.success(), "{status}");
-    let raw = std::fs::read(&log).unwrap();
-    let text = String::from_utf8_lossy(&raw);
+    let text = on_a_terminal(&command, &log);
     let frames: Vec<&str> = text.split(['\r', '\n']).collect();
     let distinct = |word: &str, pick: &dyn Fn(&str) -> Option<String>| {
         let mut seen: Vec<String> = frames
@@ -708,6 +701,63 @@ fn progress_moves_on_a_terminal() {
         Some(f[i..].split(':').next()?.to_string())
     });
     assert!(outer.len() >= 2, "outer iterations drawn: {outer:?}");
+}
+
+/// Runs `command` under a pseudo-terminal (`script`), its terminal's bytes logged to `log`:
+/// what was drawn.
+fn on_a_terminal(command: &str, log: &std::path::Path) -> String {
+    let status = std::process::Command::new("script")
+        .args(["-qfec", command, log.to_str().unwrap()])
+        .stdout(std::process::Stdio::null())
+        .status()
+        .expect("script (util-linux) runs");
+    assert!(status.success(), "{status}");
+    String::from_utf8_lossy(&std::fs::read(log).unwrap()).into_owned()
+}
+
+/// A collapse search on a terminal: the contact bar first counts the search's trials (10
+/// for max 2 bisected to 0.01), names each trial and its multiplier, gives the time left
+/// once a trial is done, then counts the load step of the run at the multiplier found.
+#[test]
+fn a_collapse_search_counts_its_trials_on_a_terminal() {
+    let dir = support::tmpdir("progress_collapse_pty");
+    let log = dir.join("terminal.log");
+    let scene = support::root().join("pipelines/wall_collapse.toml");
+    let command = format!(
+        "'{}' run '{}' --set mesh.courses=3 --set mesh.bricks=3 \
+         --set solve.collapse.tolerance=0.01 --set output.vtk=false --out '{}'",
+        env!("CARGO_BIN_EXE_sgbem"),
+        scene.display(),
+        dir.join("run").display()
+    );
+    let text = on_a_terminal(&command, &log);
+    let frames: Vec<&str> = text.split(['\r', '\n']).collect();
+    let search: Vec<&str> = frames
+        .iter()
+        .copied()
+        .filter(|f| f.contains("collapse [") && f.contains("trial "))
+        .collect();
+    assert!(search.iter().all(|f| f.contains("/10 ")), "{search:?}");
+    let mut trials: Vec<&str> = search
+        .iter()
+        .filter_map(|f| f.split("trial ").nth(1)?.split(':').next())
+        .collect();
+    trials.sort();
+    trials.dedup();
+    assert!(trials.contains(&"1 at t = 0"), "{trials:?}");
+    assert!(trials.contains(&"2 at t = 2"), "{trials:?}");
+    assert!(trials.len() >= 4, "{trials:?}");
+    assert!(search.iter().any(|f| f.contains(" left")), "{search:?}");
+    // The run at the multiplier: the contact bar again, one load step.
+    let last = frames
+        .iter()
+        .rev()
+        .find(|f| f.contains("contact [") || f.contains("collapse ["))
+        .unwrap();
+    assert!(
+        last.contains("contact [") && last.contains("1/1 "),
+        "{last}"
+    );
 }
 
 /// `sgbem man`: a manual page that groff formats without a warning, with every subcommand

@@ -76,6 +76,7 @@ impl Search<'_, '_> {
         timings: &mut Timings,
         reassembled: &mut Option<Operators>,
     ) -> Result<Option<Collapsed>> {
+        self.ctx.stage.begin_trial(self.trials.len() as u64 + 1, t);
         // Well above the rigid-block bound no equilibrium exists by proof: not solved (a
         // solver there only finds its mechanism or, with Coulomb joints, often nothing in
         // minutes). Within 10 % above it the trial is solved, so that the bisection's
@@ -158,6 +159,7 @@ pub(super) fn search(
         trials: Vec::new(),
         bound: statics::collapse_bound(stepper.case.scene, stepper.case.model, c.max),
     };
+    ctx.stage.count_trials(trials_needed(c));
     if let Some((e, _)) = s.trial(0.0, session, timings, reassembled)? {
         return Err(Error::numerical(format!(
             "the collapse search found no equilibrium at t = 0 (before any load \
@@ -202,6 +204,19 @@ pub(super) fn search(
         },
         motion,
     })
+}
+
+/// The trials of a search that bisects down to its tolerance: t = 0, `max`, and one per
+/// halving of [0, max] until the bracket is within the tolerance (fewer where `max`
+/// stands). The brackets are exact: their ends are multiples of max / 2^k.
+fn trials_needed(c: &Collapse) -> u64 {
+    let mut width = c.max;
+    let mut trials = 2;
+    while width > c.tolerance && trials < 2100 {
+        width *= 0.5;
+        trials += 1;
+    }
+    trials
 }
 
 /// The summary's `upper_bound` and what it is (or why there is none).

@@ -139,6 +139,7 @@ pub fn solve(
                 timings,
                 &mut reassembled,
             )?;
+            stage.count_steps(1);
             (vec![(1.0, found.multiplier)], Some(found))
         }
     };
@@ -389,7 +390,7 @@ pub(super) struct StepContext<'a> {
     steps: usize,
     tol: f64,
     maxit: usize,
-    stage: &'a Stage,
+    pub(super) stage: &'a Stage,
 }
 
 /// The `contact.junctions` block: how many points join three or more bodies, and the pair

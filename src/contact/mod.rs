@@ -595,7 +595,7 @@ impl<'a> Session<'a> {
     ) {
         if let Some(stage) = &self.stage {
             let open = state.open.iter().filter(|&&o| o).count();
-            stage.set_message(format!(
+            stage.contact_detail(&format!(
                 "step {}, outer iteration {outer}: {iterations} switches, {open} of {} rows \
                  open or slipping{}",
                 load_step + 1,

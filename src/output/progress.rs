@@ -16,9 +16,13 @@
 //! ```
 
 use std::io::IsTerminal;
+use std::sync::{Arc, Mutex};
 use std::time::Duration;
 
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::estimate::fmt_seconds;
+use crate::input::model::fmt_num;
 
 /// Whether progress is shown; makes the bars of a run.
 #[derive(Debug, Clone, Copy)]
@@ -64,13 +68,14 @@ impl Progress {
         bar.set_style(style);
         bar.set_prefix(stage.to_string());
         bar.enable_steady_tick(Duration::from_millis(200));
-        Stage { bar }
+        Stage::of(bar)
     }
 
-    /// A bar for the contact stage: its length is the number of load steps; the message
-    /// shows the latest [`ContactTick`] (iteration, open pairs, detached length).
-    /// No time left is shown: the iterations a load step needs are not known ahead (the
-    /// message moves with each outer iteration instead).
+    /// A bar for the contact stage: its length is the number of load steps (a collapse
+    /// search first counts its trials: [`Stage::count_trials`]); the message shows the
+    /// latest [`ContactTick`] (iteration, open pairs, detached length) and, once a step or
+    /// trial is finished, the time left at the rate of those finished (the iterations a
+    /// step needs are not known ahead: the message moves with each outer iteration).
     pub fn contact(&self, load_steps: usize) -> Stage {
         let stage = self.styled(
             "contact",
@@ -92,7 +97,7 @@ impl Progress {
         bar.set_style(style);
         bar.set_prefix(stage.to_string());
         bar.enable_steady_tick(Duration::from_millis(120));
-        Stage { bar }
+        Stage::of(bar)
     }
 }
 
@@ -126,14 +131,22 @@ pub fn no_contact_progress(_: &ContactTick) {}
 #[derive(Debug, Clone)]
 pub struct Stage {
     bar: ProgressBar,
+    /// The contact bar in a collapse search: the trial being solved (from 1) and its
+    /// multiplier t; `None` while it counts load steps.
+    trial: Arc<Mutex<Option<(u64, f64)>>>,
 }
 
 impl Stage {
+    fn of(bar: ProgressBar) -> Stage {
+        Stage {
+            bar,
+            trial: Arc::default(),
+        }
+    }
+
     /// A bar that draws nothing.
     pub fn hidden() -> Stage {
-        Stage {
-            bar: ProgressBar::hidden(),
-        }
+        Stage::of(ProgressBar::hidden())
     }
 
     /// Advances by `n` steps.
@@ -159,11 +172,69 @@ impl Stage {
         self.bar.position()
     }
 
-    /// Shows a contact iteration: position = finished load steps, message = iteration,
-    /// open pairs, detached length.
+    /// Shows a contact iteration: position = finished load steps (in a collapse search,
+    /// the finished trials), message = iteration, open pairs, detached length.
     pub fn contact_tick(&self, t: &ContactTick) {
-        self.set_position((t.load_step + usize::from(t.step_done)) as u64);
-        self.set_message(contact_message(t));
+        if self.current_trial().is_none() {
+            self.set_position((t.load_step + usize::from(t.step_done)) as u64);
+        }
+        self.contact_detail(&contact_message(t));
+    }
+
+    /// Shows `text` about the contact solver's progress, after the trial of a collapse
+    /// search and before the time left at the rate of the finished steps or trials.
+    pub fn contact_detail(&self, text: &str) {
+        let head = self.current_trial().map_or(String::new(), |(k, t)| {
+            format!("trial {k} at t = {}: ", fmt_num(t))
+        });
+        self.set_message(format!("{head}{text}{}", self.left()));
+    }
+
+    /// Makes the contact bar count a collapse search's `trials`, none done.
+    pub fn count_trials(&self, trials: u64) {
+        self.restart(trials);
+        self.bar.set_prefix("collapse");
+    }
+
+    /// Marks the start of trial `k` (from 1) at the multiplier `t`: `k - 1` are done.
+    pub fn begin_trial(&self, k: u64, t: f64) {
+        if let Ok(mut g) = self.trial.lock() {
+            *g = Some((k, t));
+        }
+        self.set_position(k.saturating_sub(1));
+        self.contact_detail("started");
+    }
+
+    /// Makes the contact bar count `steps` load steps, none done (after a collapse search).
+    pub fn count_steps(&self, steps: u64) {
+        if let Ok(mut g) = self.trial.lock() {
+            *g = None;
+        }
+        self.bar.set_prefix("contact");
+        self.set_message("load step 1");
+        self.restart(steps);
+    }
+
+    fn restart(&self, len: u64) {
+        self.bar.set_position(0);
+        self.bar.set_length(len);
+        self.bar.reset_elapsed();
+        self.bar.reset_eta();
+    }
+
+    fn current_trial(&self) -> Option<(u64, f64)> {
+        self.trial.lock().ok().and_then(|g| *g)
+    }
+
+    /// ", about 40 s left" at the rate of the finished steps since the count began; empty
+    /// before the first is finished and after the last.
+    fn left(&self) -> String {
+        let (done, len) = (self.bar.position(), self.bar.length().unwrap_or(0));
+        if done == 0 || done >= len {
+            return String::new();
+        }
+        let secs = self.bar.elapsed().as_secs_f64() * (len - done) as f64 / done as f64;
+        format!(", about {} left", fmt_seconds(secs))
     }
 
     /// A closure for the contact solver that forwards each tick to this bar.
@@ -226,5 +297,24 @@ mod tests {
             "step 2/2, iteration 7/100, open 12/105 pairs, detached 33.8500"
         );
         no_contact_progress(&tick);
+    }
+
+    #[test]
+    fn a_collapse_search_names_its_trial_and_then_counts_load_steps() {
+        let stage = Stage::hidden();
+        stage.count_trials(10);
+        stage.begin_trial(3, 0.5);
+        assert_eq!(stage.position(), 2);
+        assert_eq!(stage.current_trial(), Some((3, 0.5)));
+        // A tick inside a trial leaves the count of finished trials alone.
+        stage.contact_tick(&ContactTick {
+            load_step: 0,
+            load_steps: 1,
+            step_done: true,
+            ..ContactTick::default()
+        });
+        assert_eq!(stage.position(), 2);
+        stage.count_steps(1);
+        assert_eq!((stage.position(), stage.current_trial()), (0, None));
     }
 }
