@@ -208,7 +208,8 @@ pub(super) fn search(
 
 /// The trials of a search that bisects down to its tolerance: t = 0, `max`, and one per
 /// halving of [0, max] until the bracket is within the tolerance (fewer where `max`
-/// stands). The brackets are exact: their ends are multiples of max / 2^k.
+/// stands). The brackets are exact: their ends are multiples of max / 2^k. (The scene
+/// refuses a tolerance finer than floating point resolves; the bound only guards the loop.)
 fn trials_needed(c: &Collapse) -> u64 {
     let mut width = c.max;
     let mut trials = 2;

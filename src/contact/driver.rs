@@ -769,9 +769,8 @@ fn contact_step(
     // A "no equilibrium" with Coulomb pairs is checked by the rigid-block statics (the
     // verdict above holds where the rescue found none either: the same model and load).
     let t = Instant::now();
-    let fresh = known.is_none();
     let verdict = super::statics::judge_step(session.model, f, &mut r, known);
-    if verdict.is_some() && fresh {
+    if verdict.is_some() {
         timings.add("contact_statics", t.elapsed().as_secs_f64());
     }
     let t = Instant::now();

@@ -296,8 +296,8 @@ pub fn decide(found: &str, v: &Verdict, solver: &str) -> Decision {
         Verdict::Infeasible => Decision {
             message: insert(
                 "the rigid-block check confirms it: no interface forces within the pairs' laws \
-                 (no tension; friction within Coulomb's cone where a pair has it) balance every body that no displacement \
-                 condition holds",
+                 (no tension; friction within Coulomb's cone where a pair has it) balance \
+                 every body that no displacement condition holds",
             ),
             mechanism: true,
         },

@@ -198,18 +198,14 @@ impl Stage {
 
     /// Marks the start of trial `k` (from 1) at the multiplier `t`: `k - 1` are done.
     pub fn begin_trial(&self, k: u64, t: f64) {
-        if let Ok(mut g) = self.trial.lock() {
-            *g = Some((k, t));
-        }
+        self.set_trial(Some((k, t)));
         self.set_position(k.saturating_sub(1));
         self.contact_detail("started");
     }
 
     /// Makes the contact bar count `steps` load steps, none done (after a collapse search).
     pub fn count_steps(&self, steps: u64) {
-        if let Ok(mut g) = self.trial.lock() {
-            *g = None;
-        }
+        self.set_trial(None);
         self.bar.set_prefix("contact");
         self.set_message("load step 1");
         self.restart(steps);
@@ -220,6 +216,12 @@ impl Stage {
         self.bar.set_length(len);
         self.bar.reset_elapsed();
         self.bar.reset_eta();
+    }
+
+    fn set_trial(&self, trial: Option<(u64, f64)>) {
+        if let Ok(mut g) = self.trial.lock() {
+            *g = trial;
+        }
     }
 
     fn current_trial(&self) -> Option<(u64, f64)> {
