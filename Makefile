@@ -3,7 +3,7 @@
 SHELL := /bin/bash
 .DELETE_ON_ERROR:
 .DEFAULT_GOAL := help
-.PHONY: help setup build mesh test lint demo examples accuracy bench report clean view man
+.PHONY: help setup build mesh test test-long lint demo examples accuracy bench report clean view man
 
 CARGO   ?= cargo
 GMSH    ?= gmsh
@@ -25,6 +25,7 @@ help:
 	@echo "sgbem — make targets"
 	@echo "  make demo      set up, build, mesh and check the paper's clamped-beam example"
 	@echo "  make test      set up, then run every test (what CI runs)"
+	@echo "  make test-long the tests too long for CI (minutes each), marked #[ignore = \"long ...\"]"
 	@echo "  make setup     install what is missing: apt ($(APT_PACKAGES)), $(VENV) ($(PY_PACKAGES)) and the package sgbem (python/)"
 	@echo "  make build     cargo build --release"
 	@echo "  make lint      cargo fmt --check, clippy and rustdoc with warnings denied (part of make test)"
@@ -91,7 +92,7 @@ demo: setup build mesh
 	@echo "  vtk/states.pvd (ParaView: Warp By Vector on displacement, play the iterations)"
 
 test: setup mesh lint
-	$(CARGO) test --release
+	CARGO=$(CARGO) bash tests/run_binaries.sh
 	$(CARGO) build --release
 	@# The Python package (python/) against real runs of the built sgbem.
 	@# (with ParaView installed also view.py and the VTK series in pvpython; skipped otherwise)
@@ -127,6 +128,11 @@ test: setup mesh lint
 	else \
 	  echo "test: ParaView check SKIPPED: no pvpython or xvfb-run (apt-get install -y paraview xvfb)"; \
 	fi
+
+# Tests too long for CI's 30 minutes (marked `#[ignore = "long ..."]`): run before a change
+# to the sparse solver's friction iteration or to [contact]'s detection.
+test-long: setup mesh
+	$(CARGO) test --release --test friction -- --ignored --exact stone_wall_with_coulomb_joints_stands_under_its_weight
 
 examples: build mesh $(RESULTS)
 

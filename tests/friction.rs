@@ -898,7 +898,12 @@ fn collapse_with_very_large_friction_completes_near_stick() {
 /// §6.5); the semismooth Newton iteration with at most 100 switches per iterate settles it.
 /// Every closed row with a friction law obeys Coulomb's law (slipping rows at μ|t_n|), some
 /// rows slip, and every stone balances.
+///
+/// Long: 4–5 minutes on a 2-core machine (the sparse solver's Newton iteration), too long for
+/// CI's 30 minutes beside the rest; `make test-long` runs it. CI keeps the same scene with
+/// Coulomb joints on the full rows (`full_rows::the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free`).
 #[test]
+#[ignore = "long (4-5 min): make test-long"]
 fn stone_wall_with_coulomb_joints_stands_under_its_weight() {
     let dir = support::tmpdir("stone_wall_friction");
     let out = dir.join("out");
