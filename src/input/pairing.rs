@@ -75,6 +75,15 @@ pub struct Reach {
 /// must be within 60° of opposite.
 const FACING_COS: f64 = -0.5;
 
+/// Sine of the angle between two segments above which, where they come within the search
+/// distance of each other near one point only, they touch at that point and do not face
+/// each other: a stone's corner on the foundation, or two stones' faces that meet at a
+/// vertex with a third stone in the wedge between them. No node of one lies within reach
+/// of the other there, so such a pair has no row; kept, it made an interface of no rows (an
+/// error) or lent a wedge's face to a joint's rows (a false overlap). The facing segments
+/// of a curved body and a flat, a few degrees apart, still pair.
+const POINT_TOUCH_SIN: f64 = 0.5;
+
 fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [a[0] - b[0], a[1] - b[1]]
 }
@@ -460,6 +469,7 @@ pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
                 || dot(s.normal, t.normal) > FACING_COS
                 || segment_distance(s.a, s.b, t.a, t.b) > search
                 || !overlaps(s.a, s.b, t.a, t.b)
+                || touch_at_a_point(s, t, search)
             {
                 continue;
             }
@@ -467,6 +477,18 @@ pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// True when segments s and t cross at more than 30° (`POINT_TOUCH_SIN`) and are not wholly
+/// within `search` of each other: diverging lines, within reach near one point only.
+fn touch_at_a_point(s: &BodySegment, t: &BodySegment, search: f64) -> bool {
+    let (ds, dt) = (sub(s.b, s.a), sub(t.b, t.a));
+    let cross = ds[0] * dt[1] - ds[1] * dt[0];
+    if cross.abs() <= POINT_TOUCH_SIN * norm(ds) * norm(dt) {
+        return false;
+    }
+    let near = |p: [f64; 2], a: [f64; 2], b: [f64; 2]| segment_distance(p, p, a, b) <= search;
+    !(near(s.a, t.a, t.b) && near(s.b, t.a, t.b) && near(t.a, s.a, s.b) && near(t.b, s.a, s.b))
 }
 
 /// True when segment [r, s] projected on the line of [p, q] overlaps it by more than
@@ -723,6 +745,36 @@ mod tests {
         segs.extend(square(1, 0.5, 1.01));
         assert_eq!(facing_pairs(&segs, 0.02), vec![(2, 4)]);
         assert!(facing_pairs(&segs, 0.005).is_empty());
+    }
+
+    #[test]
+    fn faces_that_touch_at_one_point_at_an_angle_do_not_pair() {
+        let seg = |body: usize, a: [f64; 2], b: [f64; 2], n: [f64; 2]| {
+            let l = norm(n);
+            BodySegment {
+                body,
+                a,
+                b,
+                normal: [n[0] / l, n[1] / l],
+            }
+        };
+        // Two stones' faces meeting at the vertex (0, 0), 58° apart, a third stone in the
+        // wedge below: normals within 60° of opposite and overlapping in projection, so
+        // only the point rule keeps them apart.
+        let s = seg(0, [-1.0, -1.3], [0.0, 0.0], [1.3, -1.0]);
+        let t = seg(1, [0.0, 0.0], [0.4, -1.0], [-1.0, -0.4]);
+        assert!(dot(s.normal, t.normal) <= FACING_COS);
+        assert!(overlaps(s.a, s.b, t.a, t.b));
+        assert!(facing_pairs(&[s, t], 1e-6).is_empty());
+        // A stone's corner on the foundation's top, its face rising at 45°.
+        let top = seg(0, [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]);
+        let face = seg(1, [0.0, 0.0], [-0.5, 0.5], [-1.0, -1.0]);
+        assert!(facing_pairs(&[top, face], 1e-6).is_empty());
+        // A curved body's segment touching a flat 5.7° apart still pairs, and so do the
+        // 45° pieces where the search reaches over both whole (segments shorter than it).
+        let curve = seg(1, [0.0, 0.0], [0.5, 0.05], [0.05, -0.5]);
+        assert_eq!(facing_pairs(&[top, curve], 1e-6), vec![(0, 1)]);
+        assert_eq!(facing_pairs(&[top, face], 1.0), vec![(0, 1)]);
     }
 
     #[test]
