@@ -454,7 +454,8 @@ pub struct BodySegment {
 /// The pairs (i, j) of segments of different bodies (`body` of i below that of j) that face
 /// each other within `search`: outward normals within 60° of opposite, at most `search`
 /// apart, and each overlapping the other in projection (pieces that meet at a corner only
-/// do not pair). A uniform grid of cells about one segment or `search` wide, whichever is
+/// do not pair, nor pieces more than 30° apart that come within `search` near one point
+/// only: `touch_at_a_point`). A uniform grid of cells about one segment or `search` wide, whichever is
 /// larger, keeps the search near linear in the number of segments.
 pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
     let lines: Vec<([f64; 2], [f64; 2])> = segs.iter().map(|s| (s.a, s.b)).collect();
