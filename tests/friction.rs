@@ -900,8 +900,9 @@ fn collapse_with_very_large_friction_completes_near_stick() {
 /// rows slip, and every stone balances.
 ///
 /// Long: 4–5 minutes on a 2-core machine (the sparse solver's Newton iteration), too long for
-/// CI's 30 minutes beside the rest; `make test-long` runs it. CI keeps the same scene with
-/// Coulomb joints on the full rows (`full_rows::the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free`).
+/// CI's 30 minutes beside the rest; `make test-long` runs it, and the same scene on the full
+/// rows (`full_rows::the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free`,
+/// 3 min). CI keeps Coulomb's law at junctions on running-bond walls (`full_rows`, `sparse`).
 #[test]
 #[ignore = "long (4-5 min): make test-long"]
 fn stone_wall_with_coulomb_joints_stands_under_its_weight() {

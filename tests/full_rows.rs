@@ -518,8 +518,9 @@ fn a_wall_settles_from_the_sparse_solvers_statuses() {
 /// on with a proximal spring until they hold (docs/formulation.md §6.10; measured: 31
 /// programmes). Without that spring this trial of the collapse search ended undecided after
 /// 100 programmes (8a35717). The state obeys Coulomb's law pair by pair and every stone
-/// balances.
+/// balances. Long (169 s alone on 2 cores): `make test-long` runs it, CI does not.
 #[test]
+#[ignore = "long (3 min): make test-long"]
 fn the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free() {
     let dir = tmpdir("full_rows_stones");
     let scene = root().join("pipelines/stone_wall.toml");

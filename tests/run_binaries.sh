@@ -2,7 +2,7 @@
 # `make test`'s Rust tests: what `cargo test --release` runs, with its test binaries run
 # SGBEM_TEST_JOBS at a time (default: the number of cores) instead of one after another.
 # Each binary already runs its tests two at a time, but a binary's longest test leaves the
-# other core idle (full_rows' stone wall on the exact solver alone takes minutes); running binaries
+# other core idle (full_rows' collapse searches take over a minute each); running binaries
 # side by side keeps both cores busy. The heaviest binaries start first. Each binary's
 # output goes to out/test-logs/NAME.log; a failing binary's log is printed whole.
 set -euo pipefail
@@ -15,8 +15,9 @@ mapfile -t bins < <("$cargo" test --release --no-run --message-format=json 2>/de
   grep -E '"profile":\{[^}]*"test":true' | grep -o '"executable":"[^"]*"' | cut -d'"' -f4)
 [ "${#bins[@]}" -gt 0 ] || { echo "run_binaries: no test binaries found" >&2; exit 1; }
 
-# Heaviest first (seconds per binary, one after another on 2 cores, 2026-11-27: full_rows 237,
-# sparse 135, friction 290 before its stone wall moved to `make test-long`, then about 30).
+# Heaviest first (seconds per binary in a clean-clone CI, two at a time, 2026-11-27: full_rows
+# 413 before its stone wall (169 s) moved to `make test-long`, sparse 271, friction 119,
+# geometry_contact, outputs, workflow 75-79, hostile 65, then 30 and less).
 heavy=(full_rows sparse friction geometry_contact workflow outputs hostile solvers arch_limit cli)
 ordered=()
 for h in "${heavy[@]}"; do
