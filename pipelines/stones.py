@@ -95,8 +95,9 @@ def merge_vertices(cells, tol, width, height):
         return i
 
     grid = {}
+    cell = tol if tol > 0 else 1.0  # tol = 0: nothing merges, any grid will do
     for i, (x, y) in enumerate(pts):
-        grid.setdefault((int(x // tol), int(y // tol)), []).append(i)
+        grid.setdefault((int(x // cell), int(y // cell)), []).append(i)
     for (gx, gy), members in grid.items():
         for dx in (-1, 0, 1):
             for dy in (-1, 0, 1):
@@ -144,6 +145,14 @@ def main():
     ap.add_argument("--merge", type=float, default=0.08)
     ap.add_argument("--out", default="geo/stone_wall.geo")
     a = ap.parse_args()
+    if a.stones < 1:
+        ap.error(f"--stones {a.stones}: give 1 or more")
+    if not (a.width > 0 and a.height > 0 and math.isfinite(a.width * a.height)):
+        ap.error(f"--width {a.width} --height {a.height}: give positive finite sizes")
+    if a.lloyd < 0:
+        ap.error(f"--lloyd {a.lloyd}: give 0 (plain Voronoi cells) or more")
+    if not (0 <= a.merge < 1):
+        ap.error(f"--merge {a.merge}: give a fraction of the stone size in [0, 1) (0: no merging)")
     rng = random.Random(a.seed)
     w, h = a.width, a.height
     sites = [(rng.uniform(0, w), rng.uniform(0, h)) for _ in range(a.stones)]
