@@ -101,8 +101,8 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             "no such mesh file: mesh the .geo first (make mesh, or gmsh -2 -format msh41 FILE.geo)",
         ));
     }
-    let mesh = mesh::read_msh(&mesh_path)?;
-    let model = model::build(&scene, &mesh, &mesh_path)?;
+    let mut mesh = mesh::read_msh(&mesh_path)?;
+    let model = model::build(&scene, &mut mesh, &mesh_path)?;
     scene.solve.choose_method(model.unilateral_pair_count());
     let scaled = crate::estimate::scale_history(&mut scene, &model);
     let mut plan = plan::plan(&scene, &model)?;
@@ -826,6 +826,7 @@ fn summary_of(
         counts: summary::Counts {
             bodies: model.bodies.len(),
             boundary_elements: model.element_count(),
+            contact_cuts: model.contact_cuts,
             dofs,
             field_nodes: post.field_nodes,
             interface_pairs: model.pair_count(),

@@ -61,6 +61,13 @@ fn write_scene(o: &mut String, scene: &Scene, model: &Model, mesh_binary: bool, 
         model.mesh_path.display(),
         if mesh_binary { "binary" } else { "ASCII" }
     );
+    if model.contact_cuts > 0 {
+        let _ = writeln!(
+            o,
+            "          {} line elements cut by [contact] where the body they face changes",
+            model.contact_cuts
+        );
+    }
     let plane = match scene.plane {
         Plane::Strain => "strain",
         Plane::Stress => "stress",
@@ -361,6 +368,8 @@ pub struct CheckJson<'a> {
 /// The mesh file: its path, format and the Gmsh parameters the scene sets.
 #[derive(Debug, Clone, Serialize)]
 pub struct MeshJson<'a> {
+    /// Line elements that `[contact]` cut because they face more than one body.
+    pub contact_cuts: usize,
     pub format: &'static str,
     /// Each parameter's value as text, by name.
     pub gmsh_parameters: BTreeMap<&'a str, String>,
@@ -546,6 +555,7 @@ pub fn check_json<'a>(
             .map(|i| interface_json(model, i))
             .collect(),
         mesh: MeshJson {
+            contact_cuts: model.contact_cuts,
             format: if mesh_binary { "binary" } else { "ascii" },
             gmsh_parameters: scene
                 .mesh_parameters

@@ -16,7 +16,7 @@ mapfile -t bins < <("$cargo" test --release --no-run --message-format=json 2>/de
 [ "${#bins[@]}" -gt 0 ] || { echo "run_binaries: no test binaries found" >&2; exit 1; }
 
 # Heaviest first (seconds per binary in a clean-clone CI, two at a time, 2026-11-27: full_rows
-# 413 before its stone wall (169 s) moved to `make test-long`, sparse 271, friction 119,
+# 413 before its stone wall (169 s) was left out, sparse 271, friction 119,
 # geometry_contact, outputs, workflow 75-79, hostile 65, then 30 and less).
 heavy=(full_rows sparse friction geometry_contact workflow outputs hostile solvers arch_limit cli)
 ordered=()

@@ -455,7 +455,8 @@ pub struct BodySegment {
 /// each other within `search`: outward normals within 60° of opposite, at most `search`
 /// apart, and each overlapping the other in projection (pieces that meet at a corner only
 /// do not pair, nor pieces more than 30° apart that come within `search` near one point
-/// only: `touch_at_a_point`). A uniform grid of cells about one segment or `search` wide, whichever is
+/// only: `touch_at_a_point`, nor pieces farther apart than `search` at the middle of their
+/// overlap: `apart_mid_overlap`). A uniform grid of cells about one segment or `search` wide, whichever is
 /// larger, keeps the search near linear in the number of segments.
 pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
     let lines: Vec<([f64; 2], [f64; 2])> = segs.iter().map(|s| (s.a, s.b)).collect();
@@ -471,6 +472,7 @@ pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
                 || segment_distance(s.a, s.b, t.a, t.b) > search
                 || !overlaps(s.a, s.b, t.a, t.b)
                 || touch_at_a_point(s, t, search)
+                || apart_mid_overlap(s, t, search)
             {
                 continue;
             }
@@ -478,6 +480,31 @@ pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
         }
     }
     out
+}
+
+/// True when t lies farther than `search` ahead of s at the middle of their overlap (t
+/// projected on s), measured along s's normal as the rows measure it ([`pieces`]): faces that
+/// meet at a corner and diverge at a small angle are within `search` near that corner only,
+/// and such a pair would have no rows.
+fn apart_mid_overlap(s: &BodySegment, t: &BodySegment, search: f64) -> bool {
+    let (tau, l, nu) = frame(s.a, s.b);
+    if l <= 0.0 {
+        return false;
+    }
+    let (xr, xs) = (dot(sub(t.a, s.a), tau) / l, dot(sub(t.b, s.a), tau) / l);
+    if (xs - xr).abs() <= 1e-12 {
+        return false;
+    }
+    let xm = 0.5 * (xr.min(xs).max(0.0) + xr.max(xs).min(1.0));
+    let eta = (xm - xr) / (xs - xr);
+    let dist = dot(
+        sub(
+            lerp(sub(t.a, s.a), sub(t.b, s.a), eta),
+            lerp([0.0; 2], sub(s.b, s.a), xm),
+        ),
+        nu,
+    );
+    dist > search
 }
 
 /// True when segments s and t cross at more than 30° (`POINT_TOUCH_SIN`) and are not wholly
@@ -771,10 +798,14 @@ mod tests {
         let top = seg(0, [1.0, 0.0], [-1.0, 0.0], [0.0, 1.0]);
         let face = seg(1, [0.0, 0.0], [-0.5, 0.5], [-1.0, -1.0]);
         assert!(facing_pairs(&[top, face], 1e-6).is_empty());
-        // A curved body's segment touching a flat 5.7° apart still pairs, and so do the
-        // 45° pieces where the search reaches over both whole (segments shorter than it).
+        // A curved body's segment touching a flat 5.7° apart pairs where the search reaches
+        // the middle of their overlap (0.025 apart there: the rows measure the gap there),
+        // not where it touches at the point only; the 45° pieces pair where the search
+        // reaches over both whole (segments shorter than it).
         let curve = seg(1, [0.0, 0.0], [0.5, 0.05], [0.05, -0.5]);
-        assert_eq!(facing_pairs(&[top, curve], 1e-6), vec![(0, 1)]);
+        assert_eq!(facing_pairs(&[top, curve], 0.03), vec![(0, 1)]);
+        assert!(facing_pairs(&[top, curve], 0.02).is_empty());
+        assert!(facing_pairs(&[top, curve], 1e-6).is_empty());
         assert_eq!(facing_pairs(&[top, face], 1.0), vec![(0, 1)]);
     }
 

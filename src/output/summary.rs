@@ -76,6 +76,9 @@ pub struct Summary {
 pub struct Counts {
     pub bodies: usize,
     pub boundary_elements: usize,
+    /// Line elements of the mesh that `[contact]` cut because they faced more than one body
+    /// (the archive's mesh has their pieces).
+    pub contact_cuts: usize,
     /// The unknowns of all bodies' systems.
     pub dofs: usize,
     /// The mesh nodes where the interior field was evaluated.
@@ -637,6 +640,7 @@ mod tests {
             counts: Counts {
                 bodies: 2,
                 boundary_elements: 10,
+                contact_cuts: 0,
                 dofs: 40,
                 field_nodes: 0,
                 interface_pairs: 3,

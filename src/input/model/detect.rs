@@ -10,6 +10,7 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use crate::error::{Error, Result};
+use crate::input::mesh::{Line, Mesh};
 use crate::input::pairing::{facing_pairs, BodySegment};
 use crate::input::scene::{Condition, ContactSpec, InterfaceSpec, Scene};
 
@@ -74,16 +75,13 @@ fn traction_free(part: &Part) -> bool {
             .all(|c| matches!(c, Condition::Traction(v) if v.is_zero()))
 }
 
-/// Finds the facing pieces of the bodies that `spec.bodies` names. Each found interface is
-/// named `contact[A|B]` (bodies in scene order) and takes `[defaults.interface]`.
-pub(super) fn find_contacts(
-    scene: &Scene,
+/// The candidate elements of `[contact]`, as (body, element), and their segments: the
+/// traction-free boundary elements of the bodies that `spec.bodies` names.
+fn candidates(
     spec: &ContactSpec,
     bodies: &[Body],
     parts: &[Part],
-    sfile: &Path,
-) -> Result<Vec<Found>> {
-    // Candidate elements: (body, element) and their segments.
+) -> (Vec<(usize, usize)>, Vec<BodySegment>) {
     let mut cand: Vec<(usize, usize)> = Vec::new();
     let mut segs: Vec<BodySegment> = Vec::new();
     for (bi, body) in bodies.iter().enumerate() {
@@ -104,14 +102,183 @@ pub(super) fn find_contacts(
             });
         }
     }
+    (cand, segs)
+}
+
+/// A piece shorter than this share of its element is not cut off (no sliver elements): the
+/// element goes to the body it faces the longest (`find_contacts`).
+const MIN_CUT_SHARE: f64 = 0.05;
+
+/// Where a line element of the mesh must be cut so that each piece faces one body.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Cut {
+    /// gmsh tag of the line element.
+    pub tag: usize,
+    /// The points of the element where the body it faces changes, from its start.
+    pub points: Vec<[f64; 2]>,
+}
+
+/// The elements that face more than one body across `[contact]`'s search (a foundation's
+/// top under two stones, a brick's top under the two bricks of the course above): each is
+/// cut where the body it faces changes, half-way between the ends of the bodies' facing
+/// pieces in projection, so that every element of an interface found faces its other body
+/// only (an element belongs to one interface: uncut, it would leave one of them without
+/// support over its length).
+pub(super) fn cuts(spec: &ContactSpec, bodies: &[Body], parts: &[Part]) -> Vec<Cut> {
+    let (cand, segs) = candidates(spec, bodies, parts);
+    let pairs = facing_pairs(&segs, spec.search);
+    let mut out = Vec::new();
+    for (i, hull) in facing_hulls(&segs, &pairs) {
+        if hull.len() < 2 {
+            continue;
+        }
+        let mut spans: Vec<(f64, f64)> = hull.into_values().collect();
+        spans.sort_by(|a, b| (a.0 + a.1).total_cmp(&(b.0 + b.1)));
+        let mut params: Vec<f64> = Vec::new();
+        for w in spans.windows(2) {
+            let t = 0.5 * (w[0].1 + w[1].0);
+            let last = params.last().copied().unwrap_or(0.0);
+            if t - last >= MIN_CUT_SHARE && t <= 1.0 - MIN_CUT_SHARE {
+                params.push(t);
+            }
+        }
+        if params.is_empty() {
+            continue;
+        }
+        let (s, (bi, ei)) = (&segs[i], cand[i]);
+        let d = [s.b[0] - s.a[0], s.b[1] - s.a[1]];
+        out.push(Cut {
+            tag: bodies[bi].elements[ei].tag,
+            points: params
+                .iter()
+                .map(|&t| [s.a[0] + t * d[0], s.a[1] + t * d[1]])
+                .collect(),
+        });
+    }
+    out
+}
+
+/// Per segment that faces others: each body it faces, with the hull of that body's facing
+/// segments projected on it (parameters along it from its start, within [0, 1]).
+fn facing_hulls(
+    segs: &[BodySegment],
+    pairs: &[(usize, usize)],
+) -> BTreeMap<usize, BTreeMap<usize, (f64, f64)>> {
+    let mut out: BTreeMap<usize, BTreeMap<usize, (f64, f64)>> = BTreeMap::new();
+    for &(i, j) in pairs {
+        for (x, y) in [(i, j), (j, i)] {
+            let (s, t) = (&segs[x], &segs[y]);
+            let d = [s.b[0] - s.a[0], s.b[1] - s.a[1]];
+            let l2 = d[0] * d[0] + d[1] * d[1];
+            let at = |p: [f64; 2]| ((p[0] - s.a[0]) * d[0] + (p[1] - s.a[1]) * d[1]) / l2;
+            let (ta, tb) = (at(t.a), at(t.b));
+            let (lo, hi) = (ta.min(tb).max(0.0), ta.max(tb).min(1.0));
+            let h = out.entry(x).or_default().entry(t.body).or_insert((lo, hi));
+            *h = (h.0.min(lo), h.1.max(hi));
+        }
+    }
+    out
+}
+
+/// Cuts the mesh's line elements at the points of `cuts`: each new node and element takes
+/// the next free gmsh tag; the pieces keep their element's curve and direction. Triangles
+/// are left as they are (the new node lies on their edge: the boundary is the same line).
+pub(super) fn apply_cuts(mesh: &mut Mesh, cuts: &[Cut]) {
+    let mut node_tag = mesh.node_tags.iter().max().copied().unwrap_or(0);
+    let mut elem_tag = mesh
+        .lines
+        .iter()
+        .map(|l| l.tag)
+        .chain(mesh.triangles.iter().map(|t| t.tag))
+        .max()
+        .unwrap_or(0);
+    let line_of: BTreeMap<usize, usize> = mesh
+        .lines
+        .iter()
+        .enumerate()
+        .map(|(i, l)| (l.tag, i))
+        .collect();
+    for cut in cuts {
+        let Some(&li) = line_of.get(&cut.tag) else {
+            continue;
+        };
+        let Line {
+            nodes: [n0, n1],
+            curve,
+            ..
+        } = mesh.lines[li];
+        let (p, q) = (mesh.nodes[n0], mesh.nodes[n1]);
+        let d = [q[0] - p[0], q[1] - p[1]];
+        let l2 = d[0] * d[0] + d[1] * d[1];
+        let mut params: Vec<f64> = cut
+            .points
+            .iter()
+            .map(|x| ((x[0] - p[0]) * d[0] + (x[1] - p[1]) * d[1]) / l2)
+            .collect();
+        params.sort_by(f64::total_cmp);
+        let mut prev = n0;
+        for (k, t) in params.into_iter().enumerate() {
+            node_tag += 1;
+            mesh.nodes.push([p[0] + t * d[0], p[1] + t * d[1]]);
+            mesh.node_tags.push(node_tag);
+            let m = mesh.nodes.len() - 1;
+            if k == 0 {
+                mesh.lines[li].nodes = [n0, m];
+            } else {
+                elem_tag += 1;
+                mesh.lines.push(Line {
+                    tag: elem_tag,
+                    nodes: [prev, m],
+                    curve,
+                });
+            }
+            prev = m;
+        }
+        elem_tag += 1;
+        mesh.lines.push(Line {
+            tag: elem_tag,
+            nodes: [prev, n1],
+            curve,
+        });
+    }
+}
+
+/// Finds the facing pieces of the bodies that `spec.bodies` names. Each found interface is
+/// named `contact[A|B]` (bodies in scene order) and takes `[defaults.interface]`.
+pub(super) fn find_contacts(
+    scene: &Scene,
+    spec: &ContactSpec,
+    bodies: &[Body],
+    parts: &[Part],
+    sfile: &Path,
+) -> Result<Vec<Found>> {
+    let (cand, segs) = candidates(spec, bodies, parts);
+    let pairs = facing_pairs(&segs, spec.search);
+    // An element belongs to one interface: where it still faces several bodies (a piece
+    // too short to cut off, `cuts`), the body it faces the longest.
+    let best: BTreeMap<usize, usize> = facing_hulls(&segs, &pairs)
+        .into_iter()
+        .filter_map(|(i, hull)| {
+            let longest = hull
+                .into_iter()
+                .max_by(|a, b| (a.1 .1 - a.1 .0).total_cmp(&(b.1 .1 - b.1 .0)))?;
+            Some((i, longest.0))
+        })
+        .collect();
     // Per pair of bodies (scene order): the elements of each that face the other.
     let mut by_pair: BTreeMap<(usize, usize), [Vec<usize>; 2]> = BTreeMap::new();
-    for (i, j) in facing_pairs(&segs, spec.search) {
+    for (i, j) in pairs {
         let ((bi, ei), (bj, ej)) = (cand[i], cand[j]);
         let sides = by_pair.entry((bi, bj)).or_default();
-        sides[0].push(ei);
-        sides[1].push(ej);
+        if best.get(&i) == Some(&bj) {
+            sides[0].push(ei);
+        }
+        if best.get(&j) == Some(&bi) {
+            sides[1].push(ej);
+        }
     }
+    // Bodies that face each other only over such short pieces touch at a point.
+    by_pair.retain(|_, sides| !sides[0].is_empty() && !sides[1].is_empty());
     if by_pair.is_empty() {
         return Ok(Vec::new());
     }

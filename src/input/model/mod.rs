@@ -365,6 +365,9 @@ pub struct Model {
     pub time: f64,
     /// Which scene table applies to each body and interface group (exact, glob, default).
     pub tables: Vec<Resolved>,
+    /// Line elements of the mesh that `[contact]` cut in two or more because they face
+    /// more than one body (`detect::cuts`).
+    pub contact_cuts: usize,
 }
 
 impl Model {
@@ -573,8 +576,38 @@ enum CurveUse {
     Split(BTreeMap<(usize, usize), usize>),
 }
 
-/// Builds and validates the model of a scene on a mesh.
-pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
+/// Builds and validates the model of a scene on a mesh. With `[contact]`, the line elements
+/// that face more than one body are first cut where the body they face changes
+/// (`detect::cuts`): `mesh` gains those nodes and elements.
+pub fn build(scene: &Scene, mesh: &mut Mesh, mesh_path: &Path) -> Result<Model> {
+    match build_once(scene, mesh, mesh_path, true)? {
+        Built::Model(m) => Ok(*m),
+        Built::Cut(cuts) => {
+            detect::apply_cuts(mesh, &cuts);
+            match build_once(scene, mesh, mesh_path, false)? {
+                Built::Model(mut m) => {
+                    m.contact_cuts = cuts.len();
+                    Ok(*m)
+                }
+                Built::Cut(_) => Err(Error::input(
+                    mesh_path,
+                    "[contact]: the elements cut where the body they face changes still face \
+                     several bodies; mesh the facing curves finer",
+                )),
+            }
+        }
+    }
+}
+
+/// A model, or the cuts its mesh needs first.
+enum Built {
+    Model(Box<Model>),
+    Cut(Vec<detect::Cut>),
+}
+
+/// [`build`] on the mesh as it is; with `cut`, returns the cuts [`detect::cuts`] asks for
+/// instead where there are any.
+fn build_once(scene: &Scene, mesh: &Mesh, mesh_path: &Path, cut: bool) -> Result<Built> {
     let t0 = first_time(scene);
     let (with_bodies, mut resolved) = tables::resolve_bodies(scene, mesh)?;
     let scene = &with_bodies;
@@ -625,6 +658,12 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         body.triangles = std::mem::take(&mut triangles[bi]);
         bodies.push(body);
     }
+    if let (true, Some(cs)) = (cut, &scene.contact) {
+        let cuts = detect::cuts(cs, &bodies, &parts);
+        if !cuts.is_empty() {
+            return Ok(Built::Cut(cuts));
+        }
+    }
     // Interfaces found from the drawing ([contact]) follow the declared ones.
     let declared = interfaces_found.len();
     detect::add_found(
@@ -674,6 +713,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
         sizes,
         unused_curves,
         time: t0,
+        contact_cuts: 0,
     };
     // Every step's values must be valid, not only the first's.
     if scene.solve.time.is_some() {
@@ -681,7 +721,7 @@ pub fn build(scene: &Scene, mesh: &Mesh, mesh_path: &Path) -> Result<Model> {
             model.at_time(scene, t)?;
         }
     }
-    Ok(model)
+    Ok(Built::Model(Box::new(model)))
 }
 
 /// The line elements of the mesh per curve, as indices into `mesh.lines`.
