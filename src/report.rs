@@ -64,7 +64,8 @@ fn write_scene(o: &mut String, scene: &Scene, model: &Model, mesh_binary: bool, 
     if model.contact_cuts > 0 {
         let _ = writeln!(
             o,
-            "          {} line elements cut by [contact] where the body they face changes",
+            "          {} cuts by [contact] where the body a line element faces changes (as many \
+             line elements more)",
             model.contact_cuts
         );
     }
@@ -368,7 +369,8 @@ pub struct CheckJson<'a> {
 /// The mesh file: its path, format and the Gmsh parameters the scene sets.
 #[derive(Debug, Clone, Serialize)]
 pub struct MeshJson<'a> {
-    /// Line elements that `[contact]` cut because they face more than one body.
+    /// Cuts that `[contact]` made where the body a line element faces changes (the mesh
+    /// has as many line elements more).
     pub contact_cuts: usize,
     pub format: &'static str,
     /// Each parameter's value as text, by name.

@@ -76,8 +76,8 @@ pub struct Summary {
 pub struct Counts {
     pub bodies: usize,
     pub boundary_elements: usize,
-    /// Line elements of the mesh that `[contact]` cut because they faced more than one body
-    /// (the archive's mesh has their pieces).
+    /// Cuts that `[contact]` made where the body a line element faces changes (the
+    /// archive's mesh has as many line elements more).
     pub contact_cuts: usize,
     /// The unknowns of all bodies' systems.
     pub dofs: usize,

@@ -365,8 +365,8 @@ pub struct Model {
     pub time: f64,
     /// Which scene table applies to each body and interface group (exact, glob, default).
     pub tables: Vec<Resolved>,
-    /// Line elements of the mesh that `[contact]` cut in two or more because they face
-    /// more than one body (`detect::cuts`).
+    /// Cuts that `[contact]` made in line elements that face more than one body
+    /// (`detect::cuts`): the mesh has that many line elements more.
     pub contact_cuts: usize,
 }
 
@@ -586,7 +586,7 @@ pub fn build(scene: &Scene, mesh: &mut Mesh, mesh_path: &Path) -> Result<Model> 
             detect::apply_cuts(mesh, &cuts);
             match build_once(scene, mesh, mesh_path, false)? {
                 Built::Model(mut m) => {
-                    m.contact_cuts = cuts.len();
+                    m.contact_cuts = cuts.iter().map(|c| c.points.len()).sum();
                     Ok(*m)
                 }
                 Built::Cut(_) => Err(Error::input(
