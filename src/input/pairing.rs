@@ -121,6 +121,41 @@ struct Piece {
     dist: f64,
 }
 
+/// Segment `[r, s]` projected on `[p, q]` (whose frame is `(τ, l, ν)`): the parameters ξ of
+/// r and s along it, their overlap `[lo, hi]` within [0, 1], and the distance from `[p, q]` to
+/// `[r, s]` along ν at the middle of the overlap. None where `[r, s]` is perpendicular to it
+/// or overlaps it by rounding only.
+fn mid_overlap(
+    p: [f64; 2],
+    q: [f64; 2],
+    (tau, l, nu): ([f64; 2], f64, [f64; 2]),
+    r: [f64; 2],
+    s: [f64; 2],
+) -> Option<(f64, f64, f64, f64, f64)> {
+    let xr = dot(sub(r, p), tau) / l;
+    let xs = dot(sub(s, p), tau) / l;
+    if (xs - xr).abs() <= 1e-12 {
+        return None;
+    }
+    let lo = xr.min(xs).max(0.0);
+    let hi = xr.max(xs).min(1.0);
+    if hi - lo <= 1e-12 {
+        return None;
+    }
+    let xm = 0.5 * (lo + hi);
+    let eta = (xm - xr) / (xs - xr);
+    // Both points relative to p (exact differences), not as positions: far from the origin
+    // the positions would round.
+    let dist = dot(
+        sub(
+            lerp(sub(r, p), sub(s, p), eta),
+            lerp([0.0; 2], sub(q, p), xm),
+        ),
+        nu,
+    );
+    Some((xr, xs, lo, hi, dist))
+}
+
 /// The pieces of B that face element `[p, q]` of A, nearest layer only.
 fn pieces(p: [f64; 2], q: [f64; 2], b: &Side, cands: &[usize], reach: Reach) -> Vec<Piece> {
     let (tau, l, nu) = frame(p, q);
@@ -135,27 +170,9 @@ fn pieces(p: [f64; 2], q: [f64; 2], b: &Side, cands: &[usize], reach: Reach) -> 
         if lf <= 0.0 || dot(nu, nf) > FACING_COS {
             continue;
         }
-        let xr = dot(sub(xr_pt, p), tau) / l;
-        let xs = dot(sub(xs_pt, p), tau) / l;
-        if (xs - xr).abs() <= 1e-12 {
+        let Some((xr, xs, lo, hi, dist)) = mid_overlap(p, q, (tau, l, nu), xr_pt, xs_pt) else {
             continue;
-        }
-        let lo = xr.min(xs).max(0.0);
-        let hi = xr.max(xs).min(1.0);
-        if hi - lo <= 1e-12 {
-            continue;
-        }
-        let xm = 0.5 * (lo + hi);
-        let eta = (xm - xr) / (xs - xr);
-        // Both points relative to p (exact differences), not as positions: far from the
-        // origin the positions would round.
-        let dist = dot(
-            sub(
-                lerp(sub(xr_pt, p), sub(xs_pt, p), eta),
-                lerp([0.0; 2], sub(q, p), xm),
-            ),
-            nu,
-        );
+        };
         if dist > reach.ahead || dist < -reach.behind {
             continue;
         }
@@ -487,24 +504,8 @@ pub fn facing_pairs(segs: &[BodySegment], search: f64) -> Vec<(usize, usize)> {
 /// meet at a corner and diverge at a small angle are within `search` near that corner only,
 /// and such a pair would have no rows.
 fn apart_mid_overlap(s: &BodySegment, t: &BodySegment, search: f64) -> bool {
-    let (tau, l, nu) = frame(s.a, s.b);
-    if l <= 0.0 {
-        return false;
-    }
-    let (xr, xs) = (dot(sub(t.a, s.a), tau) / l, dot(sub(t.b, s.a), tau) / l);
-    if (xs - xr).abs() <= 1e-12 {
-        return false;
-    }
-    let xm = 0.5 * (xr.min(xs).max(0.0) + xr.max(xs).min(1.0));
-    let eta = (xm - xr) / (xs - xr);
-    let dist = dot(
-        sub(
-            lerp(sub(t.a, s.a), sub(t.b, s.a), eta),
-            lerp([0.0; 2], sub(s.b, s.a), xm),
-        ),
-        nu,
-    );
-    dist > search
+    let f = frame(s.a, s.b);
+    f.1 > 0.0 && mid_overlap(s.a, s.b, f, t.a, t.b).is_some_and(|m| m.4 > search)
 }
 
 /// True when segments s and t cross at more than 30° (`POINT_TOUCH_SIN`) and are not wholly
