@@ -714,16 +714,16 @@ fn stone_wall_joints_are_all_found() {
     assert_eq!(in_joint.len(), bodies);
 }
 
-/// The bricks of a running-bond wall of `courses` courses of `bricks` whole bricks 0.4 wide
-/// (odd courses shifted by half a brick, a half brick at each end), in the order of
-/// `geo/wall.geo` and `geo/wall_drawn.geo`: brick_1, brick_2, ... is (course, x0, x1).
-fn running_bond(courses: usize, bricks: usize) -> Vec<(usize, f64, f64)> {
+/// The bricks of a wall of `courses` courses of `bricks` whole bricks 0.4 wide, odd courses
+/// shifted by `bond` bricks with a part brick at each end (none with bond = 0), in the order
+/// of `geo/wall.geo` and `geo/wall_drawn.geo`: brick_1, brick_2, ... is (course, x0, x1).
+fn running_bond(courses: usize, bricks: usize, bond: f64) -> Vec<(usize, f64, f64)> {
     let w = 0.4;
     let mut out = Vec::new();
     for c in 0..courses {
-        let mut edges: Vec<f64> = if c % 2 == 1 {
+        let mut edges: Vec<f64> = if c % 2 == 1 && bond > 0.0 {
             std::iter::once(0.0)
-                .chain((0..bricks).map(|i| (i as f64 + 0.5) * w))
+                .chain((0..bricks).map(|i| (i as f64 + bond) * w))
                 .collect()
         } else {
             (0..bricks).map(|i| i as f64 * w).collect()
@@ -732,6 +732,40 @@ fn running_bond(courses: usize, bricks: usize) -> Vec<(usize, f64, f64)> {
         out.extend(edges.windows(2).map(|e| (c, e[0], e[1])));
     }
     out
+}
+
+/// The cuts that `[contact]` makes in `geo/wall_drawn.geo` with nj = 4 (element size
+/// hs = 0.05): at each end of a head joint, the element of the brick (or the foundation)
+/// across the bed that spans it, unless the joint meets that element within 5 % of its
+/// length from a node. A brick w wide has n = ceil(w / hs) elements on its bottom and n + 1
+/// on its top, the foundation L wide ceil(L / hs) + 1 on its top.
+fn drawn_wall_cuts(layout: &[(usize, f64, f64)], courses: usize, length: f64) -> usize {
+    let hs = 0.05;
+    let n = |w: f64| (w / hs - 1e-9).ceil();
+    // Whether x falls inside an element of [x0, x1] cut into m equal ones, clear of its ends.
+    let cut = |x: f64, (x0, x1): (f64, f64), m: f64| {
+        let t = (x - x0) / ((x1 - x0) / m);
+        x0 < x && x < x1 && (t - t.round()).abs() >= 0.05 - 1e-9
+    };
+    let spans = |c: usize| layout.iter().filter(move |b| b.0 == c).map(|b| (b.1, b.2));
+    let mut count = 0;
+    for k in 1..layout.len() {
+        let (c, x) = (layout[k].0, layout[k].1);
+        if layout[k - 1].0 != c {
+            continue;
+        }
+        count += if c == 0 {
+            usize::from(cut(x, (0.0, length), n(length) + 1.0))
+        } else {
+            spans(c - 1)
+                .filter(|&s| cut(x, s, n(s.1 - s.0) + 1.0))
+                .count()
+        };
+        if c + 1 < courses {
+            count += spans(c + 1).filter(|&s| cut(x, s, n(s.1 - s.0))).count();
+        }
+    }
+    count
 }
 
 /// The course of a body of the drawn wall by name: `brick_K` from `running_bond`, the
@@ -753,11 +787,12 @@ fn bodies_of(name: &str) -> (String, String) {
 
 /// A wall of `courses` x `bricks` under self-weight 20 (0.4 x 0.2 bricks: 1.6 each) and a
 /// wind `wind` on its left end; drawn brick by brick on a foundation (`geo/wall_drawn.geo`,
-/// `[contact]`, the foundation `found_young` stiff) or conforming on a clamped base
-/// (`geo/wall.geo`, its Physical Curve `joints`); every joint `law`.
+/// `[contact]`, the foundation 1000 times stiffer than the bricks) or conforming on a clamped
+/// base (`geo/wall.geo`, its Physical Curve `joints`); odd courses shifted by `bond` bricks;
+/// every joint `law`.
 fn brick_wall_scene(
     drawn: bool,
-    (courses, bricks): (usize, usize),
+    (courses, bricks, bond): (usize, usize, f64),
     wind: f64,
     law: &str,
 ) -> String {
@@ -771,7 +806,8 @@ fn brick_wall_scene(
     };
     format!(
         "title = \"running-bond wall\"\nplane = \"strain\"\n\
-         [mesh]\nfile = \"{file}\"\ncourses = {courses}\nbricks = {bricks}\nnj = 4\n\
+         [mesh]\nfile = \"{file}\"\ncourses = {courses}\nbricks = {bricks}\nbond = {bond}\n\
+         nj = 4\n\
          [defaults.body]\nyoung = 5.0e6\npoisson = 0.2\nbody_force = [0.0, -20.0]\n{extra}\
          [boundary.base]\nux = 0.0\nuy = 0.0\n[boundary.left]\ntx = {wind}\n\
          [defaults.interface]\nmodel = \"unilateral\"\n{law}\n\
@@ -781,36 +817,61 @@ fn brick_wall_scene(
 
 /// A running-bond wall drawn brick by brick (`geo/wall_drawn.geo`: every brick its own
 /// rectangle, meshed on its own) is found joint by joint: `[contact]` finds exactly the
-/// joints drawn, b on the foundation, 2b per bed between courses and b - 1 or b head joints
-/// per course, each between bricks that touch in the drawing; the element under each head
-/// joint (a brick's top, the foundation's under the first course) is cut there.
+/// joints drawn, b on the foundation, 2b per bed between courses (b in a stack bond) and
+/// b - 1 or b head joints per course, each between bricks that touch in the drawing; the
+/// elements across a bed from the ends of each head joint are cut there (`drawn_wall_cuts`:
+/// with half a brick's bond only the brick's top, or the foundation's, under the joint);
+/// every curve drawn is in the mesh.
 #[test]
 fn a_wall_drawn_brick_by_brick_has_exactly_its_joints_found() {
     let dir = support::tmpdir("wall_drawn_check");
-    for (courses, bricks) in [(4, 3), (5, 2), (3, 5)] {
-        let layout = running_bond(courses, bricks);
+    for (courses, bricks, bond) in [
+        (4, 3, 0.5),
+        (5, 2, 0.5),
+        (3, 5, 0.5),
+        (4, 3, 0.3),
+        (3, 3, 0.0),
+    ] {
+        let layout = running_bond(courses, bricks, bond);
         let in_course = |c: usize| layout.iter().filter(|b| b.0 == c).count();
         let heads: usize = (0..courses).map(|c| in_course(c) - 1).sum();
-        let joints = bricks + (courses - 1) * 2 * bricks + heads;
-        // The bottom end of every head joint lies inside an element of the brick (or the
-        // foundation) below: one cut each.
-        let cuts = heads;
-        let scene = brick_wall_scene(true, (courses, bricks), 1.0, "tangential = \"stick\"");
+        let per_bed = if bond > 0.0 { 2 * bricks } else { bricks };
+        let joints = bricks + (courses - 1) * per_bed + heads;
+        let cuts = drawn_wall_cuts(&layout, courses, 0.4 * bricks as f64);
+        if bond == 0.5 {
+            assert_eq!(cuts, heads);
+        }
+        let scene = brick_wall_scene(true, (courses, bricks, bond), 1.0, "tangential = \"stick\"");
         let s = support::write(&dir, "scene.toml", &scene);
         let (code, out, err) = support::sgbem(&["check", s.to_str().unwrap(), "--json"]);
         assert_eq!(code, 0, "{err}");
         let v: serde_json::Value = serde_json::from_str(&out).unwrap();
         let found = v["interfaces"].as_array().unwrap();
         println!(
-            "drawn wall {courses} x {bricks}: {} bricks, {} joints found of {joints} drawn, {} \
-             cuts ({cuts} expected)",
+            "drawn wall {courses} x {bricks}, bond {bond}: {} bricks, {} joints found of \
+             {joints} drawn, {} cuts ({cuts} expected)",
             layout.len(),
             found.len(),
             v["mesh"]["contact_cuts"]
         );
         assert_eq!(v["bodies"].as_array().unwrap().len(), layout.len() + 1);
-        assert_eq!(found.len(), joints, "{courses} x {bricks}");
-        assert_eq!(v["mesh"]["contact_cuts"], cuts, "{courses} x {bricks}");
+        // Every curve drawn is meshed (gmsh 4.8 drops a curve of no Physical group): with
+        // hs = 0.05, a brick w wide has ceil(w / hs) elements on its bottom, one more on its
+        // top, 4 and 5 on its sides; the foundation L wide and 0.2 high ceil(L / hs), one
+        // more, and 4 on each side; each cut adds one.
+        let sides = |w: f64| {
+            let n = (w / 0.05 - 1e-9).ceil() as usize;
+            2 * n + 1
+        };
+        let drawn: usize = layout.iter().map(|b| sides(b.2 - b.1) + 9).sum::<usize>()
+            + sides(0.4 * bricks as f64)
+            + 8;
+        assert_eq!(v["boundary_elements"]["count"], drawn + cuts);
+        assert_eq!(found.len(), joints, "{courses} x {bricks}, bond {bond}");
+        assert_eq!(
+            v["mesh"]["contact_cuts"], cuts,
+            "{courses} x {bricks}, bond {bond}"
+        );
         // Every joint found joins bricks that touch in the drawing: neighbours in a course,
         // or bricks of consecutive courses whose spans overlap (the foundation: course 0).
         for i in found {
@@ -852,8 +913,8 @@ fn load_on(summary: &serde_json::Value, body: &str, key: &str) -> (f64, f64) {
 fn a_wall_drawn_brick_by_brick_carries_its_weight_course_by_course() {
     let dir = support::tmpdir("wall_drawn_weight");
     let (courses, bricks) = (4, 3);
-    let layout = running_bond(courses, bricks);
-    let scene = brick_wall_scene(true, (courses, bricks), 0.0, "tangential = \"stick\"");
+    let layout = running_bond(courses, bricks, 0.5);
+    let scene = brick_wall_scene(true, (courses, bricks, 0.5), 0.0, "tangential = \"stick\"");
     let (_, summary) = run(&dir, &scene, "contact[foundation|brick_1]");
     assert_eq!(summary["status"], "converged");
     let course_weight = 20.0 * 0.4 * 0.2 * bricks as f64;
@@ -918,12 +979,12 @@ fn a_wall_drawn_brick_by_brick_matches_the_conforming_one() {
     let push = wind * 0.2 * courses as f64;
     let (_, drawn) = run(
         &support::tmpdir("wall_drawn_vs_conforming"),
-        &brick_wall_scene(true, (courses, bricks), wind, law),
+        &brick_wall_scene(true, (courses, bricks, 0.5), wind, law),
         "contact[brick_2|brick_5]",
     );
     let (_, conforming) = run(
         &support::tmpdir("wall_conforming_vs_drawn"),
-        &brick_wall_scene(false, (courses, bricks), wind, law),
+        &brick_wall_scene(false, (courses, bricks, 0.5), wind, law),
         "joints[brick_2|brick_5]",
     );
     assert_eq!(drawn["status"], "converged");
