@@ -2,11 +2,15 @@
 //! (`pipelines/arch.toml` on `geo/arch.geo`, 6 elements per joint) for 6 … 100 voussoirs and
 //! of the running-bond wall (`pipelines/wall_running_bond.toml` on `geo/wall.geo`, 6
 //! elements per course height) for 7 … 410 bricks with the full history (the default) and
-//! 798, 2 048 and 4 128 bricks with the final state; the solver (evolutive path or sparse) and its
-//! iterations: seconds per stage (from the run's `timings.json`), peak memory of the run,
-//! fitted exponents against the number of bodies (all walls, and those of 200 bodies on). Writes out/bench/masonry.csv and prints a table.
-//! `SGBEM_BENCH_VOUSSOIRS=6,12` and `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` (courses x
-//! bricks, optionally `:final` for history = "final") select sizes.
+//! 798, 2 048 and 4 128 bricks with the final state, and of the same walls drawn brick by
+//! brick (`pipelines/wall_drawn.toml` on `geo/wall_drawn.geo`, `[contact]`) for 105 … 2 047
+//! bricks; the solver (evolutive path or sparse) and its iterations: seconds per stage (from
+//! the run's `timings.json`), peak memory of the run, fitted exponents against the number of
+//! bodies (all walls, and those of 200 bodies on). Writes out/bench/masonry.csv and prints a
+//! table.
+//! `SGBEM_BENCH_VOUSSOIRS=6,12`, `SGBEM_BENCH_WALLS=2x3,10x10,20x20:final` and
+//! `SGBEM_BENCH_DRAWN=4x3,28x28:final` (courses x bricks, optionally `:final` for history =
+//! "final") select sizes.
 
 #[path = "../tests/support/mod.rs"]
 mod support;
@@ -146,6 +150,49 @@ fn exponents(label: &str, xs: &[f64], totals: &[f64], peaks: &[f64]) {
     }
 }
 
+/// One series of walls, `(label, scene, variable)`: the scene run at each size of `variable`
+/// (or `default`), `COURSESxBRICKS` optionally with `:final` (history = "final"), with the
+/// `--set` values `sets` besides; prints the fitted exponents and returns the CSV rows.
+fn walls(
+    (label, scene, var): (&str, &str, &str),
+    default: &[&str],
+    sets: &[&str],
+    dir: &Path,
+) -> String {
+    let scene = root().join(scene);
+    let (mut csv, mut xs, mut totals, mut peaks) = (String::new(), vec![], vec![], vec![]);
+    for size in sizes(var, default) {
+        let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
+        let (c, b) = dims.split_once('x').unwrap_or((dims, "1"));
+        let out = dir.join(format!("{label}{dims}{history}"));
+        let mut all = vec![format!("mesh.courses={c}"), format!("mesh.bricks={b}")];
+        all.extend(sets.iter().map(|x| x.to_string()));
+        if history != "full" {
+            all.push(format!("output.history=\"{history}\""));
+        }
+        let args: Vec<String> = all
+            .into_iter()
+            .flat_map(|x| ["--set".to_string(), x])
+            .collect();
+        let (row, n, t, p) = one(label, &size, &scene, &args, &out);
+        csv += &row;
+        xs.push(n);
+        totals.push(t);
+        peaks.push(p);
+    }
+    exponents(label, &xs, &totals, &peaks);
+    // The sparse solver's range alone (over 3000 unilateral pairs: 14 x 14 on).
+    let big: Vec<usize> = (0..xs.len()).filter(|&i| xs[i] >= 200.0).collect();
+    let pick = |v: &[f64]| big.iter().map(|&i| v[i]).collect::<Vec<_>>();
+    exponents(
+        &format!("{label}, 200 bodies and more"),
+        &pick(&xs),
+        &pick(&totals),
+        &pick(&peaks),
+    );
+    csv
+}
+
 fn main() {
     let dir = tmpdir("bench-masonry");
     println!(
@@ -192,14 +239,16 @@ fn main() {
     exponents("arch", &xs, &totals, &peaks);
 
     // Running-bond walls: pipelines/wall_running_bond.toml (geo/wall.geo, 6 elements per
-    // course height, self-weight and wind, friction 0.7), COURSESxBRICKS.
-    let scene = root().join("pipelines/wall_running_bond.toml");
-    let (mut xs, mut totals, mut peaks) = (Vec::new(), Vec::new(), Vec::new());
-    // Walls of over 3000 unilateral pairs (14 x 14 on) are solved by the sparse solver, as
-    // a scene without `method` is; 28 x 28 (798 bodies), 45 x 45 (2 048) and 64 x 64
-    // (4 128: about 85 s and 7.7 GB) with the final state only.
-    for size in sizes(
-        "SGBEM_BENCH_WALLS",
+    // course height, self-weight and wind, friction 0.7), COURSESxBRICKS. Walls of over 3000
+    // unilateral pairs (14 x 14 on) are solved by the sparse solver, as a scene without
+    // `method` is; 28 x 28 (798 bodies), 45 x 45 (2 048) and 64 x 64 (4 128: about 85 s and
+    // 7.7 GB) with the final state only.
+    csv += &walls(
+        (
+            "wall",
+            "pipelines/wall_running_bond.toml",
+            "SGBEM_BENCH_WALLS",
+        ),
         &[
             "2x3",
             "4x5",
@@ -211,33 +260,17 @@ fn main() {
             "45x45:final",
             "64x64:final",
         ],
-    ) {
-        let (dims, history) = size.split_once(':').unwrap_or((&size, "full"));
-        let (c, b) = dims.split_once('x').unwrap_or((dims, "1"));
-        let out = dir.join(format!("wall{dims}{history}"));
-        let mut sets = vec![format!("mesh.courses={c}"), format!("mesh.bricks={b}")];
-        if history != "full" {
-            sets.push(format!("output.history=\"{history}\""));
-        }
-        let args: Vec<String> = sets
-            .into_iter()
-            .flat_map(|x| ["--set".to_string(), x])
-            .collect();
-        let (row, n, t, p) = one("wall", &size, &scene, &args, &out);
-        csv += &row;
-        xs.push(n);
-        totals.push(t);
-        peaks.push(p);
-    }
-    exponents("wall", &xs, &totals, &peaks);
-    // The sparse solver's range alone (over 3000 unilateral pairs: 14 x 14 on).
-    let big: Vec<usize> = (0..xs.len()).filter(|&i| xs[i] >= 200.0).collect();
-    let pick = |v: &[f64]| big.iter().map(|&i| v[i]).collect::<Vec<_>>();
-    exponents(
-        "wall, 200 bodies and more",
-        &pick(&xs),
-        &pick(&totals),
-        &pick(&peaks),
+        &[],
+        &dir,
+    );
+    // The same walls drawn brick by brick (pipelines/wall_drawn.toml: geo/wall_drawn.geo on
+    // its foundation, [contact] finds the joints), 6 elements per course height, without
+    // VTK files (45 x 45: about 4 min and 6.6 GB on a busy machine).
+    csv += &walls(
+        ("drawn", "pipelines/wall_drawn.toml", "SGBEM_BENCH_DRAWN"),
+        &["10x10", "20x20:final", "28x28:final", "45x45:final"],
+        &["mesh.nj=6", "output.vtk=false"],
+        &dir,
     );
 
     let out = std::path::Path::new("out/bench");
