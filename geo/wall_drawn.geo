@@ -9,7 +9,9 @@
 // matching nodes: with hs = brick_h / nj, a brick of width w has ceil(w / hs) elements on its
 // bottom and one more on its top, nj on its left side and nj + 1 on its right side; the
 // foundation's top has one element more than ceil(L / hs) (L the wall's length). A brick's
-// top element under the head joint of the course above faces two bricks: [contact] cuts it.
+// top element under a head joint of the course above faces two bricks: [contact] cuts it
+// (unless the joint meets it within 5 % of a node); with a bond other than 0.5 so is a
+// brick's bottom element over a head joint of the course below.
 //
 // Physical groups (few, for glob and default tables in the scene):
 //   Surfaces  brick_1 .. brick_N, course by course from the base, left to right;
