@@ -64,8 +64,13 @@
 //! `80 Σ_b n_u(b)²` (values and indices of the blocks, the matrix and its factor with fill),
 //! the columns of the opening stiffness and the factor of A_OO, `8 r m + 4 m²` with m =
 //! min(s, r) rows switched, and the dense LCP / QP matrices of the cross-checks of `both`,
-//! `3 · 8 r²`. Measured against it (peak resident memory of whole runs, `cargo bench --bench
-//! masonry`): see the README, Speed.
+//! `3 · 8 r²`. The sparse solver (over 3000 unilateral pairs) instead of the glued system and
+//! the columns: `300 Σ_b n_u(b)² + 24 t` bytes, with t the triplets of its system H over
+//! the glued displacements and the openings, counted from the rows as the run eliminates
+//! them (`contact::problem::pattern`): a joint whose sides were meshed on their own ties a
+//! node to several nodes of the other side, and t then outgrows Σ n_u² (walls drawn brick
+//! by brick: 6.3 t per Σ n_u², against 1.2 conforming). Measured against it (peak resident
+//! memory of whole runs, `cargo bench --bench masonry`): see the README, Speed.
 
 use crate::error::{Error, Result};
 use crate::input::model::{DofClass, Model, Role};
@@ -274,10 +279,15 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     };
     // The sparse glued system: each body's dense block (n_u² values) in triplets, the matrix
     // and its Cholesky factor with fill (about 5 values per block entry, 8 bytes and an
-    // index each). The columns of the opening stiffness computed (one per row that switches,
-    // r values each) and the Cholesky factor of A_OO over the open rows (m²/2, m ≤ the rows
-    // that switch).
-    let glued = 5.0 * 16.0 * squares;
+    // index each); with the sparse solver, that and its system of displacements and
+    // openings as counted from the rows (`sparse_bytes`). The columns of the opening
+    // stiffness computed (one per row that switches, r values each) and the Cholesky factor
+    // of A_OO over the open rows (m²/2, m ≤ the rows that switch).
+    let glued = if scene.solve.method == Method::Sparse {
+        sparse_bytes(model, squares)
+    } else {
+        5.0 * 16.0 * squares
+    };
     let m = (switches as f64 / k).min(rows as f64);
     let mut opening = 8.0 * rows as f64 * m + 8.0 * m * m / 2.0;
     if scene.solve.method == Method::Exact {
@@ -287,15 +297,10 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         // than the operators.
         opening = 3.0 * glued + EXACT_LU_BYTES * squares * (squares / EXACT_REF).powf(0.24);
     }
-    if scene.solve.method == Method::Sparse {
+    if scene.solve.method == Method::Sparse && rows > 2000 {
         // No column of the opening stiffness beyond the evolutive cross-check (up to 2000
-        // rows); the sparse system of displacements and openings, its factor and the pinned
-        // copy of its values, about three times the glued system's (410-brick wall: 0.72 GB
-        // measured, 798 bricks: 1.36 GB).
-        if rows > 2000 {
-            opening = 0.0;
-        }
-        opening += 3.0 * glued;
+        // rows).
+        opening = 0.0;
     }
     Some(ContactEstimate {
         pairs,
@@ -311,6 +316,33 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         states: recorded as usize,
         trials: trials as usize,
     })
+}
+
+/// Bytes per Σ_b n_u² of the sparse solver besides the triplets of H: the bodies'
+/// Steklov–Poincaré operators and traction recoveries with the work matrices that make them
+/// (the allocator keeps most of what these free), the glued system and its factor, H,
+/// its copy in the elimination order with the ordering's work space, and the factor of a
+/// status. Fitted with H's triplets counted apart (`sparse_bytes`): the peak resident memory
+/// of running-bond walls, nj = 6, friction 0.7, self-weight and wind, history "final", no
+/// VTK, less the rest of the estimate, is 235–243 bytes per Σ n_u² drawn brick by brick
+/// (20 × 20, 28 × 28, 45 × 45) and 252–263 conforming; 300 keeps the estimate above the
+/// measure by 7–13 % (docs/performance.md, "Walls drawn brick by brick").
+const SPARSE_OPERATOR_BYTES: f64 = 300.0;
+
+/// The memory of the sparse solver, in bytes, from the rows of `model`
+/// ([`crate::contact::problem::pattern`]); `squares` = Σ_b n_u². H is assembled from
+/// triplets, 24 bytes each (resident: the vector's capacity beyond them is never
+/// touched), all held at once: where the two sides of a joint were meshed on their own a
+/// dof moves several glued unknowns and the triplets outgrow n_u² (the wall drawn brick by
+/// brick, 20 × 20: 16.3 million, 0.39 GB, against 2.4 million on the conforming wall).
+fn sparse_bytes(model: &Model, squares: f64) -> f64 {
+    let triplets = match crate::contact::problem::pattern(model) {
+        Some(p) => p.triplets(),
+        // The run refuses such a model (a component prescribed on one side of a joint):
+        // about one triplet per n_u², as on a conforming wall.
+        None => squares,
+    };
+    SPARSE_OPERATOR_BYTES * squares + 24.0 * triplets
 }
 
 fn k_steps(scene: &Scene) -> f64 {

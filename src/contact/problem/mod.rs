@@ -74,6 +74,7 @@ use crate::solution::{BodyField, BodyMotion, InterfaceResult};
 pub(crate) use mechanism::body_has_support;
 pub use mechanism::mechanism_hint;
 pub use opening::Opening;
+pub use pattern::{pattern, Pattern};
 pub use state::FullRowSolution;
 
 use body::{body_operators, glued_matrix, BodyOperators};
@@ -82,6 +83,7 @@ use rows::{candidates, eliminate, final_rows, glued_maps};
 mod body;
 mod mechanism;
 mod opening;
+mod pattern;
 mod rows;
 mod state;
 
