@@ -135,6 +135,7 @@ test: setup mesh lint
 # to the sparse solver's friction iteration or to [contact]'s detection.
 test-long: setup mesh
 	$(CARGO) test --release --test friction -- --ignored --exact stone_wall_with_coulomb_joints_stands_under_its_weight
+	$(CARGO) test --release --test full_rows -- --ignored --exact the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free
 
 examples: build mesh $(RESULTS)
 
