@@ -132,17 +132,16 @@ impl Anderson {
 
     /// The next iterate from x and G(x) (every row), over the rows `idx`: their mixed values.
     fn mix(&mut self, x_all: &[f64], gx_all: &[f64], idx: &[usize]) -> Vec<f64> {
+        let pick = |v: &[f64]| -> Vec<f64> { idx.iter().map(|&i| v[i]).collect() };
         let f_all: Vec<f64> = gx_all.iter().zip(x_all).map(|(g, x)| g - x).collect();
+        let f = pick(&f_all);
+        let gx = pick(gx_all);
         self.xs.push(x_all.to_vec());
         self.fs.push(f_all);
         if self.xs.len() > self.m + 1 {
             self.xs.remove(0);
             self.fs.remove(0);
         }
-        let pick = |v: &[f64]| -> Vec<f64> { idx.iter().map(|&i| v[i]).collect() };
-        let x = pick(x_all);
-        let gx = pick(gx_all);
-        let f: Vec<f64> = gx.iter().zip(&x).map(|(g, x)| g - x).collect();
         let k = self.xs.len() - 1;
         if k == 0 {
             return gx;
@@ -169,7 +168,7 @@ impl Anderson {
             self.reset();
             return gx;
         };
-        (0..x.len())
+        (0..idx.len())
             .map(|n| {
                 let mut v = gx[n];
                 for i in 0..k {
