@@ -240,8 +240,8 @@ fn main() {
 
     // Running-bond walls: pipelines/wall_running_bond.toml (geo/wall.geo, 6 elements per
     // course height, self-weight and wind, friction 0.7), COURSESxBRICKS. Walls of over 3000
-    // unilateral pairs (14 x 14 on) are solved by the sparse solver, as a scene without
-    // `method` is; 28 x 28 (798 bodies), 45 x 45 (2 048) and 64 x 64 (4 128: about 85 s and
+    // unilateral pairs (14 x 14 on) are solved by the sparse solver, the smaller ones by the
+    // full rows (their joints meet at T-junctions), as a scene without `method` is; 28 x 28 (798 bodies), 45 x 45 (2 048) and 64 x 64 (4 128: about 85 s and
     // 7.7 GB) with the final state only.
     csv += &walls(
         (

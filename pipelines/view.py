@@ -223,6 +223,10 @@ def main():
     # framing, the title over the model's top): render once before the camera is set.
     Render(view)
     lo, hi = pts.min(axis=0), pts.max(axis=0)
+    if mechanism:
+        # The mechanism's lines move by up to 10 % of the model size (wall_collapse's right
+        # end, turning, rose into the title's band).
+        lo, hi = lo - 0.1 * size, hi + 0.1 * size
     centre = 0.5 * (lo + hi)
     w, h = float(hi[0] - lo[0]), float(hi[1] - lo[1])
     view.CameraParallelProjection = 1

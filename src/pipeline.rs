@@ -103,7 +103,10 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     }
     let mut mesh = mesh::read_msh(&mesh_path)?;
     let model = model::build(&scene, &mut mesh, &mesh_path)?;
-    scene.solve.choose_method(model.unilateral_pair_count());
+    scene.solve.choose_method(
+        model.unilateral_pair_count(),
+        model.has_unilateral_junction(),
+    );
     let scaled = crate::estimate::scale_history(&mut scene, &model);
     let mut plan = plan::plan(&scene, &model)?;
     plan.advice.extend(scaled);

@@ -10,7 +10,9 @@
 
 use crate::error::{Error, Result};
 use crate::input::model::Model;
-use crate::input::scene::{HistoryLevel, InitialState, InterfaceModel, Method, Scene};
+use crate::input::scene::{
+    HistoryLevel, InitialState, InterfaceModel, Method, MethodChoice, Scene,
+};
 
 /// Which unilateral problem the contact solver faces.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -466,12 +468,18 @@ impl Solve<'_> {
                 } else {
                     ""
                 };
+                let chosen = if scene.solve.method_choice == MethodChoice::Size {
+                    "; chosen for the scene's size (over 3000 unilateral pairs; `method` sets \
+                     another)"
+                } else {
+                    ""
+                };
                 stages.push((
                     "contact_sparse",
                     format!(
                         "active set on the sparse system of displacements and openings \
                          ({what}; the evolutive LCP cross-checks it up to 2000 rows){cohesion_note}\
-                         {coulomb}{steps_note}"
+                         {coulomb}{steps_note}{chosen}"
                     ),
                 ));
             }
@@ -481,12 +489,18 @@ impl Solve<'_> {
                 } else {
                     ""
                 };
+                let chosen = if scene.solve.method_choice == MethodChoice::Junctions {
+                    "; chosen because unilateral joints meet at junctions, where the other \
+                     solvers leave a component without a row of its own (`method` sets another)"
+                } else {
+                    ""
+                };
                 stages.push((
                     "contact_exact",
                     format!(
                         "every pair component its own row, junctions included ({what}): one \
                          sparse convex programme per set of slip bounds with Clarabel, an \
-                         unbounded one is the mechanism{coulomb}{steps_note}"
+                         unbounded one is the mechanism{coulomb}{steps_note}{chosen}"
                     ),
                 ));
             }

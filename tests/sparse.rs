@@ -352,14 +352,15 @@ fn collapse_multipliers_grow_with_friction_towards_stick() {
 }
 
 /// A scene without `method` is solved by the sparse solver above 3000 unilateral pairs (the
-/// 203-brick wall: 3 871) and by the evolutive path below (the 105-brick wall: 1 925); a
-/// `method` given wins. `sgbem check` says which.
+/// 203-brick wall: 3 871); below, by the full rows where unilateral joints meet at junctions
+/// (the 105-brick wall: 1 925 pairs, T-junctions; a single pier of blocks: none) and by the
+/// evolutive path elsewhere (two blocks; the pier); a `method` given wins. `sgbem check`
+/// says which, and why.
 #[test]
 fn the_method_follows_the_size_unless_given() {
-    let scene = root().join("pipelines/wall_running_bond.toml");
-    let s = scene.to_str().unwrap();
-    let method = |sets: &[&str]| -> String {
-        let mut args = vec!["check", s];
+    let of = |scene: &str, sets: &[&str]| -> String {
+        let path = root().join("pipelines").join(scene);
+        let mut args = vec!["check", path.to_str().unwrap()];
         for x in sets {
             args.push("--set");
             args.push(x);
@@ -371,8 +372,12 @@ fn the_method_follows_the_size_unless_given() {
             .map(|m| m.trim().to_string())
             .unwrap_or_else(|| panic!("no method line in {out}"))
     };
-    assert_eq!(method(&[]), "lcp");
+    let method = |sets: &[&str]| of("wall_running_bond.toml", sets);
+    assert_eq!(method(&[]), "exact");
+    assert_eq!(of("two_blocks.toml", &[]), "lcp");
+    assert_eq!(of("wall.toml", &[]), "lcp");
     assert_eq!(method(&["mesh.courses=14", "mesh.bricks=14"]), "sparse");
+    assert_eq!(method(&["solve.method=lcp"]), "lcp");
     assert_eq!(
         method(&["mesh.courses=14", "mesh.bricks=14", "solve.method=lcp"]),
         "lcp"
@@ -384,7 +389,7 @@ fn the_method_follows_the_size_unless_given() {
 /// sparse solver passes through them with a proximal spring and ends on exact statuses
 /// (before it, it stopped after 1 505 iterations, not converged): converged, every brick in
 /// balance to round-off, complementarity exact; the default path (whose evolutive iteration
-/// stops there at a false mechanism and hands the step to the sparse solver) gives the same
+/// stops there at a false mechanism and hands the step to the sparse solver; `lcp`) gives the same
 /// state pair by pair.
 #[test]
 fn statuses_that_leave_a_brick_free_are_passed_through() {

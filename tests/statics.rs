@@ -122,9 +122,16 @@ fn the_collapse_search_upper_bound_lies_above_the_multiplier() {
         "3 x 3 wall, μ = 0.8: multiplier {t:.4}, collapses at {at:.4}, upper bound {bound:.6}"
     );
     assert!(bound >= t, "{bound} < {t}");
+    let trial = c["trials"]
+        .as_array()
+        .expect("trials")
+        .iter()
+        .find(|x| x["t"].as_f64() == Some(at))
+        .expect("the trial at collapses_at");
     if at > bound {
         assert!(mech.contains("the rigid-block check confirms it"), "{mech}");
     } else {
+        assert_eq!(trial["undecided"], true, "{mech}");
         assert!(
             mech.starts_with("undecided: the solver found no equilibrium"),
             "{mech}"
@@ -134,7 +141,7 @@ fn the_collapse_search_upper_bound_lies_above_the_multiplier() {
 }
 
 /// A frictionless 4 × 5 running-bond wall under wind (`pipelines/wall_running_bond.toml`,
-/// default method): the evolutive path ends at a mechanism, the rigid-block LP proves it
+/// `method = "lcp"`): the evolutive path ends at a mechanism, the rigid-block LP proves it
 /// (no forces without tension balance the wind) and the run reports it without the sparse
 /// solver's retry (which on the 105-brick wall took 176 s of the run's 192 s): no
 /// `contact_sparse` stage in timings.json, the LP's stage present, the confirmation in the
@@ -147,6 +154,7 @@ fn a_proven_mechanism_is_reported_without_the_sparse_retry() {
     let scene = support::root().join("pipelines/wall_running_bond.toml");
     let mut args = vec!["run", scene.to_str().unwrap()];
     for set in [
+        "solve.method=\"lcp\"",
         "defaults.interface.friction=0.0",
         "mesh.courses=4",
         "mesh.bricks=5",

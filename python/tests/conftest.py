@@ -3,9 +3,10 @@
 The scenes are the shipped ones, meshed here with gmsh into a temporary folder:
 clamped_beam_joint (the paper's example 2: one joint, interior field) and a running-bond
 wall of 3 courses of 4 bricks (13 bodies, friction, no interior field, 26 split interfaces
-whose run order is not the alphabetical order h5py lists them in: brick_10 before brick_2);
-the collapse search on a wall of 3 courses of 3 bricks (one archived state, whose body forces,
-20 t sideways at the multiplier t found, differ from the bodies' own)."""
+whose run order is not the alphabetical order h5py lists them in: brick_10 before brick_2;
+the evolutive path, every iteration archived); the collapse search on a wall of 3 courses of
+3 bricks (the full rows, its default: one archived state, whose body forces, 20 t sideways at
+the multiplier t found, differ from the bodies' own)."""
 
 import pathlib
 import subprocess
@@ -36,8 +37,10 @@ def beam(tmp_path_factory):
 @pytest.fixture(scope="session")
 def wall(tmp_path_factory):
     d = tmp_path_factory.mktemp("wall")
+    # The evolutive path (the wall's default is the full rows: its joints meet at
+    # junctions), so that the history holds every iteration.
     return sgbem.run(ROOT / "pipelines/wall_running_bond.toml", out=d / "run",
-                     set={"mesh.courses": 3, "mesh.bricks": 4})
+                     set={"mesh.courses": 3, "mesh.bricks": 4}, method="lcp")
 
 
 

@@ -403,7 +403,9 @@ def test_hubs_equal_thrust_hubs_csv(beam, wall, collapse, tmp_path):
     assert beam_hubs["joints"].dtype == np.int64 and beam_hubs["x"].dtype == float
     assert len(pd.read_csv(beam.folder / "thrust_hubs.csv")) == 0
     # The collapse search's state: body forces of its own (sideways), its hubs' "down".
-    assert len(assert_hubs_equal_the_csv(collapse)) == 8
+    # (7 bricks with the full rows, its default, at t = 0.711; brick_4 has two loaded joints
+    # there. The evolutive path stands only to 0.484, with 8.)
+    assert len(assert_hubs_equal_the_csv(collapse)) == 7
     hubs = assert_hubs_equal_the_csv(wall)
     # A hub per brick of the 3 x 4 bond but the last of the top course (its head joint
     # opens: two loaded joints); in body order, each joining the body's loaded joints of
@@ -487,7 +489,7 @@ def test_to_pyvista_thrust_block_equals_the_vtk_thrust_block(beam, wall, collaps
         assert types.count(pyvista.CellType.LINE) == (per_body == 2).sum() + hubs["joints"].sum()
     assert beam.to_pyvista()["thrust"].n_points == 1               # one joint, no hub
     assert patch.to_pyvista(0)["thrust"].n_points == 0 < patch.to_pyvista()["thrust"].n_points
-    assert len(wall.hubs()) == 12 and len(collapse.hubs()) == 8
+    assert len(wall.hubs()) == 12 and len(collapse.hubs()) == 7
     with h5py.File(collapse.archive, "r") as f:
         own = np.asarray(f["states/0000/body_force"])
         brick = np.asarray(f["bodies"][collapse._bodies[0][1]].attrs["body_force"])

@@ -314,7 +314,14 @@ impl<'a> Exact<'a> {
         solver.solve();
         let sol = &solver.solution;
         match sol.status {
-            SolverStatus::Solved | SolverStatus::AlmostSolved => {}
+            // An interior point that stopped short of its tolerances (rows that depend on
+            // each other at junctions leave the multipliers a face, not a point) is judged
+            // by the bodies' balance below, as a solved one is: measured on a 3 × 3
+            // running-bond wall's collapse trial at t = 0.71875, InsufficientProgress.
+            SolverStatus::Solved
+            | SolverStatus::AlmostSolved
+            | SolverStatus::InsufficientProgress
+            | SolverStatus::MaxIterations => {}
             SolverStatus::DualInfeasible | SolverStatus::AlmostDualInfeasible => {
                 return ProgrammeOutcome::Mechanism((0..n).map(|k| self.d[k] * sol.x[k]).collect())
             }

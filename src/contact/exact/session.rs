@@ -235,8 +235,8 @@ impl crate::contact::Session<'_> {
                 Verdict {
                     sol: None,
                     failure: Some(crate::error::Error::numerical(format!(
-                        "the contact solver (exact) found no equilibrium at load step {step}: \
-                         the bodies' energy with every pair's law has no minimum (a \
+                        "the contact solver (exact) at load step {step}: no equilibrium \
+                         exists, the bodies' energy with every pair's law has no minimum (a \
                          mechanism){words}"
                     ))),
                     mechanism: true,

@@ -387,6 +387,25 @@ impl Model {
             .sum()
     }
 
+    /// Whether a unilateral interface meets another at a junction (a node of one body in
+    /// pairs of two or more interfaces, one of them unilateral): there the solvers other
+    /// than the full rows leave a dependent component without a row of its own.
+    pub fn has_unilateral_junction(&self) -> bool {
+        let mut seen: BTreeMap<(usize, usize), (usize, bool)> = BTreeMap::new();
+        for it in &self.interfaces {
+            let unilateral = it.spec.model == crate::input::scene::InterfaceModel::Unilateral;
+            for (side_a, body) in [(true, it.body_a), (false, it.body_b)] {
+                for j in 0..it.point_count(side_a) {
+                    let e = seen.entry((body, it.point(side_a, j).0)).or_default();
+                    e.0 += 1;
+                    e.1 |= unilateral;
+                }
+            }
+        }
+        seen.values()
+            .any(|&(count, unilateral)| count >= 2 && unilateral)
+    }
+
     /// The junctions: points where a body meets two or more others (a node of one body in
     /// pairs of two or more interfaces), as (point, bodies meeting there), in body order.
     pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {

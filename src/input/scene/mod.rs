@@ -250,6 +250,8 @@ pub struct SolveSpec {
     /// `method` was given (in the scene or by `--method`); otherwise it follows the size of
     /// the model ([`SolveSpec::choose_method`]).
     pub method_given: bool,
+    /// Why the scene is solved by `method` (set by [`SolveSpec::choose_method`]).
+    pub method_choice: MethodChoice,
     pub tolerance: f64,
     /// Contact iterations per load step; `None`: automatic, the larger of 1000 and four per
     /// pair component that can open (a wall of hundreds of bricks needs a switch per head
@@ -277,13 +279,38 @@ pub struct Collapse {
 /// 8 050 pairs, 15.7 s against 4.1 s).
 pub const SPARSE_FROM_PAIRS: usize = 3000;
 
+/// Why a scene without `method` is solved by the method it gets ([`SolveSpec::choose_method`]).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MethodChoice {
+    /// The scene or the command line gave the method.
+    Given,
+    /// No junction of unilateral joints, up to [`SPARSE_FROM_PAIRS`] pairs: the paper's path.
+    Paper,
+    /// Unilateral joints meet at junctions, up to [`SPARSE_FROM_PAIRS`] pairs: the full rows,
+    /// so that every pair there obeys its own law.
+    Junctions,
+    /// Over [`SPARSE_FROM_PAIRS`] unilateral pairs: the sparse solver.
+    Size,
+}
+
 impl SolveSpec {
-    /// The method of a scene without `method`: the evolutive path (`lcp`, the paper's, every
-    /// switch recorded) up to [`SPARSE_FROM_PAIRS`] unilateral pairs, the sparse solver above.
-    pub fn choose_method(&mut self, unilateral_pairs: usize) {
-        if !self.method_given && unilateral_pairs > SPARSE_FROM_PAIRS {
-            self.method = Method::Sparse;
+    /// The method of a scene without `method`: the sparse solver above
+    /// [`SPARSE_FROM_PAIRS`] unilateral pairs; below it the full rows (`exact`) where
+    /// unilateral joints meet at junctions (the evolutive path and the sparse solver leave a
+    /// dependent component there without a row, and a closed pair may slide at that node
+    /// without a friction force of its own), the evolutive path (`lcp`, the paper's, every
+    /// switch recorded) elsewhere.
+    pub fn choose_method(&mut self, unilateral_pairs: usize, unilateral_junction: bool) {
+        if self.method_given {
+            return;
         }
+        (self.method, self.method_choice) = if unilateral_pairs > SPARSE_FROM_PAIRS {
+            (Method::Sparse, MethodChoice::Size)
+        } else if unilateral_junction {
+            (Method::Exact, MethodChoice::Junctions)
+        } else {
+            (self.method, MethodChoice::Paper)
+        };
     }
 
     /// The load steps as (load factor, pseudo-time): `(f, 1)` for each load factor, or

@@ -499,6 +499,7 @@ pub(super) fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
     Ok(SolveSpec {
         method,
         method_given: raw.method.is_some(),
+        method_choice: super::MethodChoice::Given,
         tolerance,
         max_iterations: max_iterations.map(|m| m as usize),
         load_factors,
