@@ -7,7 +7,9 @@ boundary alone for a run without an interior field; the field block has `stress`
 6-component symmetric tensor (components XX YY ZZ XY YZ XZ) and the scalars sxx, syy, sxy
 that equal its components; every block carries the title and units as field data; the
 boundary's `iteration` field data increases with time; the times increase. Then states.pvd:
-the same times, at each a multiblock with a block named "boundary", only in a state
+the same times, at each a multiblock whose field data holds the title and units as text
+(string arrays `run title`, `length unit`, `force unit`, `stress unit`, as ParaView's
+Information panel lists them) with a block named "boundary", only in a state
 that has its interior field (the final one, where computed) a block named "field", and
 where the run has interfaces a block named "thrust" (the thrust line: a vertex per joint
 that carries a normal force, with N, T and e, and lines through the bodies), and where the
@@ -78,6 +80,36 @@ def check_mechanism(pvd, t, named):
         fail(f"{pvd} at time {t}: the largest mechanism_velocity is {top}, not 1")
 
 
+# The multiblock's own text field data (string arrays) and the blocks' UInt8 array it repeats.
+TEXTS = {"run title": "title", "length unit": "length_unit", "force unit": "force_unit",
+         "stress unit": "stress_unit"}
+
+
+def check_text(pvd, t, reader, data, boundary):
+    """Title and units as text where ParaView shows them: string arrays in the multiblock's
+    field data, equal to the boundary's UInt8 texts, and in the reader's data information
+    (what the Information panel lists) as string values, not as a range of byte codes."""
+    fd = data.GetFieldData()
+    info = reader.GetDataInformation().DataInformation.GetFieldDataInformation()
+    for name, bytes_name in TEXTS.items():
+        # An empty text is left out of both (a scene without units).
+        want = text(boundary, bytes_name) \
+            if boundary.GetFieldData().GetArray(bytes_name) is not None else ""
+        if not want:
+            continue
+        a = fd.GetAbstractArray(name)
+        if a is None or not a.IsA("vtkStringArray") or a.GetNumberOfValues() != 1:
+            fail(f"{pvd} at time {t}: no string array `{name}` in the multiblock's field data")
+        if a.GetValue(0) != want:
+            fail(f"{pvd} at time {t}: `{name}` is {a.GetValue(0)!r}, the blocks' text {want!r}")
+        ai = info.GetArrayInformation(name)
+        shown = [ai.GetStringValue(i) for i in range(ai.GetNumberOfStringValues())] \
+            if ai is not None else []
+        if shown != [want]:
+            fail(f"{pvd} at time {t}: ParaView's information on `{name}` shows {shown}, "
+                 f"not [{want!r}]")
+
+
 def check_states(run, times, with_field, with_thrust, with_mechanism):
     """states.pvd: one multiblock per time, named blocks, the field only at the last time,
     the thrust line and the contact rows at every time where the run has interfaces, the
@@ -89,7 +121,9 @@ def check_states(run, times, with_field, with_thrust, with_mechanism):
         fail(f"{pvd}: times differ from history.pvd's")
     for k, t in enumerate(times):
         reader.UpdatePipeline(t)
-        named = named_leaves(servermanager.Fetch(reader))
+        data = servermanager.Fetch(reader)
+        named = named_leaves(data)
+        check_text(pvd, t, reader, data, dict(named)["boundary"])
         want = ["boundary", "field"] if with_field and k == len(times) - 1 else ["boundary"]
         want += ["thrust", "contact"] if with_thrust else []
         want += ["mechanism"] if with_mechanism and k == len(times) - 1 else []
@@ -107,8 +141,8 @@ def check_states(run, times, with_field, with_thrust, with_mechanism):
     print(f"check_pvd_paraview: {pvd}: {len(times)} multiblocks, block boundary at every "
           f"time, field {'at the last time only' if with_field else 'nowhere'}, thrust "
           f"{'at every time' if with_thrust else 'nowhere (no interfaces)'}, contact rows "
-          f"{'at every time' if with_thrust else 'nowhere'}, mechanism "
-          f"{'at the last time only' if with_mechanism else 'nowhere'}: ok")
+          f"{'at every time' if with_thrust else 'nowhere'}, title and units as text, "
+          f"mechanism {'at the last time only' if with_mechanism else 'nowhere'}: ok")
 
 
 def main():

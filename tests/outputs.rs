@@ -894,6 +894,26 @@ fn vtk_content() {
         ));
         assert_eq!(blocks, want, "state_000{k}.vtm");
         assert!(vtm.contains("<VTKFile type=\"vtkMultiBlockDataSet\""));
+        // Title and units as text for ParaView's Information panel: string arrays (each
+        // string's bytes and a 0) in the multiblock's own field data, named apart from the
+        // blocks' UInt8 arrays (ParaView merges field data by name).
+        let fd = vtm
+            .split("<FieldData>")
+            .nth(1)
+            .expect("field data of the multiblock");
+        for (name, text) in [
+            ("run title", "Two blocks, fabricated"),
+            ("length unit", "cm"),
+            ("force unit", "daN"),
+            ("stress unit", "daN/cm^2"),
+        ] {
+            let array = format!(
+                "<Array type=\"String\" Name=\"{name}\" NumberOfTuples=\"1\" \
+                 format=\"ascii\">{} 0</Array>",
+                bytes(text)
+            );
+            assert!(fd.contains(&array), "state_000{k}.vtm: {array} not in {fd}");
+        }
     }
     // A second write leaves no temporary files behind.
     write_vtk(&dir, &rec).expect("vtk");

@@ -91,6 +91,8 @@ class Run:
             units = json.loads(_text(a.get("units", "{}")))
             length, force = units.get("length") or "length", units.get("force") or "force"
             self.units = {"length": length, "force": force, "stress": f"{force}/{length}^2"}
+            # As the scene gave them ("" where it gave none): the VTK files' texts.
+            self._units_given = (units.get("length") or "", units.get("force") or "")
             self._plane = _text(a.get("plane", "strain"))
             self._bodies = self._named(f["bodies"])
             self._interfaces = self._named(f["interfaces"])
@@ -455,6 +457,20 @@ class Run:
             block.field_data["iteration"] = [meta[0]]
             block.field_data["load_step"] = [meta[1]]
             block.field_data["load_factor"] = [meta[2]]
+        # The multiblock's own field data, as the .vtm's: title and units as text.
+        length, force = self._units_given
+        texts = {"run title": self.title, "length unit": length, "force unit": force,
+                 "stress unit": f"{force}/{length}^2" if length or force else ""}
+        from vtkmodules.vtkCommonCore import vtkStringArray  # with pyvista
+
+        for name, value in texts.items():
+            if value:
+                # A vtkStringArray of its own: pyvista's setter refuses text that is not
+                # ASCII ("Lamé"), which VTK holds as UTF-8 and the .vtm has.
+                array = vtkStringArray()
+                array.SetName(name)
+                array.InsertNextValue(value)
+                blocks.GetFieldData().AddArray(array)
         return blocks
 
     def _contact_block(self, k):

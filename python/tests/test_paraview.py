@@ -106,6 +106,8 @@ def test_paraview_reads_the_series(beam, wall):
     for run in (beam, wall):
         out = pvpython(ROOT / "pipelines/check_pvd_paraview.py", run.folder)
         assert "states.pvd" in out and out.count(": ok") == 2
+        # Title and units as words in ParaView's Information panel, not byte codes.
+        assert "title and units as text, mechanism" in out
     assert "field at the last time only" in pvpython(
         ROOT / "pipelines/check_pvd_paraview.py", beam.folder)
 

@@ -453,7 +453,15 @@ def test_to_pyvista_thrust_block_equals_the_vtk_thrust_block(beam, wall, collaps
         vtk = pathlib.Path(run.folder, "vtk")
         for k in range(run.state_count):
             blocks = run.to_pyvista(k)
-            assert blocks.keys() == pyvista.read(vtk / f"state_{k:04d}.vtm").keys()
+            vtm = pyvista.read(vtk / f"state_{k:04d}.vtm")
+            assert blocks.keys() == vtm.keys()
+            # Title and units as text in the multiblock's field data, as the .vtm's.
+            texts = {n: list(vtm.field_data[n]) for n in vtm.field_data}
+            assert {n: list(blocks.field_data[n]) for n in blocks.field_data} == texts
+            assert "run title" in texts
+            if run is beam:
+                assert texts == {"run title": [run.title], "length unit": ["cm"],
+                                 "force unit": ["daN"], "stress unit": ["daN/cm^2"]}
             ours, ref = blocks["thrust"], pyvista.read(vtk / f"thrust_{k:04d}.vtu")
             assert ours.n_points == ref.n_points and ours.n_cells == ref.n_cells, k
             np.testing.assert_array_equal(ours.points, ref.points)

@@ -31,7 +31,9 @@
 //! Field data of every file: `title`, `length_unit`, `force_unit`, `stress_unit` (text as
 //! UTF-8 bytes in UInt8 arrays, since meshio reads no string arrays; left out when empty),
 //! `iteration`, `load_step` (from 0), `load_factor`, `time` (the state's time in
-//! `history.pvd`).
+//! `history.pvd`). The same texts as text for ParaView, where meshio does not look: string
+//! arrays `run title`, `length unit`, `force unit`, `stress unit` in the field data of each
+//! `state_NNNN.vtm` (ParaView's Information panel shows them as words).
 //!
 //! Boundary point data: `displacement`, `traction` (average of the element-end values at
 //! the node), `normal` (unit, average of the adjacent element normals), `contact_status`
@@ -238,7 +240,7 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
                 grid_xml(mechanism_grid(rec), &state_meta(rec, k, times[k]), &style)
             }
             File::State(k, field, thrust, mechanism) => {
-                state_vtm(k, field, thrust, mechanism).into_bytes()
+                state_vtm(k, field, thrust, mechanism, &state_meta(rec, k, times[k])).into_bytes()
             }
             File::StatesPvd => states_pvd(&times).into_bytes(),
             File::Pvd => pvd(&times, &field_of).into_bytes(),
@@ -249,8 +251,15 @@ fn write_vtk_with(dir: &Path, rec: &RunRecord, durable: bool) -> Result<Vec<Path
 
 /// `state_NNNN.vtm`: the state as one multiblock with named blocks, `boundary`, where the
 /// state has its interior field `field` (nowhere else), where the run has interfaces
-/// `thrust` and `contact`, and where the mechanism is drawn with it `mechanism`.
-fn state_vtm(k: usize, field: bool, thrust: bool, mechanism: bool) -> String {
+/// `thrust` and `contact`, and where the mechanism is drawn with it `mechanism`; the
+/// multiblock's own field data holds the text of `meta` as text (see [`text_field_data`]).
+fn state_vtm(
+    k: usize,
+    field: bool,
+    thrust: bool,
+    mechanism: bool,
+    meta: &[(&'static str, FieldValue)],
+) -> String {
     let mut o = String::from(
         "<?xml version=\"1.0\"?>\n<VTKFile type=\"vtkMultiBlockDataSet\" version=\"1.0\" \
          byte_order=\"LittleEndian\">\n  <vtkMultiBlockDataSet>\n",
@@ -289,8 +298,50 @@ fn state_vtm(k: usize, field: bool, thrust: bool, mechanism: bool) -> String {
             mechanism_name(k)
         );
     }
-    o.push_str("  </vtkMultiBlockDataSet>\n</VTKFile>\n");
+    o.push_str("  </vtkMultiBlockDataSet>\n");
+    text_field_data(&mut o, meta);
+    o.push_str("</VTKFile>\n");
     o
+}
+
+/// The multiblock's field data: every non-empty text of `meta` as a VTK string array named
+/// with a space for the underscore (`title` → `run title`, `stress_unit` → `stress unit`),
+/// so that ParaView's Information panel shows "stress unit  daN/cm^2" rather than the
+/// codes of the blocks' UInt8 arrays (which keep their names: meshio refuses a .vtu with a
+/// string array, and reads no .vtm). A distinct name, since ParaView merges the field data
+/// of the blocks and the root by name, and the blocks' UInt8 array would hide the text.
+/// A string array's ASCII payload is each string's UTF-8 bytes followed by a 0.
+fn text_field_data(o: &mut String, meta: &[(&'static str, FieldValue)]) {
+    let texts: Vec<(String, &str)> = meta
+        .iter()
+        .filter_map(|(name, v)| match v {
+            FieldValue::Text(s) if !s.is_empty() => {
+                let shown = if *name == "title" {
+                    "run title".to_string()
+                } else {
+                    name.replace('_', " ")
+                };
+                Some((shown, s.as_str()))
+            }
+            _ => None,
+        })
+        .collect();
+    if texts.is_empty() {
+        return;
+    }
+    o.push_str("  <FieldData>\n");
+    for (name, s) in texts {
+        let mut codes: Vec<String> = s.bytes().map(|b| b.to_string()).collect();
+        codes.push("0".into());
+        let _ = writeln!(
+            o,
+            "    <Array type=\"String\" Name=\"{}\" NumberOfTuples=\"1\" \
+             format=\"ascii\">{}</Array>",
+            name,
+            codes.join(" ")
+        );
+    }
+    o.push_str("  </FieldData>\n");
 }
 
 /// `states.pvd`: one multiblock (`state_NNNN.vtm`) per time, the series to open in ParaView.
