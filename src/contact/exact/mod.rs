@@ -119,9 +119,53 @@ pub struct Exact<'a> {
     p_cols: Vec<usize>,
     p_rows: Vec<usize>,
     p_vals: Vec<f64>,
+    /// The contact bar and the load step (from 0) its messages name, where one is shown.
+    progress: Option<(&'a crate::output::progress::Stage, usize)>,
 }
 
 impl<'a> Exact<'a> {
+    /// Shows each programme of the steps solved from now on in `stage`'s message, as
+    /// load step `load_step` (from 0).
+    pub fn show_in(&mut self, stage: Option<&'a crate::output::progress::Stage>, load_step: usize) {
+        self.progress = stage.map(|s| (s, load_step));
+    }
+
+    /// The contact bar's message after a programme (or before the seed's linear solve):
+    /// the rows open and slipping, and the residual of Coulomb's law.
+    fn show(&self, programmes: usize, sol: Option<&Programme>, residual: f64) {
+        let Some((stage, step)) = self.progress else {
+            return;
+        };
+        let text = match sol {
+            None => format!(
+                "step {}: the linear solve of Coulomb's law from the sparse solver's statuses",
+                step + 1
+            ),
+            Some(sol) => {
+                let full = &self.problem.full;
+                let open = (0..full.len())
+                    .filter(|&r| full[r].row.kind == RowKind::Normal && !sol.closed[r])
+                    .count();
+                let normal = full
+                    .iter()
+                    .filter(|f| f.row.kind == RowKind::Normal)
+                    .count();
+                let slipping = sol.slipping.iter().filter(|&&x| x).count();
+                let law = if residual.is_finite() {
+                    format!(", Coulomb residual {residual:.1e}")
+                } else {
+                    String::new()
+                };
+                format!(
+                    "step {}, convex programme {programmes}: {open} of {normal} normal rows \
+                     open, {slipping} rows slipping{law}",
+                    step + 1
+                )
+            }
+        };
+        stage.contact_detail(&text);
+    }
+
     pub fn new(problem: &'a Problem) -> Exact<'a> {
         let n = problem.n_dofs;
         let mut d = vec![1.0; n];
@@ -167,6 +211,7 @@ impl<'a> Exact<'a> {
             p_cols,
             p_rows,
             p_vals,
+            progress: None,
         }
     }
 
@@ -703,6 +748,7 @@ impl<'a> Exact<'a> {
             finished: false,
         };
         if let Some(seed) = seed {
+            self.show(0, None, f64::NAN);
             let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
             if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior, false) {
                 change = settled_residual(&friction, &normal, &done, &done_laws);
@@ -743,6 +789,12 @@ impl<'a> Exact<'a> {
             // Coulomb's bounds from the normal forces: G(x).
             let (x, gx) = self.bounds(model, &friction, &normal, &laws, &sol, cohesion);
             change = coulomb_residual(&friction, &normal, &sol, &x, &gx);
+            let shown = if friction.is_empty() {
+                f64::NAN
+            } else {
+                change
+            };
+            self.show(programmes, Some(&sol), shown);
             // Where the statuses held since the last programme, Coulomb's law with these
             // statuses is one linear solve (`newton`).
             let statuses = (sol.closed.clone(), sol.slipping.clone());

@@ -36,7 +36,8 @@ impl crate::contact::Session<'_> {
             None
         };
         let (model, pb) = (self.model, &self.problem);
-        let ex = Exact::new(pb);
+        let mut ex = Exact::new(pb);
+        ex.show_in(self.stage.as_ref(), load_step);
         let n_full = pb.full.len();
         // Before the solver's first step: no slip yet.
         let or_zeros = |v: &[f64]| {
