@@ -229,11 +229,13 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     // between the VTK writer and the archive's thread.
     per_state =
         1.15 * (per_state + 8.0 * (6.0 + 4.25) * model.pair_count() as f64 + 9.0 * rows as f64);
+    // The full rows record one state per load step whatever the history.
     let recorded = match scene.output.history {
-        HistoryLevel::Full => ((switches as f64 + 1.0) / scene.output.every as f64)
+        HistoryLevel::Full if scene.solve.method != Method::Exact => ((switches as f64 + 1.0)
+            / scene.output.every as f64)
             .ceil()
             .max(k),
-        HistoryLevel::Steps | HistoryLevel::Final => k,
+        _ => k,
     };
     // A collapse search solves one step per trial before the run itself: the two bounds and
     // the bisection down to the tolerance.
