@@ -76,7 +76,7 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
     // `--method` over the scene's, before the defaults that depend on it.
     if let Some(m) = opts.method {
         scene.solve.method = m;
-        scene.solve.method_given = true;
+        scene.solve.method_choice = crate::input::scene::MethodChoice::Given;
     }
     let mut mesh_path: PathBuf = match (&opts.mesh, &scene.mesh) {
         (Some(m), _) => m.clone(),

@@ -11,7 +11,7 @@
 use crate::error::{Error, Result};
 use crate::input::model::Model;
 use crate::input::scene::{
-    HistoryLevel, InitialState, InterfaceModel, Method, MethodChoice, Scene,
+    HistoryLevel, InitialState, InterfaceModel, Method, MethodChoice, Scene, SPARSE_FROM_PAIRS,
 };
 
 /// Which unilateral problem the contact solver faces.
@@ -469,10 +469,12 @@ impl Solve<'_> {
                     ""
                 };
                 let chosen = if scene.solve.method_choice == MethodChoice::Size {
-                    "; chosen for the scene's size (over 3000 unilateral pairs; `method` sets \
-                     another)"
+                    format!(
+                        "; chosen for the scene's size (over {SPARSE_FROM_PAIRS} unilateral \
+                         pairs; `method` sets another)"
+                    )
                 } else {
-                    ""
+                    String::new()
                 };
                 stages.push((
                     "contact_sparse",

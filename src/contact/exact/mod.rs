@@ -131,8 +131,8 @@ impl<'a> Exact<'a> {
     }
 
     /// The contact bar's message after a programme (or before the seed's linear solve):
-    /// the rows open and slipping, and the residual of Coulomb's law.
-    fn show(&self, programmes: usize, sol: Option<&Programme>, residual: f64) {
+    /// the rows open and slipping, and the residual of Coulomb's law where rows have one.
+    fn show(&self, programmes: usize, sol: Option<&Programme>, residual: Option<f64>) {
         let Some((stage, step)) = self.progress else {
             return;
         };
@@ -151,11 +151,7 @@ impl<'a> Exact<'a> {
                     .filter(|f| f.row.kind == RowKind::Normal)
                     .count();
                 let slipping = sol.slipping.iter().filter(|&&x| x).count();
-                let law = if residual.is_finite() {
-                    format!(", Coulomb residual {residual:.1e}")
-                } else {
-                    String::new()
-                };
+                let law = residual.map_or(String::new(), |r| format!(", Coulomb residual {r:.1e}"));
                 format!(
                     "step {}, convex programme {programmes}: {open} of {normal} normal rows \
                      open, {slipping} rows slipping{law}",
@@ -702,6 +698,20 @@ impl<'a> Exact<'a> {
         Some(force)
     }
 
+    /// The normal row of every full row's pair, and the Coulomb rows (friction rows of a
+    /// pair with a normal row).
+    fn normal_and_friction_rows(&self) -> (Vec<Option<usize>>, Vec<usize>) {
+        let full = &self.problem.full;
+        let normal: Vec<Option<usize>> = full
+            .iter()
+            .map(|f| self.problem.full_of[f.row.iface][f.row.pair][1])
+            .collect();
+        let friction = (0..full.len())
+            .filter(|&r| full[r].row.kind == RowKind::Friction && normal[r].is_some())
+            .collect();
+        (normal, friction)
+    }
+
     /// One load step from the relative displacements `start` of every full row (the anchors
     /// of tied and Tresca rows), with the cohesion term of every full row, and at most
     /// `max_outer` programmes. The first programme ties every tangential row (a first
@@ -720,14 +730,7 @@ impl<'a> Exact<'a> {
         max_outer: usize,
     ) -> StepOutcome {
         let full = &self.problem.full;
-        // The normal row of every full row's pair.
-        let normal: Vec<Option<usize>> = full
-            .iter()
-            .map(|f| self.problem.full_of[f.row.iface][f.row.pair][1])
-            .collect();
-        let friction: Vec<usize> = (0..full.len())
-            .filter(|&r| full[r].row.kind == RowKind::Friction && normal[r].is_some())
-            .collect();
+        let (normal, friction) = self.normal_and_friction_rows();
         let mut laws = first_laws(full, start);
         let mut programmes = 0;
         let mut ipm = 0u64;
@@ -748,7 +751,7 @@ impl<'a> Exact<'a> {
             finished: false,
         };
         if let Some(seed) = seed {
-            self.show(0, None, f64::NAN);
+            self.show(0, None, None);
             let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
             if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior, false) {
                 change = settled_residual(&friction, &normal, &done, &done_laws);
@@ -789,12 +792,11 @@ impl<'a> Exact<'a> {
             // Coulomb's bounds from the normal forces: G(x).
             let (x, gx) = self.bounds(model, &friction, &normal, &laws, &sol, cohesion);
             change = coulomb_residual(&friction, &normal, &sol, &x, &gx);
-            let shown = if friction.is_empty() {
-                f64::NAN
-            } else {
-                change
-            };
-            self.show(programmes, Some(&sol), shown);
+            self.show(
+                programmes,
+                Some(&sol),
+                (!friction.is_empty()).then_some(change),
+            );
             // Where the statuses held since the last programme, Coulomb's law with these
             // statuses is one linear solve (`newton`).
             let statuses = (sol.closed.clone(), sol.slipping.clone());

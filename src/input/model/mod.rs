@@ -391,6 +391,14 @@ impl Model {
     /// pairs of two or more interfaces, one of them unilateral): there the solvers other
     /// than the full rows leave a dependent component without a row of its own.
     pub fn has_unilateral_junction(&self) -> bool {
+        self.interface_nodes()
+            .values()
+            .any(|&(count, unilateral)| count >= 2 && unilateral)
+    }
+
+    /// Per (body, node) in any interface's pairs: the pairs it is in, and whether one of
+    /// them is of a unilateral interface.
+    fn interface_nodes(&self) -> BTreeMap<(usize, usize), (usize, bool)> {
         let mut seen: BTreeMap<(usize, usize), (usize, bool)> = BTreeMap::new();
         for it in &self.interfaces {
             let unilateral = it.spec.model == crate::input::scene::InterfaceModel::Unilateral;
@@ -402,25 +410,17 @@ impl Model {
                 }
             }
         }
-        seen.values()
-            .any(|&(count, unilateral)| count >= 2 && unilateral)
+        seen
     }
 
     /// The junctions: points where a body meets two or more others (a node of one body in
     /// pairs of two or more interfaces), as (point, bodies meeting there), in body order.
     pub fn junctions(&self) -> Vec<([f64; 2], Vec<usize>)> {
-        let mut count: BTreeMap<(usize, usize), usize> = BTreeMap::new();
-        for it in &self.interfaces {
-            for (side_a, body) in [(true, it.body_a), (false, it.body_b)] {
-                for j in 0..it.point_count(side_a) {
-                    *count.entry((body, it.point(side_a, j).0)).or_default() += 1;
-                }
-            }
-        }
+        let count = self.interface_nodes();
         // Group the junction nodes by position (the nodes of all bodies there coincide).
         let mut out: Vec<([f64; 2], Vec<usize>)> = Vec::new();
         let tol = 1e-9 * self.scale;
-        for (&(b, n), &c) in &count {
+        for (&(b, n), &(c, _)) in &count {
             if c < 2 {
                 continue;
             }

@@ -247,10 +247,8 @@ impl Quadrature {
 #[derive(Debug, Clone)]
 pub struct SolveSpec {
     pub method: Method,
-    /// `method` was given (in the scene or by `--method`); otherwise it follows the size of
-    /// the model ([`SolveSpec::choose_method`]).
-    pub method_given: bool,
-    /// Why the scene is solved by `method` (set by [`SolveSpec::choose_method`]).
+    /// Why the scene is solved by `method`: given (in the scene or by `--method`), or chosen
+    /// for the model by [`SolveSpec::choose_method`].
     pub method_choice: MethodChoice,
     pub tolerance: f64,
     /// Contact iterations per load step; `None`: automatic, the larger of 1000 and four per
@@ -301,7 +299,7 @@ impl SolveSpec {
     /// without a friction force of its own), the evolutive path (`lcp`, the paper's, every
     /// switch recorded) elsewhere.
     pub fn choose_method(&mut self, unilateral_pairs: usize, unilateral_junction: bool) {
-        if self.method_given {
+        if self.method_choice == MethodChoice::Given {
             return;
         }
         (self.method, self.method_choice) = if unilateral_pairs > SPARSE_FROM_PAIRS {

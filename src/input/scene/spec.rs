@@ -498,8 +498,11 @@ pub(super) fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
     };
     Ok(SolveSpec {
         method,
-        method_given: raw.method.is_some(),
-        method_choice: super::MethodChoice::Given,
+        method_choice: if raw.method.is_some() {
+            super::MethodChoice::Given
+        } else {
+            super::MethodChoice::Paper
+        },
         tolerance,
         max_iterations: max_iterations.map(|m| m as usize),
         load_factors,
