@@ -852,8 +852,8 @@ fn large_friction_converges_and_tends_to_stick() {
 
 /// The 4 × 5 wall's collapse search under t × its weight sideways with μ = 1 000 completes
 /// with the evolutive path (`method = "lcp"`; the wall's default since its T-junctions is the
-/// full rows, whose fixed point does not settle μ = 1 000 above t = 0.793 against its stick
-/// multiplier 1.000, said undecided; it stopped at t = 0.7266, then 0.6875, where the friction fixed
+/// full rows, whose search `full_rows::a_frictional_wall_collapses_below_its_stick_limit_as_mu_grows`
+/// tests; the evolutive path stopped at t = 0.7266, then 0.6875, where the friction fixed
 /// point cycled: near collapse the lagged bounds μλ_n amplify every change of the normal
 /// forces a thousandfold; the driver now hands such a step to the sparse solver, whose
 /// semismooth Newton iteration ties the slip forces to the normal forces within each
