@@ -584,7 +584,7 @@ fn expression_errors_name_the_key_and_never_the_evaluator() {
             assert!(!r.2.contains(internal), "{value}: {}", r.2);
         }
     }
-    // The functions SPEC.md lists are all accepted.
+    // The functions docs/scene.md §9 lists are all accepted.
     let scene = STACKED_SCENE.replace(
         "ty = -1.0",
         "ty = \"-(atan(1) + asin(0.5) + acos(0.5) + floor(x) + ceil(0.2))\"",

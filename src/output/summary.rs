@@ -1,4 +1,4 @@
-//! `summary.json`: the headline results of a run (SPEC.md "Outputs"), as typed records.
+//! `summary.json`: the headline results of a run (README "Outputs"), as typed records.
 //!
 //! This module alone knows the file's shape: the pipeline fills a [`Summary`] and writes it
 //! with `serde_json::to_string_pretty`. Key order: serde_json keeps the keys of an object

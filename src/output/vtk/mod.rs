@@ -1,4 +1,4 @@
-//! VTK files for ParaView, pyvista and meshio (SPEC.md "Outputs"): per archived state
+//! VTK files for ParaView, pyvista and meshio (README "Outputs"): per archived state
 //! `boundary_NNNN.vtu` (the boundary lines of every body) and, where interior values exist,
 //! `field_NNNN.vtu` (the triangles of every body), and `history.pvd`, the time series.
 //!
