@@ -62,6 +62,7 @@ use crate::bem::quadrature::QuadratureSettings;
 use crate::input::model::Body;
 use crate::input::scene::Plane;
 use crate::solution::BodyField;
+use crate::vec2::dot;
 
 /// Thickness of the boundary layer of [`interior`], as a fraction of the nearest element's
 /// length: 0.5.
@@ -95,11 +96,6 @@ pub const CORNER_ANGLE: f64 = std::f64::consts::PI / 6.0;
 
 // ---------------------------------------------------------------------------------------
 // Small 2-vector helpers.
-
-#[inline]
-fn dot(a: Vec2, b: Vec2) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
 
 #[inline]
 fn lerp2(a: Vec2, b: Vec2, xi: f64) -> Vec2 {

@@ -30,7 +30,7 @@ use clarabel::solver::{
 
 use crate::contact::problem::{Problem, RowKind};
 use crate::input::model::Model;
-use crate::linalg::matvec;
+use crate::linalg::{jacobi_scaling, matvec};
 
 mod fixed_point;
 mod newton;
@@ -164,14 +164,13 @@ impl<'a> Exact<'a> {
 
     pub fn new(problem: &'a Problem) -> Exact<'a> {
         let n = problem.n_dofs;
+        // The Jacobi scaling of each body's S; an entry that is not positive and finite
+        // keeps the factor 1.
         let mut d = vec![1.0; n];
         for (b, op) in problem.ops.iter().enumerate() {
-            for l in 0..op.u_idx.len() {
-                let s = op.s[(l, l)];
-                if s > 0.0 && s.is_finite() {
-                    d[problem.dof_start[b] + l] = 1.0 / s.sqrt();
-                }
-            }
+            let diag = (0..op.u_idx.len()).map(|l| op.s[(l, l)]);
+            let body = jacobi_scaling(diag.map(|s| if s > 0.0 && s.is_finite() { s } else { 0.0 }));
+            d[problem.dof_start[b]..][..body.len()].copy_from_slice(&body);
         }
         let rho = problem
             .full
