@@ -448,7 +448,7 @@ fn a_stick_wall_collapses_at_its_end_half_brick_tipping_limit() {
 /// The 4 × 5 wall with Coulomb joints under t·g sideways, μ = 3 and μ = 10, on the full
 /// rows: both searches complete (the fixed point alone left the μ = 10 trials near collapse
 /// unsettled after 500 programmes; the linear solve of its statuses settles them), and the
-/// multipliers order as friction grows towards stick's 1.000 (issue 19 item 6). Measured:
+/// multipliers order as friction grows towards stick's 1.000. Measured:
 /// 0.6338 and 0.9043. The final states obey Coulomb's law pair by pair.
 #[test]
 fn a_frictional_wall_collapses_below_its_stick_limit_as_mu_grows() {
