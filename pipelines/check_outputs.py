@@ -24,8 +24,8 @@ csv (interfaces/*.csv, sections/*.csv), json (summary.json). Checks:
              contact_status and normal_traction equal to the interface CSVs and each
              interface's normal_force adding up to -N of thrust.csv;
   vtk        history.pvd lists existing files, one boundary file per archived state, times
-             increasing; each file read by meshio and pyvista with the point data of SPEC.md
-             and values equal to the archive's.
+             increasing; each file read by meshio and pyvista with the point data of README
+             "Outputs" and values equal to the archive's.
 Usage: check_outputs.py RUN_DIR      (exit 1 with one line per disagreement)
 """
 import csv

@@ -2,8 +2,8 @@
 //!
 //! Every failure a user can cause is an [`Error`] whose message names the file and the
 //! offending key, group, node or element, and says how to fix it. The kind decides the
-//! exit status of the command line (SPEC.md): input errors 2, numerical failures 3,
-//! anything else (I/O) 1.
+//! exit status of the command line (README "Command line"): input errors 2, numerical
+//! failures 3, anything else (I/O) 1.
 
 use std::fmt;
 use std::path::Path;
@@ -48,7 +48,7 @@ impl Error {
         }
     }
 
-    /// Exit status for the command line, as SPEC.md fixes it.
+    /// Exit status for the command line, as README "Command line" fixes it.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } => 2,

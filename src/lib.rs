@@ -14,8 +14,8 @@
 //!   driver of load steps and collapse searches (`contact::driver`);
 //! * `post` — boundary stresses, interior fields, sections;
 //! * `output` — summary, archive, VTK, CSV (they read result records; nothing imports them);
-//! * `estimate` (memory and time of a run, before assembling it); `linalg` and `timings`,
-//!   small shared utilities;
+//! * `estimate` (memory and time of a run, before assembling it); `linalg`, `vec2` and
+//!   `timings`, small shared utilities;
 //! * `plan` (the effects a scene calls for), `report` (what `sgbem check` prints) and
 //!   `pipeline` (the only module that knows the stage order).
 
@@ -33,3 +33,4 @@ pub mod report;
 pub mod solution;
 pub mod sweep;
 pub mod timings;
+pub(crate) mod vec2;

@@ -875,10 +875,7 @@ fn summary_of(
         thrust: summary::thrust(&model.interfaces, &post.thrust),
         time: scene.solve.time.as_ref().map(|_| solved.time),
         title: scene.title.clone(),
-        units: summary::Units {
-            force: scene.units.force.clone(),
-            length: scene.units.length.clone(),
-        },
+        units: scene.units.clone(),
     };
     // Figures that overflow (serialised as null): a resultant of finite tractions can.
     if solved.failure.is_none() {

@@ -1,12 +1,12 @@
 //! The effects plan: which effects a scene calls for and which stages a run performs.
 //!
 //! Place in the flow: after `model`; read by `sgbem check` (printed) and by the run
-//! pipeline (followed). SPEC.md: effects are simulated only where the scene calls for them:
-//! no body-force terms without `body_force`; no contact solver without a `unilateral`
-//! interface; only the detachment problem when every unilateral zone starts closed, only
-//! the contact problem when every one starts open, both otherwise; the cohesion loop only
-//! where `cohesion > 0`; interior fields only with `field = true`; sections only where
-//! listed.
+//! pipeline (followed). README "Effects plan": effects are simulated only where the scene
+//! calls for them: no body-force terms without `body_force`; no contact solver without a
+//! `unilateral` interface; only the detachment problem when every unilateral zone starts
+//! closed, only the contact problem when every one starts open, both otherwise; the cohesion
+//! loop only where `cohesion > 0`; interior fields only with `field = true`; sections only
+//! where listed.
 
 use crate::error::{Error, Result};
 use crate::input::model::Model;

@@ -362,7 +362,7 @@ pub struct CheckJson<'a> {
     pub scene: String,
     pub thickness: f64,
     pub title: &'a str,
-    pub units: crate::output::summary::Units,
+    pub units: crate::input::scene::Units,
     pub unused_curves: &'a [String],
 }
 
@@ -593,10 +593,7 @@ pub fn check_json<'a>(
         scene: scene.path.display().to_string(),
         thickness: scene.thickness,
         title: &scene.title,
-        units: crate::output::summary::Units {
-            force: scene.units.force.clone(),
-            length: scene.units.length.clone(),
-        },
+        units: scene.units.clone(),
         unused_curves: &model.unused_curves,
     }
 }

@@ -284,7 +284,7 @@ fn example1_beam_on_blocks_slide() {
 #[test]
 fn example1_beam_on_blocks_stick() {
     let r = example1("beam_on_blocks");
-    // The paper's model must converge (SPEC: exit 3 only for a numerical failure).
+    // The paper's model must converge (README "Command line": exit 3 only for a numerical failure).
     assert!(
         r.code == 0 && r.converged(),
         "the stick model did not converge (exit {}): {}",

@@ -745,7 +745,7 @@ fn all_rows(out: &Path) -> Vec<InterfaceRow> {
 fn coulomb_holds(rows: &[InterfaceRow], summary: &Value, mu: f64, st: f64) -> usize {
     let mut slipping = 0;
     // Tangential components implied at a junction carry no friction law of their own
-    // (issue: junctions exact); they are listed in the summary and left out here.
+    // (docs/formulation.md §6.7); they are listed in the summary and left out here.
     let implied: Vec<(f64, f64)> = summary["contact"]["junctions"]["implied"]
         .as_object()
         .map(|m| {

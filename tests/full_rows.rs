@@ -450,7 +450,7 @@ fn a_stick_wall_collapses_at_its_end_half_brick_tipping_limit() {
 /// unsettled after 500 programmes; the linear solve of its statuses settles them; at
 /// μ = 1 000 the rows at the edge of a contact, opened and closed by turns, stalled every
 /// trial above 0.793 until their bounds were found by regula falsi), and the multipliers
-/// order as friction grows towards stick's 1.000 (issue 19 item 6). Measured: 0.6357,
+/// order as friction grows towards stick's 1.000. Measured: 0.6357,
 /// 0.9326 and 1.000 (0.6338, 0.9043 and undecided above 0.793 before). The final states
 /// obey Coulomb's law pair by pair.
 #[test]

@@ -1,4 +1,4 @@
-//! The third hostile-use round (issue 21): never delete a file the tool did not write, never
+//! Hostile use: never delete a file the tool did not write, never
 //! hang, bounded input, clear messages, `check` and `run` agree, plausibility notes.
 
 mod support;
@@ -584,7 +584,7 @@ fn expression_errors_name_the_key_and_never_the_evaluator() {
             assert!(!r.2.contains(internal), "{value}: {}", r.2);
         }
     }
-    // The functions SPEC.md lists are all accepted.
+    // The functions docs/scene.md §9 lists are all accepted.
     let scene = STACKED_SCENE.replace(
         "ty = -1.0",
         "ty = \"-(atan(1) + asin(0.5) + acos(0.5) + floor(x) + ceil(0.2))\"",
@@ -1440,7 +1440,7 @@ fn table_difference(near: &Path, far: &Path, x0: f64, slack: f64) -> f64 {
     worst
 }
 
-/// Issue 21 item 9: two blocks (partly slipping with friction, body forces, a traction
+/// Far from the origin: two blocks (partly slipping with friction, body forces, a traction
 /// written in x) moved by 2⁴⁷ = 1.4e14 and by 2⁵⁰ = 1.1e15, their nodes still exact, give
 /// the results they give near the origin, the expression seeing the absolute x. Measured:
 /// bitwise equal (0) for the interface table, the sections and the thrust (so was main before
@@ -1596,7 +1596,7 @@ fn moved_msh(text: &str, grid: f64, x0: f64) -> String {
     out
 }
 
-/// Issue 21 item 9: the paper's vault (pipelines/vault_friction.toml: five bodies, body
+/// Far from the origin: the paper's vault (pipelines/vault_friction.toml: five bodies, body
 /// forces, friction, joints opening and slipping, sections across the joints, the interior
 /// field) moved by 2⁴⁷ and by 2⁵⁰, its nodes rounded to the spacing of coordinates there (the
 /// same nodes near the origin) and still exact, gives the results it gives near the origin.

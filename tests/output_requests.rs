@@ -1,4 +1,4 @@
-//! Output requests on shipped scenes (SPEC.md "Output requests"): `history = "steps"` and
+//! Output requests on shipped scenes (docs/scene.md §10 `[output]`): `history = "steps"` and
 //! `every = n` keep the states of a full run bitwise, the VTK field selection and
 //! compression, `sgbem check`'s size of the outputs against a real run, the default scaled to
 //! the scene, and the errors of bad requests.

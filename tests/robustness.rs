@@ -1,5 +1,5 @@
 //! Hard to break: hostile or careless use ends in an exit status and a message, never a
-//! panic, a crash, a hang or a half-written run folder (issue 12).
+//! panic, a crash, a hang or a half-written run folder.
 
 mod support;
 

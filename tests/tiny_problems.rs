@@ -1,5 +1,5 @@
 //! Tiny hand-written contact problems with known answers, run through the command line with
-//! every contact solver (`--method lcp`, `qp`, `both`, `sparse`; issue 19, item 9): a unique
+//! every contact solver (`--method lcp`, `qp`, `both`, `sparse`): a unique
 //! solution, a degenerate one (rows that touch without pressing, dependent rows at a
 //! junction), infeasible ones (a block pulled off, pushed beyond friction, tipped over: exit 3
 //! with the mechanism named, never "converged") and bodies left free (a frictionless joint
@@ -804,7 +804,7 @@ fn free_at_the_start_every_cross_check_finds_the_stick_equilibrium() {
     }
 }
 
-/// The mechanisms of (3) and (4) far from the origin (issue 21 item 9): the blocks, scaled
+/// The mechanisms of (3) and (4) far from the origin: the blocks, scaled
 /// by 4 (elements 0.5 long, so that at 2⁴⁷ the coordinates' spacing is below a tenth of
 /// them), moved by 2⁴⁰ ≈ 1.1e12, 2⁴⁴ ≈ 1.8e13 and 2⁴⁷ ≈ 1.4e14 along both axes (every node,
 /// on a grid of 1/2, still exact) are told and drawn as the same blocks near the origin. The block free to slide: every method's

@@ -259,7 +259,7 @@ def test_thrust_equals_thrust_csv(beam, wall):
     assert 0.5 < abs(t["e_over_half_length"]) < 1.0
 
 
-# Codes of the VTK contact block (src/output/vtk.rs `contact_grid`).
+# Codes of the VTK contact block (src/output/vtk `contact_grid`).
 CONTACT_STATUS = {1: "closed", 0: "open"}
 TANGENTIAL_STATUS = {1: "stick", 2: "slip", 0: "open", -1: "none"}
 

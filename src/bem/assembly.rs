@@ -46,6 +46,7 @@ use crate::bem::quadrature::QuadratureSettings;
 use crate::error::{Error, Result};
 use crate::input::model::{Body, DofClass, Model, Role};
 use crate::input::scene::{Condition, Frame, Plane};
+use crate::vec2::dot;
 
 /// What one unknown of a body is.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -214,9 +215,6 @@ impl BodySystem {
     }
 }
 
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
 fn quad(d: [f64; 2], m: &[[f64; 2]; 2], e: [f64; 2]) -> f64 {
     d[0] * (m[0][0] * e[0] + m[0][1] * e[1]) + d[1] * (m[1][0] * e[0] + m[1][1] * e[1])
 }

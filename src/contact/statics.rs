@@ -54,9 +54,10 @@ use clarabel::solver::{
 use super::problem::body_has_support;
 use super::{ContactResult, Solver};
 use crate::error::Error;
-use crate::input::model::wrench::{body_load, centroid, cross, pair_arm, Wrench};
+use crate::input::model::wrench::{body_load, centroid, pair_arm, Wrench};
 use crate::input::model::{DofClass, Interface, Model};
 use crate::input::scene::{InterfaceModel, Scene, Tangential};
+use crate::vec2::cross;
 
 /// The set a pair's force (N, T) is given.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -501,7 +501,8 @@ mod tests {
         assert_eq!(ev("-(x+y)^2", [1.0, 1.0]), -4.0);
     }
 
-    /// The inverse trigonometric and rounding functions SPEC.md lists, against closed values.
+    /// The inverse trigonometric and rounding functions docs/scene.md §9 lists, against closed
+    /// values.
     #[test]
     fn inverse_trigonometry_and_rounding() {
         use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, FRAC_PI_6, PI};

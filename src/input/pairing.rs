@@ -40,6 +40,8 @@
 
 use std::collections::{BTreeMap, HashMap};
 
+use crate::vec2::{dot, norm, sub};
+
 /// One side of an interface: body-local node positions and its segments (body-local node
 /// indices, oriented with the body on the left, so the outward normal is `(τ_y, −τ_x)`).
 #[derive(Debug, Clone, Copy)]
@@ -84,15 +86,6 @@ const FACING_COS: f64 = -0.5;
 /// of a curved body and a flat, a few degrees apart, still pair.
 const POINT_TOUCH_SIN: f64 = 0.5;
 
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
-fn norm(a: [f64; 2]) -> f64 {
-    a[0].hypot(a[1])
-}
 fn lerp(a: [f64; 2], b: [f64; 2], t: f64) -> [f64; 2] {
     [a[0] + t * (b[0] - a[0]), a[1] + t * (b[1] - a[1])]
 }

@@ -1,9 +1,9 @@
 //! Progress bars for the long stages of a run (assembly, interior field evaluation, contact
 //! iterations), drawn on stderr with indicatif.
 //!
-//! SPEC.md: a progress bar on a terminal; none with `--quiet` or when stderr is not a
-//! terminal (pipes, CI logs, tests). When hidden, every call is a cheap no-op, so the
-//! pipeline calls the same methods either way.
+//! README "Command line" (`sgbem run`): a progress bar on a terminal; none with `--quiet` or
+//! when stderr is not a terminal (pipes, CI logs, tests). When hidden, every call is a cheap
+//! no-op, so the pipeline calls the same methods either way.
 //!
 //! ```no_run
 //! use sgbem::output::progress::Progress;

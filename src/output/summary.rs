@@ -1,4 +1,4 @@
-//! `summary.json`: the headline results of a run (SPEC.md "Outputs"), as typed records.
+//! `summary.json`: the headline results of a run (README "Outputs"), as typed records.
 //!
 //! This module alone knows the file's shape: the pipeline fills a [`Summary`] and writes it
 //! with `serde_json::to_string_pretty`. Key order: serde_json keeps the keys of an object
@@ -15,6 +15,7 @@ use serde::Serialize;
 use crate::contact::driver::QpCheck;
 use crate::input::model::wrench::Wrench;
 use crate::input::model::Interface;
+use crate::input::scene::Units;
 use crate::post::equilibrium::BodyBalance;
 use crate::post::thrust::Thrust;
 use crate::solution::{
@@ -93,13 +94,6 @@ pub struct Diagnostics {
     pub d00_asymmetry: f64,
     /// The smallest pivot ratio of the condensations.
     pub min_pivot_ratio: f64,
-}
-
-/// The scene's units, as written in it (empty when not given).
-#[derive(Debug, Clone, Serialize)]
-pub struct Units {
-    pub force: String,
-    pub length: String,
 }
 
 /// The load path of `[solve] time`.

@@ -27,10 +27,11 @@
 //! * **Body force**: `b |Ω|` at the centroid (no moment about it).
 
 use crate::input::model::wrench::{
-    body_force_wrench, centroid, cross, pair_arm, segment_wrench, Pivot, Wrench,
+    body_force_wrench, centroid, pair_arm, segment_wrench, Pivot, Wrench,
 };
 use crate::input::model::{Body, Interface, Model, Role};
 use crate::solution::{BodyField, InterfaceResult};
+use crate::vec2::cross;
 
 /// The loads of one body and their imbalance.
 #[derive(Debug, Clone)]

@@ -62,6 +62,7 @@ use crate::bem::quadrature::QuadratureSettings;
 use crate::input::model::Body;
 use crate::input::scene::Plane;
 use crate::solution::BodyField;
+use crate::vec2::dot;
 
 /// Thickness of the boundary layer of [`interior`], as a fraction of the nearest element's
 /// length: 0.5.
@@ -95,11 +96,6 @@ pub const CORNER_ANGLE: f64 = std::f64::consts::PI / 6.0;
 
 // ---------------------------------------------------------------------------------------
 // Small 2-vector helpers.
-
-#[inline]
-fn dot(a: Vec2, b: Vec2) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
 
 #[inline]
 fn lerp2(a: Vec2, b: Vec2, xi: f64) -> Vec2 {
@@ -420,7 +416,7 @@ struct Prepared<'a> {
 
 /// Where a boundary-layer ray starts ([`interior`]).
 #[derive(Debug, Clone, Copy)]
-enum Base {
+enum RayBase {
     /// The point at parameter ξ of an element.
     Element(usize, f64),
     /// A corner node.
@@ -430,14 +426,14 @@ enum Base {
 /// How [`interior`] obtains the value at a point: decided by the geometry alone, so that
 /// one plan serves every state of a run. Points relative to the body's origin.
 #[derive(Debug, Clone, Copy)]
-enum Plan {
+enum PointPlan {
     /// The boundary value at parameter ξ of an element.
     Boundary(usize, f64),
     /// The Somigliana identities at the point.
     Identities(Vec2),
     /// Linear interpolation with weight `w` between the boundary value at `base` and the
     /// identities at `far`.
-    Ray { base: Base, w: f64, far: Vec2 },
+    Ray { base: RayBase, w: f64, far: Vec2 },
 }
 
 /// The kernel integrals of the identities at one point (scaled coordinates `xs`), per
@@ -618,28 +614,28 @@ impl<'a> Geometry<'a> {
     }
 
     /// How [`interior`] evaluates x (relative; see there).
-    fn plan(&self, x: Vec2) -> Plan {
+    fn plan(&self, x: Vec2) -> PointPlan {
         let (ei, d, xi) = self.nearest(x);
         let le = self.body.elements[ei].length;
         let layer = BOUNDARY_LAYER;
         let rho = layer * le;
         if d >= rho {
-            return Plan::Identities(x);
+            return PointPlan::Identities(x);
         }
         if d == 0.0 {
-            return Plan::Boundary(ei, xi);
+            return PointPlan::Boundary(ei, xi);
         }
         // Rays from the boundary through x: (base, distance r of x from it, layer
         // thickness ρ, base point). The far point of a ray is at distance ρ.
         let foot = self.segments[ei].point(xi);
-        let mut rays = vec![(Base::Element(ei, xi), d, rho, foot)];
+        let mut rays = vec![(RayBase::Element(ei, xi), d, rho, foot)];
         for a in 0..2 {
             let node = self.body.elements[ei].nodes[a];
             if let Some(rho_v) = self.corner_layer[node] {
                 let v = self.nodes[node];
                 let r = crate::bem::kernels::norm2(x[0] - v[0], x[1] - v[1]);
                 if r < layer * rho_v && r > 0.0 {
-                    rays.push((Base::Node(node), r, layer * rho_v, v));
+                    rays.push((RayBase::Node(node), r, layer * rho_v, v));
                 }
             }
         }
@@ -657,7 +653,7 @@ impl<'a> Geometry<'a> {
         if let Some((c, k, x1)) = best {
             if c > d {
                 let (base, r, rho_k, _) = rays[k];
-                return Plan::Ray {
+                return PointPlan::Ray {
                     base,
                     w: r / rho_k,
                     far: x1,
@@ -666,9 +662,9 @@ impl<'a> Geometry<'a> {
         }
         let snap = (NEAR_BOUNDARY_FRACTION * le).max(ON_BOUNDARY_TOLERANCE * self.scaling.length);
         if d < snap {
-            Plan::Boundary(ei, xi)
+            PointPlan::Boundary(ei, xi)
         } else {
-            Plan::Identities(x)
+            PointPlan::Identities(x)
         }
     }
 
@@ -677,16 +673,16 @@ impl<'a> Geometry<'a> {
     fn value(
         &self,
         v: &Values,
-        plan: Plan,
+        plan: PointPlan,
         identities: impl FnOnce(Vec2) -> (Vec2, Mat2),
     ) -> (Vec2, Mat2) {
         match plan {
-            Plan::Boundary(ei, xi) => self.boundary_value(v, ei, xi),
-            Plan::Identities(x) => identities(x),
-            Plan::Ray { base, w, far } => {
+            PointPlan::Boundary(ei, xi) => self.boundary_value(v, ei, xi),
+            PointPlan::Identities(x) => identities(x),
+            PointPlan::Ray { base, w, far } => {
                 let (u0, s0) = match base {
-                    Base::Element(ei, xi) => self.boundary_value(v, ei, xi),
-                    Base::Node(node) => (v.field.u[node], v.nodal[node]),
+                    RayBase::Element(ei, xi) => self.boundary_value(v, ei, xi),
+                    RayBase::Node(node) => (v.field.u[node], v.nodal[node]),
                 };
                 let (u1, s1) = identities(far);
                 (lerp2(u0, u1, w), lerp_mat(&s0, &s1, w))
@@ -885,7 +881,7 @@ pub struct PointSampler<'a> {
     settings: QuadratureSettings,
     /// Per point: the body holding it, its plan and the slot of its cached integrals
     /// (`None`: over [`SAMPLER_CACHE_BYTES`], or no identities needed); `None` outside.
-    points: Vec<Option<(usize, Plan, Option<usize>)>>,
+    points: Vec<Option<(usize, PointPlan, Option<usize>)>>,
     cached: Vec<Integrals>,
 }
 
@@ -917,7 +913,7 @@ impl<'a> PointSampler<'a> {
             .iter()
             .map(|b| Geometry::new(b.body, &b.material, scaling(b.body)))
             .collect();
-        let located: Vec<Option<(usize, Plan)>> = at
+        let located: Vec<Option<(usize, PointPlan)>> = at
             .par_iter()
             .map(|&p| {
                 let bi = geometries
@@ -935,9 +931,9 @@ impl<'a> PointSampler<'a> {
             .map(|p| {
                 p.map(|(bi, plan)| {
                     let y = match plan {
-                        Plan::Identities(x) => Some(x),
-                        Plan::Ray { far, .. } => Some(far),
-                        Plan::Boundary(..) => None,
+                        PointPlan::Identities(x) => Some(x),
+                        PointPlan::Ray { far, .. } => Some(far),
+                        PointPlan::Boundary(..) => None,
                     };
                     let bytes = geometries[bi].frames.len() * pair;
                     let slot = y.filter(|_| bytes <= budget).map(|y| {

@@ -30,7 +30,7 @@ use clarabel::solver::{
 
 use crate::contact::problem::{Problem, RowKind};
 use crate::input::model::Model;
-use crate::linalg::matvec;
+use crate::linalg::{jacobi_scaling, matvec};
 
 mod fixed_point;
 mod newton;
@@ -41,7 +41,7 @@ pub use newton::Seed;
 
 /// The law of one full row in one convex programme.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum Law {
+enum RowLaw {
     /// `[u] = a`.
     Tie(f64),
     /// `[u] + h ≥ 0`.
@@ -164,14 +164,13 @@ impl<'a> Exact<'a> {
 
     pub fn new(problem: &'a Problem) -> Exact<'a> {
         let n = problem.n_dofs;
+        // The Jacobi scaling of each body's S; an entry that is not positive and finite
+        // keeps the factor 1.
         let mut d = vec![1.0; n];
         for (b, op) in problem.ops.iter().enumerate() {
-            for l in 0..op.u_idx.len() {
-                let s = op.s[(l, l)];
-                if s > 0.0 && s.is_finite() {
-                    d[problem.dof_start[b] + l] = 1.0 / s.sqrt();
-                }
-            }
+            let diag = (0..op.u_idx.len()).map(|l| op.s[(l, l)]);
+            let body = jacobi_scaling(diag.map(|s| if s > 0.0 && s.is_finite() { s } else { 0.0 }));
+            d[problem.dof_start[b]..][..body.len()].copy_from_slice(&body);
         }
         let rho = problem
             .full
@@ -242,7 +241,7 @@ impl<'a> Exact<'a> {
         &self,
         factor: f64,
         cohesion: &[f64],
-        laws: &[Law],
+        laws: &[RowLaw],
         u: &[f64],
         strict: bool,
     ) -> bool {
@@ -273,9 +272,9 @@ impl<'a> Exact<'a> {
             work += cohesion[r] * j;
             size += (cohesion[r] * j).abs();
             match *law {
-                Law::Tie(_) if j.abs() > 1e-6 => return false,
-                Law::Gap if j < -1e-6 => return false,
-                Law::Tresca { bound, .. } => {
+                RowLaw::Tie(_) if j.abs() > 1e-6 => return false,
+                RowLaw::Gap if j < -1e-6 => return false,
+                RowLaw::Tresca { bound, .. } => {
                     work += bound * j.abs();
                     size += bound * j.abs();
                 }
@@ -323,7 +322,7 @@ impl<'a> Exact<'a> {
 
     /// One convex programme for the load factor, the cohesion term of each full row and
     /// the laws.
-    fn programme(&self, factor: f64, cohesion: &[f64], laws: &[Law]) -> ProgrammeOutcome {
+    fn programme(&self, factor: f64, cohesion: &[f64], laws: &[RowLaw]) -> ProgrammeOutcome {
         let n = self.problem.n_dofs;
         let (q, qs) = self.linear_term(factor, cohesion);
         let c = self.constraints(laws, q, qs);
@@ -428,13 +427,13 @@ impl<'a> Exact<'a> {
 
     /// The constraint rows `A x + s = b` of the laws (equalities first, then inequalities)
     /// and the objective's linear term over x and the Tresca variables.
-    fn constraints(&self, laws: &[Law], q: Vec<f64>, qs: f64) -> Constraints {
+    fn constraints(&self, laws: &[RowLaw], q: Vec<f64>, qs: f64) -> Constraints {
         let full = &self.problem.full;
         let n = self.problem.n_dofs;
         let mut z_of = vec![usize::MAX; full.len()];
         let mut nz = 0;
         for (r, law) in laws.iter().enumerate() {
-            if matches!(law, Law::Tresca { .. }) {
+            if matches!(law, RowLaw::Tresca { .. }) {
                 z_of[r] = n + nz;
                 nz += 1;
             }
@@ -452,7 +451,7 @@ impl<'a> Exact<'a> {
                 .map(move |&(k, c)| (k, c * self.d[k] / self.rho[r]))
         };
         for (r, law) in laws.iter().enumerate() {
-            if let Law::Tie(a) = *law {
+            if let RowLaw::Tie(a) = *law {
                 let i = b.len();
                 trip.extend(scaled(r).map(|(k, v)| (i, k, v)));
                 b.push(a / (self.rho[r] * qs));
@@ -463,13 +462,13 @@ impl<'a> Exact<'a> {
         let mut ineq_of = vec![usize::MAX; full.len()];
         for (r, law) in laws.iter().enumerate() {
             match *law {
-                Law::Gap => {
+                RowLaw::Gap => {
                     let i = b.len();
                     ineq_of[r] = i;
                     trip.extend(scaled(r).map(|(k, v)| (i, k, -v)));
                     b.push(full[r].row.gap / (self.rho[r] * qs));
                 }
-                Law::Tresca { bound, anchor } => {
+                RowLaw::Tresca { bound, anchor } => {
                     let i = b.len();
                     ineq_of[r] = i;
                     trip.extend(scaled(r).map(|(k, v)| (i, k, v)));
@@ -499,7 +498,7 @@ impl<'a> Exact<'a> {
         &self,
         sol: &clarabel::solver::DefaultSolution<f64>,
         c: &Constraints,
-        laws: &[Law],
+        laws: &[RowLaw],
         qs: f64,
     ) -> Programme {
         let n = self.problem.n_dofs;
@@ -515,13 +514,13 @@ impl<'a> Exact<'a> {
         for (r, law) in laws.iter().enumerate() {
             let i = c.ineq_of[r];
             match law {
-                Law::Gap => {
+                RowLaw::Gap => {
                     force[r] = sol.z[i] * qs / self.rho[r];
                     // On the central path z s = μ: the larger of the two is the one of the
                     // exact complementary pair.
                     closed[r] = sol.z[i] > sol.s[i];
                 }
-                Law::Tresca { .. } => {
+                RowLaw::Tresca { .. } => {
                     force[r] = (sol.z[i + 1] - sol.z[i]) * qs / self.rho[r];
                     closed[r] = true;
                     // Slipping: one slack is the slip, the other side's multiplier the
@@ -555,7 +554,7 @@ impl<'a> Exact<'a> {
     fn distribute(
         &self,
         model: &Model,
-        laws: &[Law],
+        laws: &[RowLaw],
         normal: &[Option<usize>],
         cohesion: &[f64],
         (sol, strict): (&Programme, bool),
@@ -582,10 +581,10 @@ impl<'a> Exact<'a> {
             }
         };
         let carries = |r: usize| match laws[r] {
-            Law::Tie(_) => true,
-            Law::Gap => sol.closed[r],
-            Law::Tresca { .. } => normal[r].is_none_or(|n| sol.closed[n]),
-            Law::Free => false,
+            RowLaw::Tie(_) => true,
+            RowLaw::Gap => sol.closed[r],
+            RowLaw::Tresca { .. } => normal[r].is_none_or(|n| sol.closed[n]),
+            RowLaw::Free => false,
         };
         let mut var = vec![usize::MAX; m];
         let mut nv = 0;
@@ -623,13 +622,13 @@ impl<'a> Exact<'a> {
                 continue;
             }
             match (laws[r], f.row.kind) {
-                (Law::Gap, _) => {
+                (RowLaw::Gap, _) => {
                     // λ₀ + δ ≥ 0 (λ holds the cohesion term: a cohesive row pulls up to c w).
                     let i = bin.len();
                     ineq.push((i, j, -1.0));
                     bin.push(admit(l0[r]));
                 }
-                (Law::Tresca { .. }, RowKind::Friction) => {
+                (RowLaw::Tresca { .. }, RowKind::Friction) => {
                     let Some(n) = normal[r] else { continue };
                     let jn = var[n];
                     if jn == usize::MAX {
@@ -817,12 +816,12 @@ impl<'a> Exact<'a> {
             let mixed = mixer.next(&friction, &sol, &x, &gx);
             for (i, &r) in friction.iter().enumerate() {
                 next[r] = if mixed[i] > 0.0 {
-                    Law::Tresca {
+                    RowLaw::Tresca {
                         bound: mixed[i],
                         anchor: start[r],
                     }
                 } else {
-                    Law::Free
+                    RowLaw::Free
                 };
             }
             settled = !broke && kinds_held(&next, &laws) && change <= SETTLED;
@@ -878,15 +877,15 @@ impl Exact<'_> {
         model: &Model,
         friction: &[usize],
         normal: &[Option<usize>],
-        laws: &[Law],
+        laws: &[RowLaw],
         sol: &Programme,
         cohesion: &[f64],
     ) -> (Vec<f64>, Vec<f64>) {
         let x = friction
             .iter()
             .map(|&r| match laws[r] {
-                Law::Tresca { bound, .. } => bound,
-                Law::Tie(_) => f64::NAN,
+                RowLaw::Tresca { bound, .. } => bound,
+                RowLaw::Tie(_) => f64::NAN,
                 _ => 0.0,
             })
             .collect();
@@ -907,13 +906,13 @@ impl Exact<'_> {
 
 /// The laws of a step's first programme: bonded rows tied, normal rows unilateral, every
 /// tangential row tied at its start (a first estimate of the normal forces).
-fn first_laws(full: &[crate::contact::problem::FullRow], start: &[f64]) -> Vec<Law> {
+fn first_laws(full: &[crate::contact::problem::FullRow], start: &[f64]) -> Vec<RowLaw> {
     full.iter()
         .enumerate()
         .map(|(r, f)| match f.row.kind {
-            RowKind::Bonded if f.row.comp == 1 => Law::Tie(-f.row.gap),
-            RowKind::Normal => Law::Gap,
-            RowKind::Bonded | RowKind::Stick | RowKind::Friction => Law::Tie(start[r]),
+            RowKind::Bonded if f.row.comp == 1 => RowLaw::Tie(-f.row.gap),
+            RowKind::Normal => RowLaw::Gap,
+            RowKind::Bonded | RowKind::Stick | RowKind::Friction => RowLaw::Tie(start[r]),
         })
         .collect()
 }
@@ -944,12 +943,12 @@ fn settled_residual(
     friction: &[usize],
     normal: &[Option<usize>],
     done: &Programme,
-    laws: &[Law],
+    laws: &[RowLaw],
 ) -> f64 {
     let bounds: Vec<f64> = friction
         .iter()
         .map(|&r| match laws[r] {
-            Law::Tresca { bound, .. } => bound,
+            RowLaw::Tresca { bound, .. } => bound,
             _ => 0.0,
         })
         .collect();
@@ -957,7 +956,7 @@ fn settled_residual(
 }
 
 /// Whether two sets of laws have the same kind row by row.
-fn kinds_held(a: &[Law], b: &[Law]) -> bool {
+fn kinds_held(a: &[RowLaw], b: &[RowLaw]) -> bool {
     a.iter()
         .zip(b)
         .all(|(p, q)| std::mem::discriminant(p) == std::mem::discriminant(q))
@@ -975,17 +974,17 @@ impl StickTies<'_> {
     /// Stick rows follow their pair's status; one that the statuses untie and tie again (a
     /// pair at the contact's edge: tied it opens, untied it closes) stays untied, closed at
     /// zero normal force and tangentially free (the μ → ∞ limit of Coulomb's law there).
-    fn update(&self, sol: &Programme, laws: &[Law], next: &mut [Law], flips: &mut [u8]) {
+    fn update(&self, sol: &Programme, laws: &[RowLaw], next: &mut [RowLaw], flips: &mut [u8]) {
         for (r, f) in self.full.iter().enumerate() {
             if let (RowKind::Stick, Some(nr)) = (f.row.kind, self.normal[r]) {
                 let tie = sol.closed[nr] && flips[r] < 2;
-                if tie != matches!(laws[r], Law::Tie(_)) && self.programmes > 1 {
+                if tie != matches!(laws[r], RowLaw::Tie(_)) && self.programmes > 1 {
                     flips[r] += 1;
                 }
                 next[r] = if tie && flips[r] < 2 {
-                    Law::Tie(self.start[r])
+                    RowLaw::Tie(self.start[r])
                 } else {
-                    Law::Free
+                    RowLaw::Free
                 };
             }
         }

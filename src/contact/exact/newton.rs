@@ -27,7 +27,7 @@ use faer::linalg::solvers::Solve;
 use faer::sparse::{SparseColMat, Triplet};
 use faer::Mat;
 
-use super::{Exact, Law, Programme};
+use super::{Exact, Programme, RowLaw};
 use crate::contact::problem::RowKind;
 use crate::input::model::Model;
 use crate::solution::{InterfaceResult, PairStatus};
@@ -163,9 +163,9 @@ impl Exact<'_> {
     pub(super) fn finish(
         &self,
         f: &Finish,
-        laws: &[Law],
+        laws: &[RowLaw],
         sol: &Programme,
-    ) -> Option<(Programme, Vec<Law>)> {
+    ) -> Option<(Programme, Vec<RowLaw>)> {
         let status: Vec<Status> = (0..self.problem.full.len())
             .map(|r| self.first_status(f, laws, sol, r))
             .collect();
@@ -184,7 +184,7 @@ impl Exact<'_> {
         mut status: Vec<Status>,
         mut prior: Vec<f64>,
         proximal: bool,
-    ) -> Option<(Programme, Vec<Law>)> {
+    ) -> Option<(Programme, Vec<RowLaw>)> {
         let mut seen: Vec<Vec<Status>> = Vec::new();
         // The proximal weight and centre (scaled unknowns) once a status left a body free.
         let mut prox: Option<(f64, Vec<f64>)> = None;
@@ -288,7 +288,7 @@ impl Exact<'_> {
         status: &[Status],
         u: Vec<f64>,
         force: Vec<f64>,
-    ) -> Option<(Programme, Vec<Law>)> {
+    ) -> Option<(Programme, Vec<RowLaw>)> {
         let (tol_f, _) = self.tolerances(f, &u, &force);
         let pushed = (0..status.len()).all(|r| match (status[r], f.normal[r]) {
             (Status::Slip(_), Some(n)) => force[n] - f.cohesion[n] >= -tol_f,
@@ -300,14 +300,14 @@ impl Exact<'_> {
     }
 
     /// A row's status from the programme's.
-    fn first_status(&self, f: &Finish, laws: &[Law], sol: &Programme, r: usize) -> Status {
+    fn first_status(&self, f: &Finish, laws: &[RowLaw], sol: &Programme, r: usize) -> Status {
         let row = &self.problem.full[r].row;
         let normal_closed = f.normal[r].is_some_and(|n| sol.closed[n]);
         match (laws[r], row.kind) {
-            (Law::Tie(v), RowKind::Bonded | RowKind::Stick) => Status::Fixed(v),
-            (Law::Gap, _) if sol.closed[r] => Status::Fixed(-row.gap),
+            (RowLaw::Tie(v), RowKind::Bonded | RowKind::Stick) => Status::Fixed(v),
+            (RowLaw::Gap, _) if sol.closed[r] => Status::Fixed(-row.gap),
             (_, RowKind::Friction) if normal_closed => {
-                if sol.slipping[r] || matches!(laws[r], Law::Free) {
+                if sol.slipping[r] || matches!(laws[r], RowLaw::Free) {
                     let slip = self.jump(r, &sol.u) - f.start[r];
                     let sense = if sol.force[r] != 0.0 {
                         sol.force[r].signum()
@@ -511,7 +511,7 @@ impl Exact<'_> {
         status: &[Status],
         u: Vec<f64>,
         force: Vec<f64>,
-    ) -> (Programme, Vec<Law>) {
+    ) -> (Programme, Vec<RowLaw>) {
         let full = &self.problem.full;
         let m = full.len();
         let (_, tol_u) = self.tolerances(f, &u, &force);
@@ -529,29 +529,29 @@ impl Exact<'_> {
             .collect();
         let mut closed = vec![false; m];
         let mut slipping = vec![false; m];
-        let mut laws = vec![Law::Free; m];
+        let mut laws = vec![RowLaw::Free; m];
         for (r, fr) in full.iter().enumerate() {
             let s = status[r];
             let pair_touches = f.normal[r].is_some_and(|n| touching[n]);
             let tangential = matches!(fr.row.kind, RowKind::Friction | RowKind::Stick);
             closed[r] = s != Status::Off || touching[r] || (tangential && pair_touches);
             laws[r] = match (fr.row.kind, s) {
-                (RowKind::Normal, _) => Law::Gap,
-                (RowKind::Stick, Status::Off) if pair_touches => Law::Tie(f.start[r]),
-                (RowKind::Friction, Status::Off) if !pair_touches => Law::Free,
+                (RowKind::Normal, _) => RowLaw::Gap,
+                (RowKind::Stick, Status::Off) if pair_touches => RowLaw::Tie(f.start[r]),
+                (RowKind::Friction, Status::Off) if !pair_touches => RowLaw::Free,
                 (RowKind::Friction, s) => {
                     let nr = f.normal[r].unwrap_or(r);
                     // A row at its bound that does not move is sticking as well: the
                     // distribution of junction forces keeps it within its cone, not on it.
                     slipping[r] =
                         matches!(s, Status::Slip(_)) && (jumps[r] - f.start[r]).abs() > tol_u;
-                    Law::Tresca {
+                    RowLaw::Tresca {
                         bound: self.mu(f.model, r) * (force[nr] - f.cohesion[nr]).max(0.0),
                         anchor: f.start[r],
                     }
                 }
-                (_, Status::Fixed(v)) => Law::Tie(v),
-                _ => Law::Free,
+                (_, Status::Fixed(v)) => RowLaw::Tie(v),
+                _ => RowLaw::Free,
             };
         }
         (

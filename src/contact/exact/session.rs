@@ -73,7 +73,7 @@ impl crate::contact::Session<'_> {
         };
         let mut notes = Vec::new();
         let (programmes, residual) = (out.programmes, out.residual);
-        let Verdict {
+        let StepVerdict {
             sol,
             failure,
             mechanism,
@@ -198,9 +198,9 @@ impl crate::contact::Session<'_> {
         load_step: usize,
         programmes: usize,
         residual: f64,
-    ) -> Verdict {
+    ) -> StepVerdict {
         let step = load_step + 1;
-        let failed = |message: String, sol, undecided| Verdict {
+        let failed = |message: String, sol, undecided| StepVerdict {
             sol,
             failure: Some(crate::error::Error::numerical(message)),
             mechanism: false,
@@ -208,7 +208,7 @@ impl crate::contact::Session<'_> {
             undecided,
         };
         match result {
-            Ok(sol) => Verdict {
+            Ok(sol) => StepVerdict {
                 sol: Some(sol),
                 failure: None,
                 mechanism: false,
@@ -233,7 +233,7 @@ impl crate::contact::Session<'_> {
             Err(StepFailure::Mechanism(du)) => {
                 let motions = self.problem.rigid_fit(self.model, &du);
                 let (words, found) = crate::contact::mechanism::motion_of(self.model, motions);
-                Verdict {
+                StepVerdict {
                     sol: None,
                     failure: Some(crate::error::Error::numerical(format!(
                         "the contact solver (exact) at load step {step}: no equilibrium \
@@ -259,7 +259,7 @@ impl crate::contact::Session<'_> {
 
 /// What a full-row step gives the driver: its solution (none at a mechanism or a failure)
 /// and its failure.
-struct Verdict {
+struct StepVerdict {
     sol: Option<Programme>,
     failure: Option<crate::error::Error>,
     mechanism: bool,

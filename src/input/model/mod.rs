@@ -38,6 +38,7 @@ use crate::error::{did_you_mean, Error, Result};
 use crate::input::mesh::Mesh;
 use crate::input::scene::{BoundarySpec, InitialState, InterfaceSpec, Scene, Tangential};
 use crate::input::tables::{self, Resolved};
+use crate::vec2::{cross, dot, norm, sub};
 
 mod body;
 mod checks;
@@ -546,18 +547,6 @@ fn pair_values(
 // ---------------------------------------------------------------------------------------
 // Small 2-vector helpers.
 
-fn sub(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
-    [a[0] - b[0], a[1] - b[1]]
-}
-fn norm(a: [f64; 2]) -> f64 {
-    a[0].hypot(a[1])
-}
-fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
-}
-fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[0] + a[1] * b[1]
-}
 fn unit(a: [f64; 2]) -> [f64; 2] {
     let n = norm(a);
     [a[0] / n, a[1] / n]

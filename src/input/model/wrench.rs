@@ -13,6 +13,7 @@
 
 use super::{Body, Interface, Model, Role};
 use crate::input::scene::{Condition, Frame};
+use crate::vec2::cross;
 
 /// Force (x, y) and moment of one load.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
@@ -38,10 +39,6 @@ impl Wrench {
     pub fn force(&self) -> f64 {
         self.fx.hypot(self.fy)
     }
-}
-
-pub(crate) fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
-    a[0] * b[1] - a[1] * b[0]
 }
 
 /// The centroid moments are taken about, kept as one of the body's nodes `o` and the

@@ -389,10 +389,12 @@ pub struct OutputSpec {
     pub sections: Vec<SectionSpec>,
 }
 
-#[derive(Debug, Clone, Default)]
+/// The scene's units, as written in it (empty when not given); serialised as `summary.json`'s
+/// and the archive's `units`, its fields in alphabetical order as every record there.
+#[derive(Debug, Clone, Default, serde::Serialize)]
 pub struct Units {
-    pub length: String,
     pub force: String,
+    pub length: String,
 }
 
 /// A validated scene. Paths are resolved against the scene file's folder.

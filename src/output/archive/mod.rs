@@ -1,4 +1,4 @@
-//! `archive.h5`: everything needed to re-examine a run (SPEC.md "Outputs"), written from
+//! `archive.h5`: everything needed to re-examine a run (README "Outputs"), written from
 //! a [`RunRecord`] and read back into one.
 //!
 //! Place in the flow: pipeline → [`RunRecord`] → **`archive`**; `sgbem inspect` and

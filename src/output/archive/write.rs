@@ -255,11 +255,7 @@ pub(super) fn write_model(file: &h5::File, rec: &RunRecord) -> R<()> {
     let overrides = serde_json::to_string(&rec.overrides).unwrap_or_default();
     put_attr_str(root, "overrides", &overrides)?;
     put_attr_str(root, "mesh_sha256", &rec.mesh_sha256)?;
-    let units = serde_json::to_string(&crate::output::summary::Units {
-        force: rec.units.force.clone(),
-        length: rec.units.length.clone(),
-    })
-    .unwrap_or_default();
+    let units = serde_json::to_string(&rec.units).unwrap_or_default();
     put_attr_str(root, "units", &units)?;
     put_attr_str(root, "title", &rec.title)?;
     put_attr_str(root, "plane", plane_name(rec.plane))?;
