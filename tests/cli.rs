@@ -706,7 +706,9 @@ fn progress_moves_on_a_terminal() {
 /// The full rows (the default of a wall whose joints meet at T-junctions) on a terminal: the
 /// contact bar's message follows each convex programme with its open and slipping rows and
 /// the residual of Coulomb's law (before, it stayed on the seed's last message for the whole
-/// step: 16 s on the stone wall). A 4 × 5 wall at half its weight sideways: 15 programmes.
+/// step: 16 s on the stone wall), and once the residual has fallen over 5 programmes, how
+/// many more it needs at that rate (an upper bound: the linear solve of the statuses ends
+/// most steps sooner). A 4 × 5 wall at half its weight sideways: 15 programmes.
 #[test]
 fn the_full_rows_show_each_programme_on_a_terminal() {
     let text = run_on_a_terminal(
@@ -725,6 +727,19 @@ fn the_full_rows_show_each_programme_on_a_terminal() {
     assert!(shown.len() >= 3, "programmes drawn: {shown:?}");
     assert!(shown.contains(&"1"), "{shown:?}");
     assert!(text.contains("normal rows open"), "{text}");
+    // Once the residual has fallen over 5 programmes, the programmes left at its rate.
+    let left: Vec<usize> = text
+        .split(['\r', '\n'])
+        .filter_map(|f| {
+            f.split("settled in about ")
+                .nth(1)?
+                .split(' ')
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert!(!left.is_empty() && left.iter().all(|&n| n >= 1), "{text}");
 }
 
 /// `sgbem run` of the shipped scene `scene` with `args` under a pseudo-terminal, into a

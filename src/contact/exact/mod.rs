@@ -131,8 +131,16 @@ impl<'a> Exact<'a> {
     }
 
     /// The contact bar's message after a programme (or before the seed's linear solve):
-    /// the rows open and slipping, and the residual of Coulomb's law where rows have one.
-    fn show(&self, programmes: usize, sol: Option<&Programme>, residual: Option<f64>) {
+    /// the rows open and slipping, the residual of Coulomb's law where rows have one, and
+    /// `left`: the programmes and seconds the fixed point needs at the rate its residual
+    /// falls ([`programmes_left`]).
+    fn show(
+        &self,
+        programmes: usize,
+        sol: Option<&Programme>,
+        residual: Option<f64>,
+        left: Option<(usize, f64)>,
+    ) {
         let Some((stage, step)) = self.progress else {
             return;
         };
@@ -152,6 +160,13 @@ impl<'a> Exact<'a> {
                     .count();
                 let slipping = sol.slipping.iter().filter(|&&x| x).count();
                 let law = residual.map_or(String::new(), |r| format!(", Coulomb residual {r:.1e}"));
+                let law = match left.filter(|_| residual.is_some()) {
+                    Some((n, secs)) => format!(
+                        "{law}, settled in about {n} more ({}) at its rate",
+                        crate::estimate::fmt_seconds(secs)
+                    ),
+                    None => law,
+                };
                 format!(
                     "step {}, convex programme {programmes}: {open} of {normal} normal rows \
                      open, {slipping} rows slipping{law}",
@@ -742,6 +757,7 @@ impl<'a> Exact<'a> {
         let mut tried: Option<usize> = None;
         let mut finished = false;
         let mut residuals = Vec::new();
+        let began = std::time::Instant::now();
         let fail = |result, programmes, ipm, change| StepOutcome {
             result,
             programmes,
@@ -750,7 +766,7 @@ impl<'a> Exact<'a> {
             finished: false,
         };
         if let Some(seed) = seed {
-            self.show(0, None, None);
+            self.show(0, None, None, None);
             let fin = newton::Finish::new(model, factor, cohesion, &normal, start);
             if let Some((done, done_laws)) = self.settle(&fin, seed.status, seed.prior, false) {
                 change = settled_residual(&friction, &normal, &done, &done_laws);
@@ -791,11 +807,14 @@ impl<'a> Exact<'a> {
             // Coulomb's bounds from the normal forces: G(x).
             let (x, gx) = self.bounds(model, &friction, &normal, &laws, &sol, cohesion);
             change = coulomb_residual(&friction, &normal, &sol, &x, &gx);
-            self.show(
-                programmes,
-                Some(&sol),
-                (!friction.is_empty()).then_some(change),
-            );
+            let left = programmes_left(&residuals, change).map(|n| {
+                (
+                    n,
+                    n as f64 * began.elapsed().as_secs_f64() / programmes as f64,
+                )
+            });
+            let law = (!friction.is_empty()).then_some(change);
+            self.show(programmes, Some(&sol), law, left);
             // Where the statuses held since the last programme, Coulomb's law with these
             // statuses is one linear solve (`newton`).
             let statuses = (sol.closed.clone(), sol.slipping.clone());
@@ -931,6 +950,26 @@ fn stalled(residuals: &[f64]) -> bool {
     min(&residuals[n - STALL_WINDOW..]) > 0.5 * min(&residuals[..n - STALL_WINDOW])
 }
 
+/// The programmes the fixed point needs to settle at the rate its residual fell over the
+/// last `RATE_WINDOW` programmes (`residuals` before the newest, `last`): the residual is
+/// taken to fall geometrically, as a fixed point that converges linearly does. None where
+/// it did not fall over that window (no rate to go by) or has settled.
+fn programmes_left(residuals: &[f64], last: f64) -> Option<usize> {
+    if residuals.len() < RATE_WINDOW || last.is_nan() || last <= SETTLED {
+        return None;
+    }
+    let first = residuals[residuals.len() - RATE_WINDOW];
+    let q = (last / first).powf(1.0 / RATE_WINDOW as f64);
+    if q.is_nan() || q >= 0.95 {
+        return None;
+    }
+    let n = ((SETTLED / last).ln() / q.ln()).ceil();
+    (n.is_finite() && n >= 1.0).then(|| n.min(1e6) as usize)
+}
+
+/// The programmes over which the fall of Coulomb's residual gives the rate shown.
+const RATE_WINDOW: usize = 5;
+
 /// The programmes over which the fixed point must make progress (`stalled`).
 const STALL_WINDOW: usize = 50;
 
@@ -1029,3 +1068,20 @@ const DRIFT_LIMIT: f64 = 1e8;
 
 /// The convex programmes a load step of the full-row solver may take.
 const FULL_ROW_PROGRAMMES: usize = 500;
+
+#[cfg(test)]
+mod tests {
+    use super::programmes_left;
+
+    #[test]
+    fn the_programmes_left_follow_the_residuals_rate() {
+        // Halving per programme: from 1e-3 · 2^-6 to 1e-8 takes 11 more (2^-16.6).
+        let r: Vec<f64> = (0..6).map(|k| 1e-3 * 0.5f64.powi(k)).collect();
+        let last = 1e-3 * 0.5f64.powi(6);
+        assert_eq!(programmes_left(&r, last), Some(11));
+        // Not falling, too few, or settled: no estimate.
+        assert_eq!(programmes_left(&[1e-3; 6], 1e-3), None);
+        assert_eq!(programmes_left(&r[..3], last), None);
+        assert_eq!(programmes_left(&r, 1e-9), None);
+    }
+}
