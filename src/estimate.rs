@@ -356,12 +356,12 @@ fn k_steps(scene: &Scene) -> f64 {
 /// set `output.history` keeps the end of each load step ("steps"): the 105-brick wall
 /// (15 555 unknowns, up to 1926 states: 3.0e7; 288 MB written with every iteration) does,
 /// the other shipped scene without `history`, wall_collapse (2.8e5), does not.
-pub const FULL_HISTORY_LIMIT: f64 = 1e7;
+pub(crate) const FULL_HISTORY_LIMIT: f64 = 1e7;
 
 /// The default of `output.history` scaled to the scene: "steps" when neither
 /// `output.history` nor `output.every` is set and a full history would record more than
 /// [`FULL_HISTORY_LIMIT`] unknowns. Returns the run note that says so.
-pub fn scale_history(scene: &mut Scene, model: &Model) -> Option<String> {
+pub(crate) fn scale_history(scene: &mut Scene, model: &Model) -> Option<String> {
     use crate::input::scene::HistoryLevel;
     if scene.output.history_given || scene.output.every != 1 {
         return None;
@@ -700,7 +700,7 @@ fn probe(bytes: f64, scene_file: &std::path::Path) -> Result<()> {
 impl Estimate {
     /// Err (input error, exit 2) when the estimate exceeds the memory available: the
     /// message names the estimate, the memory available and the fix.
-    pub fn check_fits(&self, model: &Model, scene_file: &std::path::Path) -> Result<()> {
+    pub(crate) fn check_fits(&self, model: &Model, scene_file: &std::path::Path) -> Result<()> {
         let Some((avail, source)) = available_memory() else {
             return Ok(());
         };
@@ -761,7 +761,7 @@ impl Estimate {
     }
 
     /// The contact stage's line for `sgbem check`, with a unilateral interface.
-    pub fn contact_line(&self) -> Option<String> {
+    pub(crate) fn contact_line(&self) -> Option<String> {
         self.contact.as_ref().map(|c| {
             format!(
                 "up to about {} for the contact stage ({} unilateral pairs, {} rows, up to {} \

@@ -24,7 +24,7 @@ pub mod contact;
 pub mod error;
 pub mod estimate;
 pub mod input;
-pub mod linalg;
+pub(crate) mod linalg;
 pub mod output;
 pub mod pipeline;
 pub mod plan;

@@ -15,7 +15,7 @@ pub fn matvec(m: &Mat<f64>, x: &[f64]) -> Vec<f64> {
 /// The symmetric diagonal (Jacobi) scaling of a matrix from its diagonal: `D = diag(1/√|a_ii|)`,
 /// so that `D A D` has a unit diagonal, which keeps the pivots of a factorisation O(1). A zero
 /// (or NaN) diagonal entry keeps the factor 1.
-pub fn jacobi_scaling(diag: impl Iterator<Item = f64>) -> Vec<f64> {
+pub(crate) fn jacobi_scaling(diag: impl Iterator<Item = f64>) -> Vec<f64> {
     diag.map(|a| {
         let d = a.abs();
         if d > 0.0 {
@@ -30,7 +30,7 @@ pub fn jacobi_scaling(diag: impl Iterator<Item = f64>) -> Vec<f64> {
 /// `X = K⁻¹ B` by LU with partial pivoting after the symmetric Jacobi scaling S of K
 /// ([`jacobi_scaling`]): `X = S (S K S)⁻¹ S B`, with the smallest over the largest pivot of the
 /// scaled LU and the relative residual of the scaled solve.
-pub struct ScaledSolve {
+pub(crate) struct ScaledSolve {
     pub x: Mat<f64>,
     pub pivot_ratio: f64,
     pub residual: f64,
@@ -38,7 +38,7 @@ pub struct ScaledSolve {
 
 /// Why [`scaled_lu_solve`] refused a system.
 #[derive(Debug, Clone, Copy)]
-pub enum ScaledSolveFailure {
+pub(crate) enum ScaledSolveFailure {
     /// A pivot ratio of at most 1e-14 (or NaN): K is singular.
     Singular { pivot_ratio: f64 },
     /// A relative residual of 1e-8 or more (or NaN): K is ill-conditioned.
@@ -47,7 +47,7 @@ pub enum ScaledSolveFailure {
 
 /// Solves `K X = B` for a square K (see [`ScaledSolve`]); an empty K gives an empty X with a
 /// pivot ratio of 1 and no residual.
-pub fn scaled_lu_solve(
+pub(crate) fn scaled_lu_solve(
     k: MatRef<'_, f64>,
     b: MatRef<'_, f64>,
 ) -> Result<ScaledSolve, ScaledSolveFailure> {
@@ -88,14 +88,14 @@ pub fn scaled_lu_solve(
 
 /// The solution of the 3 × 3 system `a x = b` by elimination with partial pivoting; None
 /// where a pivot vanishes against the largest entry.
-pub fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
+pub(crate) fn solve3(a: [[f64; 3]; 3], b: [f64; 3]) -> Option<[f64; 3]> {
     let x = solve_small(a.iter().map(|r| r.to_vec()).collect(), b.to_vec())?;
     Some([x[0], x[1], x[2]])
 }
 
 /// The solution of a small dense system `a x = b` (rows of `a`) by elimination with partial
 /// pivoting; None where a pivot vanishes against the largest entry.
-pub fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
+pub(crate) fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f64>> {
     let n = b.len();
     let big = a.iter().flatten().fold(0.0f64, |m, v| m.max(v.abs()));
     for k in 0..n {

@@ -28,7 +28,7 @@ pub enum ContactProblem {
 }
 
 impl ContactProblem {
-    pub fn describe(self) -> &'static str {
+    pub(crate) fn describe(self) -> &'static str {
         match self {
             ContactProblem::None => "none (no unilateral interface): one linear solve",
             ContactProblem::Detachment => {
@@ -73,7 +73,7 @@ impl Plan {
 
     /// A numerical failure of the operators, naming the stiffness contrast when it is the
     /// likely cause.
-    pub fn explain(&self, e: Error) -> Error {
+    pub(crate) fn explain(&self, e: Error) -> Error {
         let (c, iface) = &self.contrast;
         if e.exit_code() == 3 && *c >= 1e6 {
             Error::numerical(format!(

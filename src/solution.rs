@@ -334,7 +334,7 @@ impl BodyMotion {
     }
 
     /// The largest speed of the points `nodes` (0 without any).
-    pub fn top_speed(&self, nodes: &[[f64; 2]]) -> f64 {
+    pub(crate) fn top_speed(&self, nodes: &[[f64; 2]]) -> f64 {
         nodes.iter().fold(0.0f64, |a, &x| {
             let v = self.velocity(x);
             a.max(v[0].hypot(v[1]))

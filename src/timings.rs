@@ -23,7 +23,7 @@ impl Timings {
     }
 
     /// `seconds` spent in `stage`, of which `inner` itemises the stages within it.
-    pub fn add_within(&mut self, stage: &'static str, seconds: f64, inner: Timings) {
+    pub(crate) fn add_within(&mut self, stage: &'static str, seconds: f64, inner: Timings) {
         self.add(stage, seconds);
         if !self.1.iter().any(|(s, _)| *s == stage) {
             self.1.push((stage, Timings::default()));
@@ -62,7 +62,7 @@ impl Timings {
 
 /// The whole of `timings.json`: the date of the run and the seconds of its stages.
 #[derive(Debug, Clone, Serialize)]
-pub struct TimingsFile<'a> {
+pub(crate) struct TimingsFile<'a> {
     /// UTC time the run's record was made, ISO 8601.
     pub created: &'a str,
     /// Every stage's seconds and their total.

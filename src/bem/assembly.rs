@@ -92,7 +92,7 @@ impl Unknown {
     }
 
     /// The value at x of a [`Unknown::LoopMode`] distribution ([0, 0] for other unknowns).
-    pub fn loop_mode_value(&self, x: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn loop_mode_value(&self, x: [f64; 2]) -> [f64; 2] {
         match *self {
             Unknown::LoopMode { mode, about, .. } => {
                 let r = about.centred(x);
@@ -855,7 +855,7 @@ impl Scaling {
     }
 
     /// The scaled coordinates of a point given relative to `origin`.
-    pub fn scaled_relative(&self, r: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn scaled_relative(&self, r: [f64; 2]) -> [f64; 2] {
         [
             (r[0] - self.centre[0]) / self.length,
             (r[1] - self.centre[1]) / self.length,

@@ -102,7 +102,7 @@ pub fn condense(sys: &BodySystem, body: &str) -> Result<Condensed> {
 
 impl Condensed {
     /// X = R X0 + factor·r (loads scaled by `factor`).
-    pub fn recover_x_scaled(&self, x0: &[f64], factor: f64) -> Vec<f64> {
+    pub(crate) fn recover_x_scaled(&self, x0: &[f64], factor: f64) -> Vec<f64> {
         if self.recover.nrows() == 0 {
             return Vec::new();
         }

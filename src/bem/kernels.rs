@@ -83,7 +83,7 @@ impl Material {
 
     /// The body-force constant `κ = (7−8ν)/(16πμ(1−ν))` of the Galerkin-vector identity
     /// (docs/formulation.md §4.1); it exists because U as normalised here has no additive constant.
-    pub fn body_force_kappa(&self) -> f64 {
+    pub(crate) fn body_force_kappa(&self) -> f64 {
         (7.0 - 8.0 * self.nu) / (16.0 * PI * self.mu * (1.0 - self.nu))
     }
 
@@ -342,7 +342,7 @@ impl Segment {
     }
 
     /// Euclidean distance from `x` to the closed segment.
-    pub fn distance_to_point(&self, x: Vec2) -> f64 {
+    pub(crate) fn distance_to_point(&self, x: Vec2) -> f64 {
         let c = self.chord();
         let w = [x[0] - self.p[0], x[1] - self.p[1]];
         let cc = c[0] * c[0] + c[1] * c[1];
@@ -355,7 +355,7 @@ impl Segment {
     }
 
     /// Distance between two closed segments. Zero if they touch or cross.
-    pub fn distance_to_segment(&self, other: &Segment) -> f64 {
+    pub(crate) fn distance_to_segment(&self, other: &Segment) -> f64 {
         if segments_cross(self, other) {
             return 0.0;
         }

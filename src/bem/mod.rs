@@ -2,7 +2,7 @@
 //! per-body assembly and condensation onto the interface unknowns.
 
 pub mod assembly;
-pub mod condensation;
+pub(crate) mod condensation;
 pub mod galerkin;
 pub mod kernels;
 pub mod operators;

@@ -170,7 +170,7 @@ pub struct PoleSplit {
 }
 
 impl PoleSplit {
-    pub fn intervals(&self) -> &[(f64, f64)] {
+    pub(crate) fn intervals(&self) -> &[(f64, f64)] {
         &self.buf[..self.len]
     }
 }
@@ -295,7 +295,7 @@ impl QuadratureSettings {
     /// Gauss order for an element of length `length` at distance `distance` from the other
     /// element (or point).
     #[inline]
-    pub fn far_order(&self, distance: f64, length: f64) -> usize {
+    pub(crate) fn far_order(&self, distance: f64, length: f64) -> usize {
         let ratio = distance / length;
         for &(bound, order) in &self.far_orders {
             if ratio < bound {

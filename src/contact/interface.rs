@@ -136,7 +136,7 @@ pub fn assemble(layout: &Layout, condensed: &[Condensed]) -> (Mat<f64>, Vec<f64>
 }
 
 /// [`assemble`] with the loads Z̄0 multiplied by `factor` (the gap offsets are not loads).
-pub fn assemble_scaled(
+pub(crate) fn assemble_scaled(
     layout: &Layout,
     condensed: &[Condensed],
     factor: f64,
@@ -180,7 +180,7 @@ pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
 /// The interface system with the shared displacements of the closed pairs eliminated
 /// ([paper eqs. 21–24]): `K00` and `L00` over `t = [open; forces]`, with the Y indices of
 /// both parts.
-pub struct Reduced {
+pub(crate) struct Reduced {
     pub k00: Mat<f64>,
     pub l00: Mat<f64>,
     /// Y indices of the open pairs' displacements (−U of A and B), first in K00.
@@ -190,7 +190,7 @@ pub struct Reduced {
 }
 
 /// Eliminates the shared displacements of the closed pairs from `K Y + L = 0`.
-pub fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Reduced {
+pub(crate) fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Reduced {
     let (mut forces, mut shared, mut open) = (Vec::new(), Vec::new(), Vec::new());
     for iface in &layout.slots {
         for pair in iface {
@@ -228,7 +228,11 @@ pub fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Reduced {
 /// the closed pairs eliminated, `K00 = [[K_fvfv, K_fvur], [K_urfv, K_urur]]` over
 /// (−U of open pairs, F of closed pairs) with its load `L00`, and the diagonalised
 /// `Ktilde_urur = K_urur − K_urfv K_fvfv⁻¹ K_fvur`, `Ktilde_fvfv = K_fvfv − K_fvur K_urur⁻¹ K_urfv`.
-pub fn reduced_operators(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Vec<(String, Mat<f64>)> {
+pub(crate) fn reduced_operators(
+    layout: &Layout,
+    k: &Mat<f64>,
+    l: &[f64],
+) -> Vec<(String, Mat<f64>)> {
     let Reduced {
         k00,
         l00,

@@ -184,7 +184,7 @@ impl Columns {
     /// Computes the columns of `rows` not yet computed, in parallel (each is a sparse solve
     /// and a product with every body's operator, independent of the others; the values do
     /// not depend on the order).
-    pub fn ensure(&mut self, problem: &Problem, rows: &[usize]) {
+    pub(crate) fn ensure(&mut self, problem: &Problem, rows: &[usize]) {
         use rayon::prelude::*;
         let mut missing: Vec<usize> = rows
             .iter()
@@ -209,18 +209,18 @@ impl Columns {
         self.cols.len()
     }
     /// Column j if it has been computed.
-    pub fn peek(&self, j: usize) -> Option<&[f64]> {
+    pub(crate) fn peek(&self, j: usize) -> Option<&[f64]> {
         self.cols.get(&j).map(|c| c.as_slice())
     }
 }
 
 /// The change of the slip bounds below which they are settled (the Tresca fixed point and
 /// Coulomb's law within an inner problem).
-pub const BOUNDS_SETTLED: f64 = 1e-10;
+pub(crate) const BOUNDS_SETTLED: f64 = 1e-10;
 
 /// The relative change of the slip bounds, over the largest finite bound (1 from the tied
 /// first iteration).
-pub fn bound_change(old: &[f64], new: &[f64]) -> f64 {
+pub(crate) fn bound_change(old: &[f64], new: &[f64]) -> f64 {
     let scale = old
         .iter()
         .chain(new)
@@ -289,7 +289,7 @@ pub struct Violation {
 }
 
 /// The status of every row in one comparable key: 0 closed/stick, 1 open, ±2 slipping.
-pub fn status_key(st: &InnerState) -> Vec<i8> {
+pub(crate) fn status_key(st: &InnerState) -> Vec<i8> {
     st.open
         .iter()
         .zip(&st.sign)
@@ -307,7 +307,7 @@ impl<'a> Inner<'a> {
         self.problem.n_open_rows
     }
 
-    pub fn is_normal(&self, r: usize) -> bool {
+    pub(crate) fn is_normal(&self, r: usize) -> bool {
         self.problem.rows[r].kind == RowKind::Normal
     }
 
@@ -334,7 +334,7 @@ impl<'a> Inner<'a> {
 
     /// The same problem with its friction rows' normal rows and μ (`coulomb`), for a
     /// solver that follows Coulomb's law within it ([`Inner::coulomb_form`]).
-    pub fn with_coulomb(mut self, coulomb: Vec<Option<(usize, f64)>>) -> Inner<'a> {
+    pub(crate) fn with_coulomb(mut self, coulomb: Vec<Option<(usize, f64)>>) -> Inner<'a> {
         self.coulomb = coulomb;
         self
     }
@@ -342,7 +342,7 @@ impl<'a> Inner<'a> {
     /// The problem under Coulomb's law: its friction rows are no longer free where their
     /// bound is zero (an open pair's row slips without force, as any row whose bound is
     /// zero), and their bounds follow the normal forces ([`Inner::coulomb_bounds`]).
-    pub fn coulomb_form(&self) -> Inner<'a> {
+    pub(crate) fn coulomb_form(&self) -> Inner<'a> {
         let mut c = self.clone();
         for (r, m) in self.coulomb.iter().enumerate() {
             if m.is_some() {
@@ -363,7 +363,7 @@ impl<'a> Inner<'a> {
 
     /// The Coulomb coupling of row `r` in the status `open`: its pair's closed normal row and
     /// μ, where `r` slips under Coulomb's law within the solve ([`Inner::coupled`]).
-    pub fn coupling(&self, r: usize, open: &[bool]) -> Option<(usize, f64)> {
+    pub(crate) fn coupling(&self, r: usize, open: &[bool]) -> Option<(usize, f64)> {
         if !self.coupled || !open[r] || !self.is_friction(r) {
             return None;
         }
@@ -375,7 +375,7 @@ impl<'a> Inner<'a> {
     }
 
     /// Whether the Coulomb row `r`'s pair's normal row is open in `open`.
-    pub fn pair_open(&self, r: usize, open: &[bool]) -> bool {
+    pub(crate) fn pair_open(&self, r: usize, open: &[bool]) -> bool {
         matches!(self.coulomb.get(r), Some(Some((k, _))) if open[*k])
     }
 
@@ -400,7 +400,7 @@ impl<'a> Inner<'a> {
     }
 
     /// Whether a stick row ties as its pair closes in this problem.
-    pub fn has_ties(&self) -> bool {
+    pub(crate) fn has_ties(&self) -> bool {
         self.tie_on_close.iter().any(|&t| t)
     }
 
@@ -424,7 +424,7 @@ impl<'a> Inner<'a> {
 
     /// The normal row of the pair whose stick row `r` ties as that pair closes
     /// (`tie_on_close`); None for every other row.
-    pub fn tied_to(&self, r: usize) -> Option<usize> {
+    pub(crate) fn tied_to(&self, r: usize) -> Option<usize> {
         if !self.tie_on_close[r] {
             return None;
         }
@@ -433,7 +433,7 @@ impl<'a> Inner<'a> {
     }
 
     /// The stick row that ties as the normal row `q` closes, if any.
-    pub fn tie_of(&self, q: usize) -> Option<usize> {
+    pub(crate) fn tie_of(&self, q: usize) -> Option<usize> {
         let row = &self.problem.rows[q];
         if row.kind != RowKind::Normal {
             return None;
@@ -456,7 +456,7 @@ impl<'a> Inner<'a> {
     /// Opens row `r` in `o`, and with it the stick row that ties as `r`'s pair closes (the
     /// pair's two rows switch together). False, with `o` unchanged, where either would
     /// leave a body free.
-    pub fn open_row(&self, cols: &mut Columns, o: &mut Opening, r: usize) -> bool {
+    pub(crate) fn open_row(&self, cols: &mut Columns, o: &mut Opening, r: usize) -> bool {
         if !o.append(r, cols.get(self.problem, r)) {
             return false;
         }
@@ -470,7 +470,7 @@ impl<'a> Inner<'a> {
     }
 
     /// Closes row `r` in `o`, and with it the stick row that ties as `r`'s pair closes.
-    pub fn close_row(&self, o: &mut Opening, r: usize) {
+    pub(crate) fn close_row(&self, o: &mut Opening, r: usize) {
         o.remove(r);
         if let Some(t) = self.tie_of(r) {
             o.remove(t);
@@ -479,14 +479,14 @@ impl<'a> Inner<'a> {
 
     /// The open rows of a start status: a friction row that slips without a direction (a
     /// row that was free) starts sticking.
-    pub fn start_open(&self, open: &[bool], sign: &[f64]) -> Vec<bool> {
+    pub(crate) fn start_open(&self, open: &[bool], sign: &[f64]) -> Vec<bool> {
         (0..self.n())
             .map(|r| open[r] && !(self.is_friction(r) && sign[r] == 0.0))
             .collect()
     }
 
     /// A friction row with a positive slip bound (not free).
-    pub fn is_friction(&self, r: usize) -> bool {
+    pub(crate) fn is_friction(&self, r: usize) -> bool {
         self.problem.rows[r].kind == RowKind::Friction && !self.free[r]
     }
 
@@ -645,7 +645,7 @@ impl<'a> Inner<'a> {
     }
 
     /// Scales of forces and openings for relative checks.
-    pub fn scales(&self, st: &InnerState) -> (f64, f64) {
+    pub(crate) fn scales(&self, st: &InnerState) -> (f64, f64) {
         let f = self
             .base
             .lambda0
@@ -824,7 +824,7 @@ impl<'a> Inner<'a> {
     /// first start ties the rows of the pairs it closed), or why there is none; where that
     /// start fails or does not settle, a second start ties them all. Returns the outcome and
     /// the solves made.
-    pub fn dense_with_ties<T>(
+    pub(crate) fn dense_with_ties<T>(
         &self,
         cols: &mut Columns,
         solve: impl Fn(&Inner, &mut Columns) -> Result<T, InnerFailure>,

@@ -199,7 +199,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns) -> Result<(Statuses, usize), Inn
 /// Returns the open rows, the slip directions and the bounds μ max(λ_n − c_n, 0) of the
 /// solution.
 #[allow(clippy::type_complexity)]
-pub fn solve_coupled(
+pub(crate) fn solve_coupled(
     inner: &Inner,
     cols: &mut Columns,
     mu: &[f64],

@@ -294,7 +294,7 @@ fn scaled(model: &Model, mut moving: Vec<BodyMotion>) -> Vec<BodyMotion> {
 
 /// The summary's records of the moving bodies `motion` (scaled as a step's motion is): kind,
 /// direction or centre, sense, and the largest speed of each body's boundary nodes.
-pub fn mechanism_bodies(model: &Model, motion: &[BodyMotion]) -> Vec<MechanismBody> {
+pub(crate) fn mechanism_bodies(model: &Model, motion: &[BodyMotion]) -> Vec<MechanismBody> {
     motion
         .iter()
         .filter_map(|m| {

@@ -28,7 +28,7 @@
 // Index loops over rows mirror the problem's row numbering.
 #![allow(clippy::needless_range_loop)]
 
-pub mod active_set;
+pub(crate) mod active_set;
 mod collapse;
 pub mod driver;
 pub mod evolutive;
@@ -85,7 +85,7 @@ impl Solver {
     }
 
     /// Its entry in the run's timings.
-    pub fn timing_key(self) -> &'static str {
+    pub(crate) fn timing_key(self) -> &'static str {
         match self {
             Solver::Evolutive => "contact_lcp",
             Solver::ActiveSet => "contact_active_set",
@@ -345,7 +345,7 @@ impl<'a> Session<'a> {
     }
 
     /// The body force of each body at the model's pseudo-time.
-    pub fn body_forces(&self) -> Vec<Option<[f64; 2]>> {
+    pub(crate) fn body_forces(&self) -> Vec<Option<[f64; 2]>> {
         self.model.bodies.iter().map(|b| b.body_force).collect()
     }
 
@@ -982,7 +982,7 @@ fn adopt_bounds<'a>(inner: Inner<'a>, b: Option<Vec<f64>>, bound: &mut Vec<f64>)
 }
 
 /// A history row of a state.
-pub fn history_row(
+pub(crate) fn history_row(
     model: &Model,
     interfaces: &[InterfaceResult],
     load_step: usize,
@@ -1050,7 +1050,7 @@ pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
 /// largest) in one result and open with no opening (below 1e-12 of `length`) in the
 /// other: touching without pressing, like the head joints of a wall under vertical load.
 /// Both statuses solve the LCP there, with the same forces and gaps.
-pub fn status_differences(
+pub(crate) fn status_differences(
     a: &[InterfaceResult],
     b: &[InterfaceResult],
     length: f64,

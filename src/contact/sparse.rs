@@ -861,7 +861,7 @@ fn closed_state(inner: &Inner) -> InnerState {
 /// the bodies that the status leaves free, the part of `w` that the weight alone holds.
 /// Normalised to a largest entry of 1; None where the status holds every body (then `w`
 /// hardly changes) or a factorisation fails.
-pub fn mechanism_motion(
+pub(crate) fn mechanism_motion(
     inner: &Inner,
     sys: &mut SparseSystem,
     open: &[bool],

@@ -212,7 +212,7 @@ fn law(model: &Model, it: &Interface, j: usize) -> Law {
 
 /// Whether `model` has a pair with Coulomb friction (μ > 0 on a unilateral interface): the
 /// only law whose problem the solvers do not decide exactly.
-pub fn has_coulomb(model: &Model) -> bool {
+pub(crate) fn has_coulomb(model: &Model) -> bool {
     model.interfaces.iter().any(|it| {
         it.spec.model == InterfaceModel::Unilateral
             && it.spec.tangential == Tangential::Friction
@@ -229,7 +229,7 @@ pub fn certify(model: &Model, f: f64) -> Verdict {
 /// The largest multiplier t of a collapse search (load factor 1, pseudo-time t, over
 /// `[0, max]`) at which the LP is feasible: the loads must be affine in t (compared at 0,
 /// max/2 and max to 1e-9 of the largest) and the pairs' laws the same at the three.
-pub fn collapse_bound(scene: &Scene, model: &Model, max: f64) -> Bound {
+pub(crate) fn collapse_bound(scene: &Scene, model: &Model, max: f64) -> Bound {
     if !(max.is_finite() && max > 0.0) {
         return Bound::None(format!("max = {max}"));
     }
@@ -276,7 +276,7 @@ pub fn collapse_bound(scene: &Scene, model: &Model, max: f64) -> Bound {
 
 /// A step's failure after the check: its message and whether it stays a mechanism.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Decision {
+pub(crate) struct Decision {
     pub message: String,
     /// True where the failure is (still) "no equilibrium": confirmed, or not decided by
     /// Clarabel; false where forces exist (undecided).
@@ -288,7 +288,7 @@ pub struct Decision {
 /// equilibrium exists, and gives a hint: the full-row solver unless `solver`, the one that
 /// found it, is that one), or kept with Clarabel's status (unknown). The words are put
 /// before the motion that ends a mechanism's message.
-pub fn decide(found: &str, v: &Verdict, solver: &str) -> Decision {
+pub(crate) fn decide(found: &str, v: &Verdict, solver: &str) -> Decision {
     let insert = |words: &str| match found.find("; the motion: ") {
         Some(i) => format!("{}; {words}{}", &found[..i], &found[i..]),
         None => format!("{found}; {words}"),

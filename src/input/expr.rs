@@ -54,17 +54,17 @@ impl Scalar {
     }
 
     /// True when the value depends on the pseudo-time `t`.
-    pub fn uses_time(&self) -> bool {
+    pub(crate) fn uses_time(&self) -> bool {
         matches!(self, Scalar::Expr(e) if e.reads("t"))
     }
 
     /// True when the value depends on the point (`x` or `y`).
-    pub fn uses_space(&self) -> bool {
+    pub(crate) fn uses_space(&self) -> bool {
         matches!(self, Scalar::Expr(e) if e.reads("x") || e.reads("y"))
     }
 
     /// The constant value, if the value does not depend on the point.
-    pub fn as_const(&self) -> Option<f64> {
+    pub(crate) fn as_const(&self) -> Option<f64> {
         match self {
             Scalar::Const(v) => Some(*v),
             Scalar::Expr(_) => None,
@@ -72,7 +72,7 @@ impl Scalar {
     }
 
     /// True when the value is the constant 0.
-    pub fn is_zero(&self) -> bool {
+    pub(crate) fn is_zero(&self) -> bool {
         self.as_const() == Some(0.0)
     }
 }

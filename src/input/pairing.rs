@@ -52,7 +52,7 @@ pub struct Side<'a> {
 
 /// The row of one node of side A.
 #[derive(Debug, Clone, PartialEq)]
-pub struct MortarRow {
+pub(crate) struct MortarRow {
     /// Nodes of side B and their coefficients `C_jk` (they sum to one), in node order.
     pub coefs: Vec<(usize, f64)>,
     /// `D_j`: the integral of A's hat over the part of its support that faces B (the
@@ -66,7 +66,7 @@ pub struct MortarRow {
 
 /// How far the pieces of side B may lie from side A to be paired, along A's normal.
 #[derive(Debug, Clone, Copy)]
-pub struct Reach {
+pub(crate) struct Reach {
     /// Largest gap (B ahead of A).
     pub ahead: f64,
     /// Largest interference (B behind A's surface).
@@ -318,7 +318,7 @@ impl Acc {
 /// A's unit normal at node n (only A's interface nodes are read); `cands(p, q)` lists the
 /// segments of B that may face A's segment `[p, q]` (all of them, or those a
 /// [`SegmentGrid`] finds near it). A node that no piece of B faces has no row.
-pub fn mortar_rows(
+pub(crate) fn mortar_rows(
     a: &Side,
     normals: &[[f64; 2]],
     b: &Side,
@@ -367,7 +367,7 @@ pub fn mortar_rows(
 
 /// A uniform grid over segments: each cell lists the segments that pass through it.
 #[derive(Debug, Clone)]
-pub struct SegmentGrid {
+pub(crate) struct SegmentGrid {
     origin: [f64; 2],
     h: f64,
     cells: HashMap<(i64, i64), Vec<usize>>,
@@ -529,7 +529,7 @@ fn overlaps(p: [f64; 2], q: [f64; 2], r: [f64; 2], s: [f64; 2]) -> bool {
 }
 
 /// Distance between two segments (zero where they touch or cross).
-pub fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
+pub(crate) fn segment_distance(a: [f64; 2], b: [f64; 2], c: [f64; 2], d: [f64; 2]) -> f64 {
     let point_seg = |p: [f64; 2], s0: [f64; 2], s1: [f64; 2]| -> f64 {
         let (v, w) = (sub(s1, s0), sub(p, s0));
         let l2 = dot(v, v);

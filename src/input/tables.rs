@@ -37,7 +37,7 @@ pub struct Glob {
 
 impl Glob {
     /// True when a table name is a pattern rather than a group name.
-    pub fn is_pattern(name: &str) -> bool {
+    pub(crate) fn is_pattern(name: &str) -> bool {
         name.contains(['*', '?'])
     }
 
@@ -52,7 +52,7 @@ impl Glob {
     }
 
     /// Literal (non-wildcard) characters: the rank of the pattern among matching ones.
-    pub fn specificity(&self) -> usize {
+    pub(crate) fn specificity(&self) -> usize {
         self.pattern
             .chars()
             .filter(|c| !matches!(c, '*' | '?'))

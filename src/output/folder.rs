@@ -209,7 +209,7 @@ impl RunFolder {
     /// Takes the lock of `target`, checks that the tool may replace it (new, empty, or
     /// holding only what its marker lists: [`super::owned`], and none of the command's
     /// `inputs`), and creates an empty staging folder beside it.
-    pub fn acquire(target: &Path, inputs: &[&Path]) -> Result<RunFolder> {
+    pub(crate) fn acquire(target: &Path, inputs: &[&Path]) -> Result<RunFolder> {
         let target = if target.file_name().is_none() {
             // "out/" or "." : name the folder itself.
             std::path::absolute(target).map_err(|e| Error::io(target, e))?

@@ -154,7 +154,7 @@ impl Stage {
         self.bar.inc(n);
     }
 
-    pub fn set_position(&self, pos: u64) {
+    pub(crate) fn set_position(&self, pos: u64) {
         self.bar.set_position(pos);
     }
 
@@ -183,7 +183,7 @@ impl Stage {
 
     /// Shows `text` about the contact solver's progress, after the trial of a collapse
     /// search and before the time left at the rate of the finished steps or trials.
-    pub fn contact_detail(&self, text: &str) {
+    pub(crate) fn contact_detail(&self, text: &str) {
         let head = self.current_trial().map_or(String::new(), |(k, t)| {
             format!("trial {k} at t = {}: ", fmt_num(t))
         });
@@ -197,14 +197,14 @@ impl Stage {
     }
 
     /// Marks the start of trial `k` (from 1) at the multiplier `t`: `k - 1` are done.
-    pub fn begin_trial(&self, k: u64, t: f64) {
+    pub(crate) fn begin_trial(&self, k: u64, t: f64) {
         self.set_trial(Some((k, t)));
         self.set_position(k.saturating_sub(1));
         self.contact_detail("started");
     }
 
     /// Makes the contact bar count `steps` load steps, none done (after a collapse search).
-    pub fn count_steps(&self, steps: u64) {
+    pub(crate) fn count_steps(&self, steps: u64) {
         self.set_trial(None);
         self.bar.set_prefix("contact");
         self.set_message("load step 1");

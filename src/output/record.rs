@@ -66,7 +66,7 @@ impl Array {
     }
 
     /// A copy of a faer matrix.
-    pub fn from_mat(m: &Mat<f64>) -> Array {
+    pub(crate) fn from_mat(m: &Mat<f64>) -> Array {
         let (r, c) = (m.nrows(), m.ncols());
         let mut data = Vec::with_capacity(r * c);
         for i in 0..r {
@@ -78,7 +78,7 @@ impl Array {
     }
 
     /// The sub-block of rows `r0..r1`, columns `c0..c1` of a faer matrix.
-    pub fn from_block(
+    pub(crate) fn from_block(
         m: &Mat<f64>,
         rows: std::ops::Range<usize>,
         cols: std::ops::Range<usize>,
@@ -94,7 +94,7 @@ impl Array {
     }
 
     /// "240 x 240" or "240".
-    pub fn shape_text(&self) -> String {
+    pub(crate) fn shape_text(&self) -> String {
         let s: Vec<String> = self.shape.iter().map(|d| d.to_string()).collect();
         s.join(" x ")
     }
@@ -124,7 +124,7 @@ pub struct MeshRecord {
 impl MeshRecord {
     /// The record of a mesh read by [`crate::input::mesh::read_msh`]. A line or triangle takes the
     /// first physical group of its entity.
-    pub fn from_mesh(mesh: &Mesh) -> MeshRecord {
+    pub(crate) fn from_mesh(mesh: &Mesh) -> MeshRecord {
         let group_names = mesh.physical_names.iter().map(|p| p.name.clone()).collect();
         let group_dims = mesh.physical_names.iter().map(|p| p.dim).collect();
         let index: HashMap<(i32, i32), usize> = mesh
@@ -175,7 +175,7 @@ pub struct BodyOperators {
 
 impl BodyOperators {
     /// The blocks of an assembled body and of its condensation.
-    pub fn from_system(sys: &BodySystem, cond: &Condensed) -> BodyOperators {
+    pub(crate) fn from_system(sys: &BodySystem, cond: &Condensed) -> BodyOperators {
         let (nx, n) = (sys.n_x, sys.n());
         BodyOperators {
             unknowns: sys.unknowns.iter().map(describe_unknown).collect(),
@@ -321,7 +321,7 @@ impl PairingRecord {
 
 impl InterfaceRecord {
     /// The record of a model interface.
-    pub fn from_interface(it: &Interface) -> InterfaceRecord {
+    pub(crate) fn from_interface(it: &Interface) -> InterfaceRecord {
         InterfaceRecord {
             name: it.spec.name.clone(),
             body_a: it.body_a,
@@ -418,7 +418,7 @@ pub struct InteriorRecord {
 
 impl InteriorRecord {
     /// From the values of [`crate::post::field_at_nodes`].
-    pub fn from_values(values: &[NodeValue]) -> InteriorRecord {
+    pub(crate) fn from_values(values: &[NodeValue]) -> InteriorRecord {
         InteriorRecord {
             mesh_nodes: values.iter().map(|v| v.mesh_node).collect(),
             u: values.iter().map(|v| v.u).collect(),
@@ -481,7 +481,7 @@ impl IterateRecord {
 
     /// The state with the body forces `body_force` (one per body of `bodies`), kept only where
     /// they differ from the bodies' recorded ones.
-    pub fn with_body_force(
+    pub(crate) fn with_body_force(
         mut self,
         body_force: &[Option<[f64; 2]>],
         bodies: &[BodyRecord],
@@ -612,7 +612,11 @@ impl RunRecord {
 
     /// Attaches the Galerkin blocks of every body (`output.operators = true`); refuses
     /// systems or condensations that are not one per body of the record.
-    pub fn set_operators(&mut self, systems: &[BodySystem], condensed: &[Condensed]) -> Result<()> {
+    pub(crate) fn set_operators(
+        &mut self,
+        systems: &[BodySystem],
+        condensed: &[Condensed],
+    ) -> Result<()> {
         let n = self.bodies.len();
         if systems.len() != n || condensed.len() != n {
             return Err(Error::numerical(format!(
@@ -915,7 +919,7 @@ impl RunRecord {
 
     /// What `sgbem inspect` prints: title, bodies, interfaces, states, the contact history
     /// with detached lengths per iteration, timings.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let mut o = String::new();
         let n = fmt_num;
         let _ = writeln!(o, "title       {}", self.title);

@@ -135,7 +135,7 @@ pub fn kept_states(scene: &Scene, contact: Option<&ContactEstimate>) -> (usize, 
 }
 
 /// The sizes of the outputs of a run of `scene` on `model` (see the module doc).
-pub fn output_size(
+pub(crate) fn output_size(
     scene: &Scene,
     model: &Model,
     bodies: &[BodySize],

@@ -26,7 +26,7 @@ use crate::output::size::OutputSize;
 /// The bytes an unprivileged writer may still write (statvfs `f_bavail × f_frsize`, what
 /// `df` shows as available) on the file system of `path`, or of its nearest ancestor that
 /// exists, with that folder; None when it cannot be read.
-pub fn free_bytes(path: &Path) -> Option<(f64, PathBuf)> {
+pub(crate) fn free_bytes(path: &Path) -> Option<(f64, PathBuf)> {
     use std::os::unix::ffi::OsStrExt;
     let dir = path
         .ancestors()
@@ -56,7 +56,7 @@ pub fn free_bytes(path: &Path) -> Option<(f64, PathBuf)> {
 
 /// What the run will write against what is free.
 #[derive(Debug, Clone)]
-pub struct Space<'a> {
+pub(crate) struct Space<'a> {
     /// The estimate as asked for (a full history: its expected states).
     pub outputs: &'a OutputSize,
     /// The estimate with the fewest states the run keeps (one per load step); the same as

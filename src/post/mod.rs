@@ -897,7 +897,7 @@ impl<'a> PointSampler<'a> {
     /// body holding it as `(base − o) + offset` (o the body's [`Scaling`] origin): the
     /// points of a section, `from + t (to − from)`, are then the same far from the origin,
     /// where their sum would round, as near it ([`section_offsets`]).
-    pub fn with_offsets(
+    pub(crate) fn with_offsets(
         bodies: &[BodyInput<'a>],
         settings: &QuadratureSettings,
         base: Vec2,
@@ -1068,7 +1068,7 @@ pub fn section_points(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
 
 /// The offsets `t (to − from)` from `from` of the [`section_points`], for
 /// [`PointSampler::with_offsets`].
-pub fn section_offsets(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
+pub(crate) fn section_offsets(from: Vec2, to: Vec2, count: usize) -> Vec<Vec2> {
     assert!(count >= 2, "a section needs at least 2 points, got {count}");
     let d = [to[0] - from[0], to[1] - from[1]];
     (0..count)

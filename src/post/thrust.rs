@@ -109,7 +109,7 @@ impl Thrust {
     /// `Σ v_j P_j / Σ P_j` over the normal nodal forces: the value of a per-pair quantity at
     /// the point of application (its position from the pairs' positions); `None` without
     /// a point.
-    pub fn at_point(&self, v: &[[f64; 2]]) -> Option<[f64; 2]> {
+    pub(crate) fn at_point(&self, v: &[[f64; 2]]) -> Option<[f64; 2]> {
         self.point?;
         let total: f64 = self.forces.iter().sum();
         let mut acc = [0.0; 2];

@@ -26,7 +26,7 @@ use std::path::{Component, Path, PathBuf};
 use crate::error::{Error, Result};
 
 /// The keys a sweep file may have.
-pub const KEYS: [&str; 6] = ["scene", "set", "out", "columns", "parts", "allow_geo_shell"];
+pub(crate) const KEYS: [&str; 6] = ["scene", "set", "out", "columns", "parts", "allow_geo_shell"];
 
 /// A sweep: what `sgbem sweep` runs, from the command line or a sweep file and it.
 #[derive(Debug, Clone, Default, PartialEq)]

@@ -498,7 +498,7 @@ fn run_points(
 }
 
 /// The figures of an interface that `--columns` can tabulate (its keys in summary.json).
-pub const COLUMN_KEYS: [&str; 11] = [
+pub(crate) const COLUMN_KEYS: [&str; 11] = [
     "closed_length",
     "detached_length",
     "max_accumulated_slip",

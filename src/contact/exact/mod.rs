@@ -37,7 +37,7 @@ mod newton;
 mod session;
 
 use fixed_point::{coulomb_residual, SlipBounds, SETTLED};
-pub use newton::Seed;
+pub(crate) use newton::Seed;
 
 /// The law of one full row in one convex programme.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -69,7 +69,7 @@ pub struct Programme {
 }
 
 /// What one programme gave.
-pub enum ProgrammeOutcome {
+pub(crate) enum ProgrammeOutcome {
     Solved(Programme),
     /// Unbounded below: the direction (every dof) along which the energy falls.
     Mechanism(Vec<f64>),
@@ -126,7 +126,11 @@ pub struct Exact<'a> {
 impl<'a> Exact<'a> {
     /// Shows each programme of the steps solved from now on in `stage`'s message, as
     /// load step `load_step` (from 0).
-    pub fn show_in(&mut self, stage: Option<&'a crate::output::progress::Stage>, load_step: usize) {
+    pub(crate) fn show_in(
+        &mut self,
+        stage: Option<&'a crate::output::progress::Stage>,
+        load_step: usize,
+    ) {
         self.progress = stage.map(|s| (s, load_step));
     }
 

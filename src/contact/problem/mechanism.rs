@@ -8,7 +8,12 @@ use crate::input::model::Model;
 
 /// Names the bodies that nothing but interfaces holds and the rigid motion that the closed
 /// rows leave free (translation along a direction, or rotation).
-pub fn mechanism_hint(model: &Model, ops: &[BodyOp], rows: &[Row], dof_start: &[usize]) -> String {
+pub(crate) fn mechanism_hint(
+    model: &Model,
+    ops: &[BodyOp],
+    rows: &[Row],
+    dof_start: &[usize],
+) -> String {
     let mut out = Vec::new();
     for (b, body) in model.bodies.iter().enumerate() {
         // Gram matrix of the rigid modes (x, y translation, rotation about the centroid)

@@ -72,10 +72,10 @@ use crate::linalg::matvec;
 use crate::solution::{BodyField, BodyMotion, InterfaceResult};
 
 pub(crate) use mechanism::body_has_support;
-pub use mechanism::mechanism_hint;
+pub(crate) use mechanism::mechanism_hint;
 pub use opening::Opening;
-pub use pattern::{pattern, Pattern};
-pub use state::FullRowSolution;
+pub(crate) use pattern::pattern;
+pub(crate) use state::FullRowSolution;
 
 use body::{body_operators, glued_matrix, BodyOperators};
 use rows::{candidates, eliminate, final_rows, glued_maps};
@@ -320,7 +320,7 @@ impl Problem {
     }
 
     /// Number of glued unknowns (the size of the sparse base system).
-    pub fn base_size(&self) -> usize {
+    pub(crate) fn base_size(&self) -> usize {
         self.n_glued
     }
 
@@ -356,7 +356,7 @@ impl Problem {
     /// The rigid motion of each body under the change `dw = (dv, ds)` of the glued
     /// displacements and the openings (a mechanism's motion): per body the least-squares
     /// translation and rotation of its interface dofs' displacements.
-    pub fn rigid_motions(&self, model: &Model, dw: &[f64]) -> Vec<BodyMotion> {
+    pub(crate) fn rigid_motions(&self, model: &Model, dw: &[f64]) -> Vec<BodyMotion> {
         let (dv, ds) = dw.split_at(self.n_glued.min(dw.len()));
         let du: Vec<f64> = (0..self.n_dofs)
             .map(|d| {
@@ -374,7 +374,7 @@ impl Problem {
 
     /// Per body the least-squares translation and rotation of the dof displacements `du`
     /// (over every dof in order).
-    pub fn rigid_fit(&self, model: &Model, du: &[f64]) -> Vec<BodyMotion> {
+    pub(crate) fn rigid_fit(&self, model: &Model, du: &[f64]) -> Vec<BodyMotion> {
         let scale = model.scale.max(f64::MIN_POSITIVE);
         let mut out = Vec::with_capacity(self.ops.len());
         for (b, op) in self.ops.iter().enumerate() {

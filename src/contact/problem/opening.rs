@@ -33,7 +33,7 @@ impl Opening {
 
     /// Appends row `r` whose column of A is `col` (over all rows that can open). Returns
     /// false (and changes nothing) if A_OO would become singular.
-    pub fn append(&mut self, r: usize, col: &[f64]) -> bool {
+    pub(crate) fn append(&mut self, r: usize, col: &[f64]) -> bool {
         let m = self.rows.len();
         let a: Vec<f64> = self.rows.iter().map(|&q| col[q]).collect();
         // Solve L x = a.

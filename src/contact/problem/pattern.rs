@@ -16,7 +16,7 @@ use crate::input::model::{DofClass, Model};
 
 /// Per body, the entries of its dofs' expressions.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub struct Pattern {
+pub(crate) struct Pattern {
     /// Σ over the body's dofs of the unknowns each moves (glued displacements and openings
     /// of the rows that can open): its block of the sparse system H over w = (v, s).
     pub unknowns: Vec<usize>,
@@ -29,7 +29,7 @@ impl Pattern {
     /// The triplets the sparse solver pushes to assemble H: `t(t + 1)/2` in the lower
     /// triangle of a body's block of t entries, and H's diagonal (the glued stiffness K_g,
     /// assembled and freed before, has fewer: its dofs move no openings).
-    pub fn triplets(&self) -> f64 {
+    pub(crate) fn triplets(&self) -> f64 {
         let half = |t: &usize| (*t as f64) * (*t as f64 + 1.0) / 2.0;
         self.unknowns.iter().map(half).sum::<f64>() + (self.n_glued + self.n_open_rows) as f64
     }

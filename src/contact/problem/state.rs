@@ -206,7 +206,7 @@ fn pair_jump(it: &Interface, pr: &Pair, fields: &[BodyField]) -> [f64; 2] {
 }
 
 /// What the full-row solver (`contact::exact`) gives for every full row (`Problem::full`).
-pub struct FullRowSolution<'s> {
+pub(crate) struct FullRowSolution<'s> {
     /// Every dof's displacement.
     pub u: &'s [f64],
     /// `λ_r = ∂E/∂[u]_r` with the cohesion term (normal rows: compression positive).
@@ -221,7 +221,7 @@ impl Problem {
     /// The boundary solution of every body and the interface results of a full-row
     /// solution: each pair's traction from its own rows' forces (junctions included), the
     /// nodal normal force of each pair (on B, compression positive).
-    pub fn full_row_state(
+    pub(crate) fn full_row_state(
         &self,
         model: &Model,
         prepared: &Operators,

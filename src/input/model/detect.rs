@@ -51,7 +51,7 @@ pub(super) fn add_found(
 
 impl Found {
     /// Gives the found elements the role of interface k; returns their curves.
-    pub fn assign(&self, k: usize, bodies: &mut [Body]) -> BTreeSet<i32> {
+    pub(crate) fn assign(&self, k: usize, bodies: &mut [Body]) -> BTreeSet<i32> {
         let mut curves = BTreeSet::new();
         for (b, list) in [(self.body_a, &self.elems_a), (self.body_b, &self.elems_b)] {
             for &e in list {
@@ -111,7 +111,7 @@ const MIN_CUT_SHARE: f64 = 0.05;
 
 /// Where a line element of the mesh must be cut so that each piece faces one body.
 #[derive(Debug, Clone, PartialEq)]
-pub struct Cut {
+pub(crate) struct Cut {
     /// gmsh tag of the line element.
     pub tag: usize,
     /// The points of the element where the body it faces changes, from its start.

@@ -46,7 +46,7 @@ mod curves;
 mod detect;
 mod interface;
 mod overlap;
-pub mod wrench;
+pub(crate) mod wrench;
 
 pub(crate) use body::winding;
 use body::{build_body, mark_traction_breaks, node_dofs};
@@ -147,7 +147,7 @@ impl Body {
     }
 
     /// The mesh nodes of the body's triangles, each once (the interior field's points).
-    pub fn triangle_node_count(&self) -> usize {
+    pub(crate) fn triangle_node_count(&self) -> usize {
         let mut v: Vec<usize> = self.triangles.iter().flatten().copied().collect();
         v.sort_unstable();
         v.dedup();
@@ -155,7 +155,7 @@ impl Body {
     }
 
     /// Winding number of the boundary around x: non-zero inside the body (holes cancel).
-    pub fn winding_number(&self, x: [f64; 2]) -> i32 {
+    pub(crate) fn winding_number(&self, x: [f64; 2]) -> i32 {
         winding(
             x,
             self.elements
@@ -193,7 +193,10 @@ pub struct Part {
 
 /// The tributary length of each of the points `x`: half of each segment `[j, k]` of
 /// `elements` that joins it to another (∫ψ_j ds of the P1 hats).
-pub fn tributary_lengths(x: &[[f64; 2]], elements: impl Iterator<Item = [usize; 2]>) -> Vec<f64> {
+pub(crate) fn tributary_lengths(
+    x: &[[f64; 2]],
+    elements: impl Iterator<Item = [usize; 2]>,
+) -> Vec<f64> {
     let mut w = vec![0.0; x.len()];
     for [j, k] in elements {
         let l = (x[k][0] - x[j][0]).hypot(x[k][1] - x[j][1]);
@@ -289,7 +292,7 @@ impl Interface {
 
     /// The number of interface points of side A (`side_a`) or B: the index range of the
     /// `pair` of that body's interface unknowns.
-    pub fn point_count(&self, side_a: bool) -> usize {
+    pub(crate) fn point_count(&self, side_a: bool) -> usize {
         if side_a || !self.independent() {
             self.pairs.len()
         } else {
@@ -325,7 +328,7 @@ impl Interface {
     /// or the point `Σ c_k x_k` of B's partners (sides meshed on their own; A's node where
     /// it has none), summed as `Σ c_k (x_k − from)` (the coefficients sum to one) so that it
     /// keeps its digits far from the origin.
-    pub fn b_offset(&self, b: &Body, j: usize, from: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn b_offset(&self, b: &Body, j: usize, from: [f64; 2]) -> [f64; 2] {
         let p = &self.pairs[j];
         if !self.independent() {
             return sub(b.nodes[p.node_b], from);
@@ -380,7 +383,7 @@ impl Model {
     }
 
     /// The pairs of unilateral interfaces (the contact problem's complementarity rows).
-    pub fn unilateral_pair_count(&self) -> usize {
+    pub(crate) fn unilateral_pair_count(&self) -> usize {
         self.interfaces
             .iter()
             .filter(|i| i.spec.model == crate::input::scene::InterfaceModel::Unilateral)
@@ -391,7 +394,7 @@ impl Model {
     /// Whether a unilateral interface meets another at a junction (a node of one body in
     /// pairs of two or more interfaces, one of them unilateral): there the solvers other
     /// than the full rows leave a dependent component without a row of its own.
-    pub fn has_unilateral_junction(&self) -> bool {
+    pub(crate) fn has_unilateral_junction(&self) -> bool {
         self.interface_nodes()
             .values()
             .any(|&(count, unilateral)| count >= 2 && unilateral)
@@ -441,7 +444,7 @@ impl Model {
     /// `[solve] time`): body forces, and the gap, cohesion and friction coefficient of
     /// every pair; boundary values are evaluated at `time` by the assembly. Values that are
     /// not finite or negative where they must not be are input errors naming the step.
-    pub fn at_time(&self, scene: &Scene, t: f64) -> Result<Model> {
+    pub(crate) fn at_time(&self, scene: &Scene, t: f64) -> Result<Model> {
         let mut m = self.clone();
         m.time = t;
         for body in m.bodies.iter_mut() {
@@ -574,7 +577,7 @@ once any physical group exists: add every boundary curve to a named Physical Cur
 (e.g. Physical Curve(\"free\") = {...};) and mesh again";
 
 /// The `group` of the interfaces found by `[contact]`.
-pub const FOUND_GROUP: &str = "[contact]";
+pub(crate) const FOUND_GROUP: &str = "[contact]";
 
 /// What each physical curve of the mesh is, after reading the scene.
 enum CurveUse {

@@ -45,21 +45,21 @@ impl Wrench {
 /// centroid relative to it, `c`: far from the origin the centroid itself rounds to the
 /// spacing of coordinates there, but an arm `(x − o) − c` keeps every digit.
 #[derive(Debug, Clone, Copy)]
-pub struct Pivot {
+pub(crate) struct Pivot {
     pub o: [f64; 2],
     pub c: [f64; 2],
 }
 
 impl Pivot {
     /// The arm from the centroid to `x`.
-    pub fn arm(&self, x: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn arm(&self, x: [f64; 2]) -> [f64; 2] {
         [
             (x[0] - self.o[0]) - self.c[0],
             (x[1] - self.o[1]) - self.c[1],
         ]
     }
     /// The arm from the centroid to a point given relative to `o`.
-    pub fn arm_rel(&self, r: [f64; 2]) -> [f64; 2] {
+    pub(crate) fn arm_rel(&self, r: [f64; 2]) -> [f64; 2] {
         [r[0] - self.c[0], r[1] - self.c[1]]
     }
     /// The centroid in absolute coordinates (rounded far from the origin).
@@ -95,7 +95,13 @@ pub fn centroid(body: &Body) -> (f64, Pivot) {
 }
 
 /// The wrench about `c` of a traction linear along the segment `x0 → x1`.
-pub fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c: &Pivot) -> Wrench {
+pub(crate) fn segment_wrench(
+    x0: [f64; 2],
+    x1: [f64; 2],
+    t0: [f64; 2],
+    t1: [f64; 2],
+    c: &Pivot,
+) -> Wrench {
     let l = (x1[0] - x0[0]).hypot(x1[1] - x0[1]);
     let (r0, r1) = (c.arm(x0), c.arm(x1));
     Wrench {
@@ -107,7 +113,7 @@ pub fn segment_wrench(x0: [f64; 2], x1: [f64; 2], t0: [f64; 2], t1: [f64; 2], c:
 
 /// The wrench of the body force `b` (per unit area) over a body of area `area`: at the
 /// centroid, so without moment about it.
-pub fn body_force_wrench(b: [f64; 2], area: f64) -> Wrench {
+pub(crate) fn body_force_wrench(b: [f64; 2], area: f64) -> Wrench {
     Wrench {
         fx: b[0] * area,
         fy: b[1] * area,
@@ -118,7 +124,7 @@ pub fn body_force_wrench(b: [f64; 2], area: f64) -> Wrench {
 /// The arm from the centroid `c` of `body` to where the nodal force of pair `j` of
 /// interface `it` acts on it: the pair's node on the first body (`on_a`), and on the second
 /// its node (node pairs) or where its partners are (sides meshed on their own).
-pub fn pair_arm(c: &Pivot, it: &Interface, body: &Body, j: usize, on_a: bool) -> [f64; 2] {
+pub(crate) fn pair_arm(c: &Pivot, it: &Interface, body: &Body, j: usize, on_a: bool) -> [f64; 2] {
     if !on_a && it.independent() {
         c.arm_rel(it.b_offset(body, j, c.o))
     } else {
@@ -131,7 +137,7 @@ pub fn pair_arm(c: &Pivot, it: &Interface, body: &Body, j: usize, on_a: bool) ->
 /// along each element between their values at its nodes (as the assembly holds them,
 /// `bem::assembly`), and its body force times its area. Reactions of displacement
 /// conditions and interface forces are not in it.
-pub fn body_load(model: &Model, bi: usize, f: f64, t: f64) -> Wrench {
+pub(crate) fn body_load(model: &Model, bi: usize, f: f64, t: f64) -> Wrench {
     let body = &model.bodies[bi];
     let (area, c) = centroid(body);
     let mut total = Wrench::default();

@@ -82,7 +82,7 @@ pub enum Condition {
 }
 
 impl Condition {
-    pub fn is_displacement(&self) -> bool {
+    pub(crate) fn is_displacement(&self) -> bool {
         matches!(self, Condition::Displacement(_))
     }
 }
@@ -98,7 +98,7 @@ pub struct BoundarySpec {
 
 impl BoundarySpec {
     /// The traction-free condition of a Physical Curve the scene does not list.
-    pub fn traction_free(name: &str) -> BoundarySpec {
+    pub(crate) fn traction_free(name: &str) -> BoundarySpec {
         BoundarySpec {
             name: name.to_string(),
             frame: Frame::Global,
@@ -110,7 +110,7 @@ impl BoundarySpec {
     }
 
     /// Short description for reports: `ux=0 uy=0`, `ty=-10`, `traction-free`.
-    pub fn describe(&self) -> String {
+    pub(crate) fn describe(&self) -> String {
         let names = match self.frame {
             Frame::Global => ["x", "y"],
             Frame::Local => ["t", "n"],

@@ -63,7 +63,7 @@ use crate::input::scene::VtkStyle;
 
 /// The names of the point arrays that the boundary and field files can hold, the choices of
 /// `output.vtk_fields` in alphabetical order (a name both files use selects it in both).
-pub const POINT_ARRAYS: [&str; 17] = [
+pub(crate) const POINT_ARRAYS: [&str; 17] = [
     "body",
     "contact_status",
     "displacement",
