@@ -8,12 +8,12 @@
 
 use std::collections::HashSet;
 
-use crate::contact::lcp::{status_key, Columns, Inner, InnerOutcome};
+use crate::contact::lcp::{status_key, Inner, InnerOutcome, OpeningColumns};
 
 /// Solves the inner problem from the statuses `open` and slip directions `sign`.
 pub fn solve(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     open: &[bool],
     sign: &[f64],
     max_iterations: usize,

@@ -13,13 +13,13 @@
 
 use std::collections::HashSet;
 
-use crate::contact::lcp::{status_key, Columns, Inner, InnerOutcome, InnerState};
+use crate::contact::lcp::{status_key, Inner, InnerOutcome, InnerState, OpeningColumns};
 
 /// Solves the inner problem from the statuses `open` (with the slip directions `sign` of
 /// slipping friction rows); `record` is called with every state (the start included).
 pub fn solve(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     open: &[bool],
     sign: &[f64],
     max_iterations: usize,

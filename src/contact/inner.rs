@@ -23,7 +23,7 @@ pub(super) const FRICTION_COUPLED_AFTER: usize = 10;
 #[allow(clippy::too_many_arguments)]
 pub(super) fn inner_solve(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     system: &mut Option<sparse::SparseSystem>,
     method: Solver,
     st: &StepState,
@@ -148,8 +148,8 @@ pub(super) fn inner_solve(
 /// ties.
 fn dense_outcome<T>(
     inner: &Inner,
-    cols: &mut Columns,
-    solve: impl Fn(&Inner, &mut Columns) -> Result<T, InnerFailure>,
+    cols: &mut OpeningColumns,
+    solve: impl Fn(&Inner, &mut OpeningColumns) -> Result<T, InnerFailure>,
     statuses: impl Fn(&T) -> &Statuses,
 ) -> Result<(T, InnerOutcome, usize, usize), InnerFailure> {
     let relaxed = inner.relaxed();
@@ -173,7 +173,7 @@ fn dense_outcome<T>(
 /// The QP's outcome of the inner problem (`dense_outcome`).
 fn qp_outcome(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
 ) -> Result<(qp::QpOutcome, InnerOutcome, usize, usize), InnerFailure> {
     dense_outcome(
         inner,
@@ -194,7 +194,7 @@ fn qp_outcome(
 /// if it finds one. `record` sees the states of both paths.
 pub(super) fn pivoting(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     (open, sign): (&[bool], &[f64]),
     budget: usize,
     record: &mut dyn FnMut(&InnerState),
@@ -235,7 +235,7 @@ pub(super) fn pivoting(
 /// on from where it stopped (the least-index rule after its own cycle terminates).
 pub(super) fn hand_over(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     stalled: InnerOutcome,
     budget: usize,
     why: &str,
@@ -267,7 +267,7 @@ pub(super) fn hand_over(
 /// mechanism (`outcome` is returned as it is).
 pub(super) fn qp_rescue(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     method: Solver,
     outcome: InnerOutcome,
     it0: usize,
@@ -304,7 +304,7 @@ pub(super) fn qp_rescue(
 /// mechanism where there is one.
 pub(super) fn solve_inner(
     inner: &Inner,
-    (cols, sparse): (&mut Columns, &mut Option<sparse::SparseSystem>),
+    (cols, sparse): (&mut OpeningColumns, &mut Option<sparse::SparseSystem>),
     method: Solver,
     st: &StepState,
     (budget, max_iterations): (usize, usize),
@@ -555,7 +555,7 @@ pub(super) fn all_closed_state(n: usize) -> InnerState {
 /// pivots is returned (0 when the statuses were exact).
 pub(super) fn exact_state(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     statuses: &Statuses,
 ) -> (InnerOutcome, usize) {
     let (o, refused) = inner.factor(cols, &statuses.open);

@@ -180,7 +180,7 @@ pub fn solve(k: &Mat<f64>, l: &[f64], what: &str) -> Result<(Vec<f64>, f64)> {
 /// The interface system with the shared displacements of the closed pairs eliminated
 /// ([paper eqs. 21–24]): `K00` and `L00` over `t = [open; forces]`, with the Y indices of
 /// both parts.
-pub(crate) struct Reduced {
+pub(crate) struct ReducedInterface {
     pub k00: Mat<f64>,
     pub l00: Mat<f64>,
     /// Y indices of the open pairs' displacements (−U of A and B), first in K00.
@@ -190,7 +190,7 @@ pub(crate) struct Reduced {
 }
 
 /// Eliminates the shared displacements of the closed pairs from `K Y + L = 0`.
-pub(crate) fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Reduced {
+pub(crate) fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> ReducedInterface {
     let (mut forces, mut shared, mut open) = (Vec::new(), Vec::new(), Vec::new());
     for iface in &layout.slots {
         for pair in iface {
@@ -215,7 +215,7 @@ pub(crate) fn eliminate_shared(layout: &Layout, k: &Mat<f64>, l: &[f64]) -> Redu
         k00 = &k00 - &htr * &x;
         l00 = &l00 - &htr * &y;
     }
-    Reduced {
+    ReducedInterface {
         k00,
         l00,
         open,
@@ -233,7 +233,7 @@ pub(crate) fn reduced_operators(
     k: &Mat<f64>,
     l: &[f64],
 ) -> Vec<(String, Mat<f64>)> {
-    let Reduced {
+    let ReducedInterface {
         k00,
         l00,
         open: fv,

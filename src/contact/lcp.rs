@@ -165,7 +165,7 @@ impl std::fmt::Display for InnerFailure {
 
 /// Columns of the opening stiffness, computed once per row and kept for the whole run.
 #[derive(Default)]
-pub struct Columns {
+pub struct OpeningColumns {
     cols: HashMap<usize, Vec<f64>>,
     /// The factor of A_OO of the last status solved: the next solve starts from it and
     /// removes or appends the rows by which its status differs (the outer iterations of
@@ -173,7 +173,7 @@ pub struct Columns {
     last: Option<Opening>,
 }
 
-impl Columns {
+impl OpeningColumns {
     /// Keeps `o` as the factor the next [`Inner::factor`] starts from.
     pub fn keep(&mut self, o: &Opening) {
         self.last = Some(o.clone());
@@ -456,7 +456,7 @@ impl<'a> Inner<'a> {
     /// Opens row `r` in `o`, and with it the stick row that ties as `r`'s pair closes (the
     /// pair's two rows switch together). False, with `o` unchanged, where either would
     /// leave a body free.
-    pub(crate) fn open_row(&self, cols: &mut Columns, o: &mut Opening, r: usize) -> bool {
+    pub(crate) fn open_row(&self, cols: &mut OpeningColumns, o: &mut Opening, r: usize) -> bool {
         if !o.append(r, cols.get(self.problem, r)) {
             return false;
         }
@@ -505,7 +505,7 @@ impl<'a> Inner<'a> {
     /// free where its pair's normal row is in `open` (appended with the free rows) and tied
     /// elsewhere; a pair whose two rows cannot both open stays closed, its stick row tied.
     /// Returns the factor and the rows refused (normal rows for such pairs).
-    pub fn factor(&self, cols: &mut Columns, open: &[bool]) -> (Opening, Vec<usize>) {
+    pub fn factor(&self, cols: &mut OpeningColumns, open: &[bool]) -> (Opening, Vec<usize>) {
         let mut o = Opening::default();
         let mut refused = Vec::new();
         let mut order: Vec<usize> = (0..self.n())
@@ -586,7 +586,7 @@ impl<'a> Inner<'a> {
 
     /// Openings and forces of the status whose factor is `o`, with the slip directions
     /// `sign` of its friction rows.
-    pub fn state(&self, cols: &mut Columns, o: &Opening, sign: &[f64]) -> InnerState {
+    pub fn state(&self, cols: &mut OpeningColumns, o: &Opening, sign: &[f64]) -> InnerState {
         let n = self.n();
         let rhs: Vec<f64> = o
             .rows
@@ -728,7 +728,7 @@ impl<'a> Inner<'a> {
     /// `M = σσᵀ ∘ (A_NN − A_NF A_FF⁻¹ A_FN)` over the variables' rows with signs σ = ±1, and
     /// `q = σ (λ⁰ − A_NF A_FF⁻¹ λ⁰_F) + g`. M is symmetric positive semidefinite, so the LCP
     /// is the QP `min ½zᵀMz + qᵀz, z ≥ 0`.
-    pub fn dense(&self, cols: &mut Columns) -> Option<Dense> {
+    pub fn dense(&self, cols: &mut OpeningColumns) -> Option<Dense> {
         // Friction rows tied without a bound (the first outer iteration) are no variables.
         let normal: Vec<usize> = (0..self.n())
             .filter(|&r| {
@@ -826,8 +826,8 @@ impl<'a> Inner<'a> {
     /// the solves made.
     pub(crate) fn dense_with_ties<T>(
         &self,
-        cols: &mut Columns,
-        solve: impl Fn(&Inner, &mut Columns) -> Result<T, InnerFailure>,
+        cols: &mut OpeningColumns,
+        solve: impl Fn(&Inner, &mut OpeningColumns) -> Result<T, InnerFailure>,
         statuses: impl Fn(&T) -> &Statuses,
         relaxed: Result<&Statuses, &str>,
     ) -> Result<(T, usize), InnerFailure> {

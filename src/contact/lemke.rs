@@ -8,7 +8,7 @@
 //! which certifies that no solution exists for a merely copositive M — is reported as an
 //! error, never hidden.
 
-use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
+use crate::contact::lcp::{Inner, InnerFailure, OpeningColumns, Statuses};
 use crate::linalg::jacobi_scaling;
 
 /// Outcome of Lemke's method.
@@ -169,7 +169,7 @@ fn jacobi_scale(m: &mut [f64], q: &mut [f64]) -> Vec<f64> {
 /// the opening stiffness, free rows eliminated, friction rows split into their two slip
 /// directions). Returns the open statuses of the rows, the slip directions and the number
 /// of pivots; a secondary ray means no equilibrium exists (a mechanism).
-pub fn solve(inner: &Inner, cols: &mut Columns) -> Result<(Statuses, usize), InnerFailure> {
+pub fn solve(inner: &Inner, cols: &mut OpeningColumns) -> Result<(Statuses, usize), InnerFailure> {
     let dense = inner.dense(cols).ok_or(InnerFailure::LeavesBodyFree)?;
     let n = dense.q.len();
     let (mut m, mut q) = (dense.m.clone(), dense.q.clone());
@@ -201,7 +201,7 @@ pub fn solve(inner: &Inner, cols: &mut Columns) -> Result<(Statuses, usize), Inn
 #[allow(clippy::type_complexity)]
 pub(crate) fn solve_coupled(
     inner: &Inner,
-    cols: &mut Columns,
+    cols: &mut OpeningColumns,
     mu: &[f64],
     normal_of: &[Option<usize>],
 ) -> Result<(Vec<bool>, Vec<f64>, Vec<f64>), String> {

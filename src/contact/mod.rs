@@ -52,8 +52,8 @@ use crate::input::scene::InterfaceModel;
 use crate::solution::{BodyField, BodyMotion, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
 use inner::*;
 use lcp::{
-    bound_change, status_key, Columns, Inner, InnerFailure, InnerOutcome, InnerState, Statuses,
-    BOUNDS_SETTLED,
+    bound_change, status_key, Inner, InnerFailure, InnerOutcome, InnerState, OpeningColumns,
+    Statuses, BOUNDS_SETTLED,
 };
 pub use problem::{solve_all_closed, StatusSolution};
 use problem::{Problem, RowKind};
@@ -239,7 +239,7 @@ pub struct Session<'a> {
     pub model: &'a Model,
     pub prepared: &'a Operators,
     pub problem: Problem,
-    pub cols: Columns,
+    pub cols: OpeningColumns,
     /// The sparse system of displacements and openings, built when `Solver::Sparse` first
     /// runs.
     pub sparse: Option<sparse::SparseSystem>,
@@ -256,7 +256,7 @@ impl<'a> Session<'a> {
             model,
             prepared,
             problem: Problem::new(model, prepared)?,
-            cols: Columns::default(),
+            cols: OpeningColumns::default(),
             sparse: None,
             coupled_after: FRICTION_COUPLED_AFTER,
             stage: None,

@@ -22,7 +22,7 @@ use clarabel::solver::{
     DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT, SolverStatus,
 };
 
-use crate::contact::lcp::{Columns, Inner, InnerFailure, Statuses};
+use crate::contact::lcp::{Inner, InnerFailure, OpeningColumns, Statuses};
 use crate::linalg::jacobi_scaling;
 
 /// What the QP found.
@@ -37,7 +37,11 @@ pub struct QpOutcome {
 }
 
 /// Solves the inner problem as a QP.
-pub fn solve(inner: &Inner, cols: &mut Columns, tolerance: f64) -> Result<QpOutcome, InnerFailure> {
+pub fn solve(
+    inner: &Inner,
+    cols: &mut OpeningColumns,
+    tolerance: f64,
+) -> Result<QpOutcome, InnerFailure> {
     let dense = inner.dense(cols).ok_or(InnerFailure::LeavesBodyFree)?;
     let nv = dense.q.len();
     let a = &dense.m;

@@ -84,7 +84,7 @@ fn body_op(sys: &BodySystem, d00: &Mat<f64>, z0: &[f64], name: &str) -> Result<B
 }
 
 /// Every body's operator and the numbering of the dofs (the bodies' U unknowns in order).
-pub(super) struct BodyOperators {
+pub(super) struct BodyBlocks {
     pub(super) ops: Vec<BodyOp>,
     pub(super) dof_start: Vec<usize>,
     pub(super) n_dofs: usize,
@@ -93,7 +93,7 @@ pub(super) struct BodyOperators {
 }
 
 /// Step 1 of [`Problem::new`]: the Steklov–Poincaré operator of every body and its dofs.
-pub(super) fn body_operators(model: &Model, prepared: &Operators) -> Result<BodyOperators> {
+pub(super) fn body_operators(model: &Model, prepared: &Operators) -> Result<BodyBlocks> {
     let mut ops = Vec::with_capacity(model.bodies.len());
     let mut dof_start = Vec::with_capacity(model.bodies.len());
     let mut n_dofs = 0;
@@ -112,7 +112,7 @@ pub(super) fn body_operators(model: &Model, prepared: &Operators) -> Result<Body
         n_dofs += op.u_idx.len();
         ops.push(op);
     }
-    Ok(BodyOperators {
+    Ok(BodyBlocks {
         ops,
         dof_start,
         n_dofs,

@@ -77,7 +77,7 @@ pub use opening::Opening;
 pub(crate) use pattern::pattern;
 pub(crate) use state::FullRowSolution;
 
-use body::{body_operators, glued_matrix, BodyOperators};
+use body::{body_operators, glued_matrix, BodyBlocks};
 use rows::{candidates, eliminate, final_rows, glued_maps};
 
 mod body;
@@ -241,7 +241,7 @@ impl Problem {
                 }
             }
         }
-        let BodyOperators {
+        let BodyBlocks {
             ops,
             dof_start,
             n_dofs,

@@ -16,7 +16,7 @@ use crate::input::model::{DofClass, Model};
 
 /// Per body, the entries of its dofs' expressions.
 #[derive(Debug, Clone, PartialEq, Eq)]
-pub(crate) struct Pattern {
+pub(crate) struct SparsityPattern {
     /// Σ over the body's dofs of the unknowns each moves (glued displacements and openings
     /// of the rows that can open): its block of the sparse system H over w = (v, s).
     pub unknowns: Vec<usize>,
@@ -25,7 +25,7 @@ pub(crate) struct Pattern {
     pub n_open_rows: usize,
 }
 
-impl Pattern {
+impl SparsityPattern {
     /// The triplets the sparse solver pushes to assemble H: `t(t + 1)/2` in the lower
     /// triangle of a body's block of t entries, and H's diagonal (the glued stiffness K_g,
     /// assembled and freed before, has fewer: its dofs move no openings).
@@ -37,7 +37,7 @@ impl Pattern {
 
 /// The pattern of the contact problem of `model`; None where its rows cannot be formed (a
 /// component prescribed on one side of an interface only: the run refuses it).
-pub fn pattern(model: &Model) -> Option<Pattern> {
+pub fn pattern(model: &Model) -> Option<SparsityPattern> {
     let mut node_dofs: Vec<NodeDofMap> = Vec::with_capacity(model.bodies.len());
     let mut body_of: Vec<usize> = Vec::new();
     for (bi, b) in model.bodies.iter().enumerate() {
@@ -64,7 +64,7 @@ pub fn pattern(model: &Model) -> Option<Pattern> {
             .count();
         unknowns[b] += maps.tmap[d].len() + openings;
     }
-    Some(Pattern {
+    Some(SparsityPattern {
         unknowns,
         n_glued: maps.n_glued,
         n_open_rows: set.n_open_rows,

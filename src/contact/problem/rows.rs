@@ -30,7 +30,7 @@ impl Candidate {
 
 /// One eliminated dof: `U_d = Σ m·U_master + Σ r·(s_q − h_q)` over candidate rows q.
 #[derive(Debug, Clone, Default)]
-pub(super) struct Expr {
+pub(super) struct RowExpr {
     m: Vec<(usize, f64)>,
     r: Vec<(usize, f64)>,
 }
@@ -165,10 +165,10 @@ fn class(r: &Row) -> usize {
 
 /// Step 3 of [`Problem::new`]: eliminates the closed rows in class order. Returns the
 /// expression of every eliminated dof and which candidates are kept as rows.
-pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<Expr>>, Vec<bool>) {
+pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<RowExpr>>, Vec<bool>) {
     let mut order: Vec<usize> = (0..cands.len()).collect();
     order.sort_by_key(|&q| class(&cands[q].row));
-    let mut expr: Vec<Option<Expr>> = vec![None; n_dofs];
+    let mut expr: Vec<Option<RowExpr>> = vec![None; n_dofs];
     let mut refs: Vec<Vec<usize>> = vec![Vec::new(); n_dofs];
     let mut kept = vec![false; cands.len()];
     let mut normal_dropped = std::collections::HashSet::new();
@@ -178,7 +178,7 @@ pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<Expr>
         if class(&row) == 3 && normal_dropped.contains(&(row.iface, row.pair)) {
             continue;
         }
-        let Expr { m: am, r: ar } = reduce(cand, &expr);
+        let RowExpr { m: am, r: ar } = reduce(cand, &expr);
         let scale = cand.coefs.iter().map(|c| c.1.abs()).fold(0.0, f64::max);
         let big = am.iter().map(|c| c.1.abs()).fold(0.0, f64::max);
         if big <= 1e-9 * scale {
@@ -197,7 +197,7 @@ pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<Expr>
             .max_by_key(|(m, _)| b_dofs.contains(m))
             .unwrap_or(am[0]);
         let (p, alpha) = pivot;
-        let mut new = Expr::default();
+        let mut new = RowExpr::default();
         for &(m, x) in &am {
             if m != p {
                 new.m.push((m, -x / alpha));
@@ -214,7 +214,7 @@ pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<Expr>
 
 /// A candidate's coefficients over the dofs still free (`m`) and the earlier rows'
 /// openings (`r`), with the eliminated dofs replaced by their expressions.
-fn reduce(cand: &Candidate, expr: &[Option<Expr>]) -> Expr {
+fn reduce(cand: &Candidate, expr: &[Option<RowExpr>]) -> RowExpr {
     let mut am: Vec<(usize, f64)> = Vec::new();
     let mut ar: Vec<(usize, f64)> = Vec::new();
     for &(d, a) in &cand.coefs {
@@ -230,12 +230,12 @@ fn reduce(cand: &Candidate, expr: &[Option<Expr>]) -> Expr {
             None => add_to(&mut am, d, a),
         }
     }
-    Expr { m: am, r: ar }
+    RowExpr { m: am, r: ar }
 }
 
 /// Eliminates dof `p` by its expression `new`: substitutes it in every expression that uses
 /// it (`refs[m]`: the dofs whose expression uses free dof m).
-fn substitute(expr: &mut [Option<Expr>], refs: &mut [Vec<usize>], p: usize, new: Expr) {
+fn substitute(expr: &mut [Option<RowExpr>], refs: &mut [Vec<usize>], p: usize, new: RowExpr) {
     for d in std::mem::take(&mut refs[p]) {
         let Some(mut e) = expr[d].take() else {
             continue;
@@ -337,7 +337,7 @@ pub(super) struct GluedMaps {
 
 /// Step 5 of [`Problem::new`]: the glued unknowns are the dofs left free, numbered in dof
 /// order; every dof is expressed through them and the rows' openings.
-pub(super) fn glued_maps(expr: &[Option<Expr>], index_of: &[usize], n_rows: usize) -> GluedMaps {
+pub(super) fn glued_maps(expr: &[Option<RowExpr>], index_of: &[usize], n_rows: usize) -> GluedMaps {
     let n_dofs = expr.len();
     let mut glued_index = vec![usize::MAX; n_dofs];
     let mut n_glued = 0;
