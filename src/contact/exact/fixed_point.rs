@@ -26,11 +26,12 @@ struct Edge {
     /// The last programme's pair was open (G = 0).
     open: Option<bool>,
     turns: u8,
-    /// Bounds where G(x) − x was positive (lo) and negative (hi), with those values.
-    lo: Option<(f64, f64)>,
-    hi: Option<(f64, f64)>,
-    /// Which end the last two proposals kept (Illinois' halving of the stale end's value).
-    kept: i8,
+    /// The bracket: the bounds where G(x) − x was positive (side 0) and negative (side 1),
+    /// with those values.
+    ends: [Option<(f64, f64)>; 2],
+    /// The side the last proposal replaced (Illinois: where the same side is replaced
+    /// twice, the other end's value is halved).
+    kept: Option<usize>,
 }
 
 impl Edge {
@@ -45,34 +46,26 @@ impl Edge {
             return None;
         }
         let f = gx - x;
+        let side = match f {
+            f if f > 0.0 => 0,
+            f if f < 0.0 => 1,
+            _ => return Some(x),
+        };
         // The same bound on both sides of the root: the row's G moved with the other
         // rows' statuses; the bracket starts again.
-        let at = |end: Option<(f64, f64)>| end.is_some_and(|e| e.0 == x);
-        if (f > 0.0 && at(self.hi)) || (f < 0.0 && at(self.lo)) {
+        if self.ends[1 - side].is_some_and(|e| e.0 == x) {
             *self = Edge::default();
             return None;
         }
-        if f > 0.0 {
-            if self.kept == 1 {
-                if let Some(h) = self.hi.as_mut() {
-                    h.1 *= 0.5;
-                }
+        if self.kept == Some(side) {
+            if let Some(other) = self.ends[1 - side].as_mut() {
+                other.1 *= 0.5;
             }
-            self.lo = Some((x, f));
-            self.kept = 1;
-        } else if f < 0.0 {
-            if self.kept == -1 {
-                if let Some(l) = self.lo.as_mut() {
-                    l.1 *= 0.5;
-                }
-            }
-            self.hi = Some((x, f));
-            self.kept = -1;
-        } else {
-            return Some(x);
         }
-        match (self.lo, self.hi) {
-            (Some((a, fa)), Some((b, fb))) => Some(a - fa * (b - a) / (fb - fa)),
+        self.ends[side] = Some((x, f));
+        self.kept = Some(side);
+        match self.ends {
+            [Some((a, fa)), Some((b, fb))] => Some(a - fa * (b - a) / (fb - fa)),
             _ => None,
         }
     }
