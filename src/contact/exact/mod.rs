@@ -33,6 +33,7 @@ use crate::input::model::Model;
 use crate::linalg::{jacobi_scaling, matvec};
 
 mod fixed_point;
+mod local;
 mod newton;
 mod session;
 

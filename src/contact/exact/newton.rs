@@ -45,13 +45,13 @@ pub(super) enum Status {
 
 /// What the finish needs besides the solver's data.
 pub(super) struct Finish<'f> {
-    model: &'f Model,
-    factor: f64,
-    cohesion: &'f [f64],
+    pub(super) model: &'f Model,
+    pub(super) factor: f64,
+    pub(super) cohesion: &'f [f64],
     /// The normal row of every row's pair.
-    normal: &'f [Option<usize>],
+    pub(super) normal: &'f [Option<usize>],
     /// The anchors (relative displacements at the step's start).
-    start: &'f [f64],
+    pub(super) start: &'f [f64],
 }
 
 impl<'f> Finish<'f> {
@@ -125,8 +125,10 @@ impl Exact<'_> {
     }
 }
 
-/// Solves of the linear system with changed statuses before the finish gives up.
-const ROUNDS: usize = 8;
+/// Solves of the linear system with changed statuses before the finish gives up (the
+/// 798-brick wall from the sparse solver's statuses: 9 with the local Tresca step; corrections
+/// of one to five rows each after the third).
+const ROUNDS: usize = 16;
 
 /// Solves of the linear system before a finish after a programme gives up where a status
 /// left a body free and the proximal spring took over (the stone wall with Coulomb joints at
@@ -154,6 +156,11 @@ const LAW_TOLERANCE: f64 = 1e-9;
 /// slip at rows on their bound (about 1e-8 of the largest displacement), which flipped them
 /// between stick and slip at 1e-9.
 const MOTION_TOLERANCE: f64 = 1e-6;
+
+/// Relative tolerance of a slip against the force of a row on its bound (a slipping row whose
+/// slip is zero but for the solve's round-off): the 798-brick wall's row at 1.2e-6 of the
+/// largest displacement held its bound in every round and turned sticking in each.
+const SLIP_TOLERANCE: f64 = 1e-5;
 
 impl Exact<'_> {
     /// The step's solution from the statuses of the programme `sol` solved with `laws`, or
@@ -190,6 +197,10 @@ impl Exact<'_> {
         let mut prox: Option<(f64, Vec<f64>)> = None;
         // The last solution (scaled unknowns): the spring's first centre.
         let mut last: Option<Vec<f64>> = None;
+        // The last exactly solved round's statuses, corrections and forces, and whether the
+        // local Tresca step decides the corrections.
+        let mut back: Option<Back> = None;
+        let mut local = false;
         let rounds = if proximal { PROXIMAL_ROUNDS } else { ROUNDS };
         for round in 0..rounds {
             if prox.is_none() && round >= ROUNDS {
@@ -199,6 +210,16 @@ impl Exact<'_> {
                 None => self.solve_statuses(f, &status, &prior, None),
                 Some(_) => None,
             };
+            // Row by row, the corrections of the last solve left a body free: the Coulomb
+            // rows about the bodies they changed are decided together instead (`local`),
+            // in this round and every one after.
+            if exact.is_none() && prox.is_none() && !local {
+                if let Some(l) = self.local_retry(f, back.take(), &seen) {
+                    local = true;
+                    status = l;
+                    continue;
+                }
+            }
             let (u, force, x, exact) = match exact {
                 Some((u, force, x)) => (u, force, x, true),
                 None if !proximal => return None,
@@ -218,7 +239,16 @@ impl Exact<'_> {
                 }
             };
             let jumps = self.jumps(&u);
-            let next = self.corrected(f, &status, &u, &jumps, (&force, true));
+            let mut next = self.corrected(f, &status, &u, &jumps, (&force, true));
+            // Row by row the corrections cycle (a status set seen before): so do they where
+            // the rows about the bodies concerned are decided together.
+            if exact && (local || seen.contains(&next)) {
+                let back = Some((status.clone(), next.clone(), force.clone()));
+                if let Some(l) = self.local_retry(f, back, &seen) {
+                    local = true;
+                    next = l;
+                }
+            }
             let changes = next.iter().zip(&status).filter(|(a, b)| a != b).count();
             if next == status && exact {
                 return self.accepted(f, &status, u, force);
@@ -256,6 +286,9 @@ impl Exact<'_> {
             {
                 return None;
             }
+            if exact {
+                back = Some((status.clone(), next.clone(), force.clone()));
+            }
             seen.push(std::mem::replace(&mut status, next));
             prior = force;
             match prox.as_mut() {
@@ -277,6 +310,20 @@ impl Exact<'_> {
             }
         }
         None
+    }
+
+    /// The corrections `back` (statuses, corrected statuses, forces) with the Coulomb rows
+    /// about the bodies they change decided together (`local_statuses`), where that gives a
+    /// status set other than the statuses and not one of `seen`.
+    fn local_retry(
+        &self,
+        f: &Finish,
+        back: Option<Back>,
+        seen: &[Vec<Status>],
+    ) -> Option<Vec<Status>> {
+        let (status, next, force) = back?;
+        let l = self.local_statuses(f, &status, &next, &force)?;
+        (l != status && !seen.contains(&l)).then_some(l)
     }
 
     /// The solution of settled statuses where slipping rows are pushed (a positive normal
@@ -336,6 +383,17 @@ impl Exact<'_> {
         prior: &[f64],
         prox: Option<(f64, &[f64])>,
     ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        self.status_system(f, status, prox)?.solve(self, prior)
+    }
+
+    /// The factored linear system of the statuses (see the module doc), or None where it is
+    /// singular.
+    pub(super) fn status_system(
+        &self,
+        f: &Finish,
+        status: &[Status],
+        prox: Option<(f64, &[f64])>,
+    ) -> Option<StatusSystem> {
         let pb = self.problem;
         let n = pb.n_dofs;
         let (q, qs) = self.linear_term(f.factor, f.cohesion);
@@ -406,33 +464,13 @@ impl Exact<'_> {
         reg.extend(compliance);
         let k_reg = SparseColMat::<usize, f64>::try_new_from_triplets(nv, nv, &reg).ok()?;
         let lu = k_reg.sp_lu().ok()?;
-        // z = z₀ + w with z₀ the prior forces: w the least-norm correction (refinement
-        // against the unregularised system converges to it).
-        let mut z0 = Mat::<f64>::zeros(nv, 1);
-        for (r, &i) in var.iter().enumerate() {
-            if i != usize::MAX {
-                z0[(i, 0)] = prior[r] * self.rho[r] / qs;
-            }
-        }
-        let b = Mat::<f64>::from_fn(nv, 1, |i, _| rhs[i]) - &k_exact * &z0;
-        let mut z = lu.solve(&b);
-        for _ in 0..REFINE {
-            let res = &b - &k_exact * &z;
-            z += lu.solve(&res);
-        }
-        z += &z0;
-        let z: Vec<f64> = (0..nv).map(|i| z[(i, 0)]).collect();
-        if z.iter().any(|v| !v.is_finite()) || z[..n].iter().any(|v| v.abs() > super::DRIFT_LIMIT) {
-            return None;
-        }
-        let u: Vec<f64> = (0..n).map(|k| self.d[k] * qs * z[k]).collect();
-        let force: Vec<f64> = (0..pb.full.len())
-            .map(|r| match var[r] {
-                usize::MAX => 0.0,
-                i => z[i] * qs / self.rho[r],
-            })
-            .collect();
-        Some((u, force, z[..n].to_vec()))
+        Some(StatusSystem {
+            k_exact,
+            lu,
+            var,
+            rhs,
+            qs,
+        })
     }
 
     /// The statuses the solution `u`, `force` of `status` calls for: the same where every
@@ -478,7 +516,11 @@ impl Exact<'_> {
                         Status::Fixed(_) if force[r].abs() > bound + tol_f => {
                             Status::Slip(force[r].signum())
                         }
-                        Status::Slip(sense) if sense * slip > tol_u => Status::Fixed(f.start[r]),
+                        Status::Slip(sense)
+                            if sense * slip > tol_u * SLIP_TOLERANCE / MOTION_TOLERANCE =>
+                        {
+                            Status::Fixed(f.start[r])
+                        }
                         Status::Off => Status::Slip(if slip != 0.0 { -slip.signum() } else { 1.0 }),
                         s => s,
                     }
@@ -564,5 +606,67 @@ impl Exact<'_> {
             },
             laws,
         )
+    }
+}
+
+/// One exactly solved round of the corrections: its statuses, the corrected ones and the
+/// rows' forces.
+type Back = (Vec<Status>, Vec<Status>, Vec<f64>);
+
+/// The factored linear system of one set of statuses.
+pub(super) struct StatusSystem {
+    k_exact: SparseColMat<usize, f64>,
+    /// The LU factors of the system with the fixed rows' compliance.
+    pub(super) lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
+    /// The unknown of each row's force (usize::MAX: none).
+    pub(super) var: Vec<usize>,
+    rhs: Vec<f64>,
+    /// The scale of the loads.
+    pub(super) qs: f64,
+}
+
+impl StatusSystem {
+    /// The number of unknowns.
+    pub(super) fn size(&self) -> usize {
+        self.rhs.len()
+    }
+
+    /// Every dof's displacement, every row's force and the scaled unknowns x, forces nearest
+    /// `prior`, or None where the solution is not finite or drifts.
+    pub(super) fn solve(
+        &self,
+        ex: &Exact,
+        prior: &[f64],
+    ) -> Option<(Vec<f64>, Vec<f64>, Vec<f64>)> {
+        let n = ex.problem.n_dofs;
+        let nv = self.rhs.len();
+        let qs = self.qs;
+        // z = z₀ + w with z₀ the prior forces: w the least-norm correction (refinement
+        // against the unregularised system converges to it).
+        let mut z0 = Mat::<f64>::zeros(nv, 1);
+        for (r, &i) in self.var.iter().enumerate() {
+            if i != usize::MAX {
+                z0[(i, 0)] = prior[r] * ex.rho[r] / qs;
+            }
+        }
+        let b = Mat::<f64>::from_fn(nv, 1, |i, _| self.rhs[i]) - &self.k_exact * &z0;
+        let mut z = self.lu.solve(&b);
+        for _ in 0..REFINE {
+            let res = &b - &self.k_exact * &z;
+            z += self.lu.solve(&res);
+        }
+        z += &z0;
+        let z: Vec<f64> = (0..nv).map(|i| z[(i, 0)]).collect();
+        if z.iter().any(|v| !v.is_finite()) || z[..n].iter().any(|v| v.abs() > super::DRIFT_LIMIT) {
+            return None;
+        }
+        let u: Vec<f64> = (0..n).map(|k| ex.d[k] * qs * z[k]).collect();
+        let force: Vec<f64> = (0..ex.problem.full.len())
+            .map(|r| match self.var[r] {
+                usize::MAX => 0.0,
+                i => z[i] * qs / ex.rho[r],
+            })
+            .collect();
+        Some((u, force, z[..n].to_vec()))
     }
 }
