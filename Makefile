@@ -137,6 +137,7 @@ test: setup mesh lint
 test-long: setup mesh
 	$(CARGO) test --release --test friction -- --ignored --exact stone_wall_with_coulomb_joints_stands_under_its_weight
 	$(CARGO) test --release --test full_rows -- --ignored --exact the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free
+	$(CARGO) test --release --test full_rows -- --ignored --exact the_stone_wall_with_coulomb_joints_stands_at_an_eighth_of_g
 
 examples: build mesh $(RESULTS)
 

@@ -534,9 +534,28 @@ fn a_wall_settles_from_the_sparse_solvers_statuses() {
 #[test]
 #[ignore = "long (4-5 min): make test-long"]
 fn the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free() {
-    let dir = tmpdir("full_rows_stones");
+    stone_wall_with_coulomb_joints_stands("full_rows_stones", 0.1171875);
+}
+
+/// The same wall at 0.125 g, the trial its collapse search left undecided before the local
+/// Tresca step (docs/formulation.md §6.10): the fixed point stalled at a residual of 3.6e-3
+/// and the corrections of its statuses row by row did not settle in 20 solves (30 min on a
+/// busy machine, killed). Measured with the step: 50 programmes, settled by the linear solve,
+/// 86 s on a quiet machine; 557 pairs slip, 721 open. Long: `make test-long`.
+#[test]
+#[ignore = "long (1.5-6 min): make test-long"]
+fn the_stone_wall_with_coulomb_joints_stands_at_an_eighth_of_g() {
+    stone_wall_with_coulomb_joints_stands("full_rows_stones_125", 0.125);
+}
+
+/// Runs the stone wall with Coulomb joints (μ = 0.7) under its weight and `g_side` g
+/// sideways, and checks that it stands: settled by the linear solve, Coulomb's law pair by
+/// pair, every stone in balance.
+fn stone_wall_with_coulomb_joints_stands(name: &str, g_side: f64) {
+    let dir = tmpdir(name);
     let scene = root().join("pipelines/stone_wall.toml");
     let out = dir.join("run");
+    let force = format!("defaults.body.body_force=[{},-25.0]", 25.0 * g_side);
     let args = [
         "--method",
         "exact",
@@ -545,7 +564,7 @@ fn the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free() {
         "--set",
         "defaults.interface.friction=0.7",
         "--set",
-        "defaults.body.body_force=[2.9296875,-25.0]",
+        force.as_str(),
         "--set",
         "output.vtk=false",
         "--set",
@@ -558,11 +577,11 @@ fn the_stone_wall_with_coulomb_joints_stands_where_a_stone_was_left_free() {
     assert_eq!(s["contact"]["junctions"]["implied_components"], 0);
     let (above, free_slip, slipping) = coulomb_breaches(&out, 0.7, 1e-7);
     eprintln!(
-        "stone wall at 0.117 g: {slipping} pairs slip, {above} above the cone, {free_slip} below"
+        "stone wall at {g_side} g: {slipping} pairs slip, {above} above the cone, {free_slip} below"
     );
     assert!(slipping > 100, "{slipping}");
     assert_eq!((above, free_slip), (0, 0));
     let worst = worst_imbalance(&s);
-    eprintln!("stone wall at 0.117 g: largest relative imbalance of a stone {worst:.1e}");
+    eprintln!("stone wall at {g_side} g: largest relative imbalance of a stone {worst:.1e}");
     assert!(worst < 1e-6, "{worst}");
 }
