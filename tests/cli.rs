@@ -708,13 +708,15 @@ fn progress_moves_on_a_terminal() {
 /// the residual of Coulomb's law (before, it stayed on the seed's last message for the whole
 /// step: 16 s on the stone wall), and once the residual has fallen over 5 programmes, how
 /// many more it needs at that rate (an upper bound: the linear solve of the statuses ends
-/// most steps sooner). A 4 × 5 wall at half its weight sideways: 15 programmes.
+/// most steps sooner). A 4 × 5 wall at 0.63 of its weight sideways, near its collapse: 9
+/// programmes (at half its weight the linear solve settles the step after the first since
+/// the local Tresca step of docs/formulation.md §6.10; it took 15 before).
 #[test]
 fn the_full_rows_show_each_programme_on_a_terminal() {
     let text = run_on_a_terminal(
         "progress_exact_pty",
         "wall_running_bond",
-        "--set mesh.courses=4 --set mesh.bricks=5 --set 'defaults.body.body_force=[10.0,-20.0]' \
+        "--set mesh.courses=4 --set mesh.bricks=5 --set 'defaults.body.body_force=[12.6,-20.0]' \
          --set output.history=final --set output.vtk=false",
     );
     let mut shown: Vec<&str> = text
