@@ -197,9 +197,7 @@ impl Exact<'_> {
         let mut prox: Option<(f64, Vec<f64>)> = None;
         // The last solution (scaled unknowns): the spring's first centre.
         let mut last: Option<Vec<f64>> = None;
-        // The last exactly solved round's statuses, corrections and forces, and whether the
-        // local Tresca step decides the corrections.
-        let mut back: Option<Back> = None;
+        // Whether the local Tresca step decides the corrections.
         let mut local = false;
         let rounds = if proximal { PROXIMAL_ROUNDS } else { ROUNDS };
         for round in 0..rounds {
@@ -213,8 +211,10 @@ impl Exact<'_> {
             // Row by row, the corrections of the last solve left a body free: the Coulomb
             // rows about the bodies they changed are decided together instead (`local`),
             // in this round and every one after.
-            if exact.is_none() && prox.is_none() && !local {
-                if let Some(l) = self.local_retry(f, back.take(), &seen) {
+            // (Before this round: the statuses `seen` last, corrected to `status`, with the
+            // forces `prior`.)
+            if let (None, None, false, Some(before)) = (&exact, &prox, local, seen.last()) {
+                if let Some(l) = self.local_retry(f, (before, &status, &prior), &seen) {
                     local = true;
                     status = l;
                     continue;
@@ -243,8 +243,7 @@ impl Exact<'_> {
             // Row by row the corrections cycle (a status set seen before): so do they where
             // the rows about the bodies concerned are decided together.
             if exact && (local || seen.contains(&next)) {
-                let back = Some((status.clone(), next.clone(), force.clone()));
-                if let Some(l) = self.local_retry(f, back, &seen) {
+                if let Some(l) = self.local_retry(f, (&status, &next, &force), &seen) {
                     local = true;
                     next = l;
                 }
@@ -286,9 +285,6 @@ impl Exact<'_> {
             {
                 return None;
             }
-            if exact {
-                back = Some((status.clone(), next.clone(), force.clone()));
-            }
             seen.push(std::mem::replace(&mut status, next));
             prior = force;
             match prox.as_mut() {
@@ -312,17 +308,16 @@ impl Exact<'_> {
         None
     }
 
-    /// The corrections `back` (statuses, corrected statuses, forces) with the Coulomb rows
-    /// about the bodies they change decided together (`local_statuses`), where that gives a
-    /// status set other than the statuses and not one of `seen`.
+    /// The corrections of one solved round (statuses, corrected statuses, forces) with the
+    /// Coulomb rows about the bodies they change decided together (`local_statuses`), where
+    /// that gives a status set other than the statuses and not one of `seen`.
     fn local_retry(
         &self,
         f: &Finish,
-        back: Option<Back>,
+        (status, next, force): (&[Status], &[Status], &[f64]),
         seen: &[Vec<Status>],
     ) -> Option<Vec<Status>> {
-        let (status, next, force) = back?;
-        let l = self.local_statuses(f, &status, &next, &force)?;
+        let l = self.local_statuses(f, status, next, force)?;
         (l != status && !seen.contains(&l)).then_some(l)
     }
 
@@ -608,10 +603,6 @@ impl Exact<'_> {
         )
     }
 }
-
-/// One exactly solved round of the corrections: its statuses, the corrected ones and the
-/// rows' forces.
-type Back = (Vec<Status>, Vec<Status>, Vec<f64>);
 
 /// The factored linear system of one set of statuses.
 pub(super) struct StatusSystem {
