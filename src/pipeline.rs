@@ -88,12 +88,18 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             ))
         }
     };
+    // The user's .geo, where gmsh made the mesh: errors in the mesh name it.
+    let mut geo: Option<PathBuf> = None;
     if crate::input::gmsh::is_geo(&mesh_path) {
         let dir = opts
             .mesh_dir
             .clone()
             .unwrap_or_else(|| scene.output.directory.join("mesh"));
-        mesh_path = crate::input::gmsh::mesh_geo(&mesh_path, &scene.mesh_parameters, &dir)?;
+        let made = crate::input::gmsh::mesh_geo(&mesh_path, &scene.mesh_parameters, &dir)?;
+        geo = Some(std::mem::replace(&mut mesh_path, made));
+    } else {
+        // A mesh given as such: the scene's gmsh parameters did not make it.
+        scene.mesh_parameters.clear();
     }
     if !mesh_path.is_file() {
         return Err(Error::input(
@@ -101,8 +107,9 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             "no such mesh file: mesh the .geo first (make mesh, or gmsh -2 -format msh41 FILE.geo)",
         ));
     }
-    let mut mesh = mesh::read_msh(&mesh_path)?;
-    let model = model::build(&scene, &mut mesh, &mesh_path)?;
+    let in_geo = |e| in_geo(e, &mesh_path, geo.as_deref());
+    let mut mesh = mesh::read_msh(&mesh_path).map_err(in_geo)?;
+    let model = model::build(&scene, &mut mesh, &mesh_path).map_err(in_geo)?;
     scene.solve.choose_method(
         model.unilateral_pair_count(),
         model.has_unilateral_junction(),
@@ -116,6 +123,18 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
         model,
         plan,
     })
+}
+
+/// An input error in the mesh gmsh made of the user's `.geo`, said of the `.geo` (the mesh
+/// of `sgbem check` is gone when the message is read).
+fn in_geo(e: Error, mesh: &Path, geo: Option<&Path>) -> Error {
+    match (e, geo) {
+        (Error::Input { file, message }, Some(geo)) if Path::new(&file) == mesh => Error::input(
+            geo,
+            format!("{message} (in the mesh gmsh made of this .geo)"),
+        ),
+        (e, _) => e,
+    }
 }
 
 /// Command-line overrides of a run.

@@ -261,9 +261,13 @@ fn check_nesting(bodies: &[Body], mfile: &Path) -> Result<()> {
                 return Err(Error::input(
                     mfile,
                     format!(
-                        "body \"{}\" lies inside body \"{}\": bodies must not overlap; cut a hole \
-                         in \"{}\" bounded by the same curves",
-                        body.name, other.name, other.name
+                        "body \"{}\" lies inside body \"{}\" (they overlap by {}, the depth of \
+                         its deepest node): bodies must not overlap; cut a hole in \"{}\" \
+                         bounded by the same curves",
+                        body.name,
+                        other.name,
+                        fmt_num(overlap_depth(body, other)),
+                        other.name
                     ),
                 ));
             }
