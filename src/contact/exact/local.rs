@@ -14,7 +14,6 @@
 //! a body free while an equilibrium exists.
 
 use clarabel::solver::{DefaultSettingsBuilder, DefaultSolver, IPSolver, NonnegativeConeT};
-use faer::linalg::solvers::Solve;
 use faer::Mat;
 
 use super::newton::{Finish, Status};
@@ -104,7 +103,7 @@ impl Exact<'_> {
                     }
                 },
             );
-            let x = sys.lu.solve(&e);
+            let x = sys.lu.solve(&e)?;
             for a in 0..k {
                 for b in c0..c1 {
                     inv[a * k + b] = x[(cols[a], b - c0)];

@@ -23,9 +23,10 @@
 //! solution (a trust region), and the system without it decides. Where it does not settle,
 //! the fixed point goes on: this is an acceleration, never a verdict.
 
-use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
-use faer::Mat;
+use faer::dyn_stack::{MemBuffer, MemStack};
+use faer::sparse::linalg::lu;
+use faer::sparse::{SparseColMat, SparseColMatRef, Triplet};
+use faer::{Conj, Mat, Par};
 
 use super::{Exact, Programme, RowLaw};
 use crate::contact::problem::RowKind;
@@ -458,7 +459,7 @@ impl Exact<'_> {
         let mut reg = exact;
         reg.extend(compliance);
         let k_reg = SparseColMat::<usize, f64>::try_new_from_triplets(nv, nv, &reg).ok()?;
-        let lu = k_reg.sp_lu().ok()?;
+        let lu = SeqLu::new(k_reg.as_ref())?;
         Some(StatusSystem {
             k_exact,
             lu,
@@ -608,7 +609,7 @@ impl Exact<'_> {
 pub(super) struct StatusSystem {
     k_exact: SparseColMat<usize, f64>,
     /// The LU factors of the system with the fixed rows' compliance.
-    pub(super) lu: faer::sparse::linalg::solvers::Lu<usize, f64>,
+    pub(super) lu: SeqLu,
     /// The unknown of each row's force (usize::MAX: none).
     pub(super) var: Vec<usize>,
     rhs: Vec<f64>,
@@ -641,10 +642,10 @@ impl StatusSystem {
             }
         }
         let b = Mat::<f64>::from_fn(nv, 1, |i, _| self.rhs[i]) - &self.k_exact * &z0;
-        let mut z = self.lu.solve(&b);
+        let mut z = self.lu.solve(&b)?;
         for _ in 0..REFINE {
             let res = &b - &self.k_exact * &z;
-            z += self.lu.solve(&res);
+            z += self.lu.solve(&res)?;
         }
         z += &z0;
         let z: Vec<f64> = (0..nv).map(|i| z[(i, 0)]).collect();
@@ -659,5 +660,51 @@ impl StatusSystem {
             })
             .collect();
         Some((u, force, z[..n].to_vec()))
+    }
+}
+
+/// A sparse LU factorisation made and used on one thread: faer's threads (its global
+/// parallelism) cost more in waiting than they gained on these systems (the 798-brick wall's
+/// 83 500 unknowns: 2.0–2.6 s a factorisation with two threads, 1.4–1.5 s with one, on a
+/// quiet 2-core machine), as on the sparse solver's (`sparse.rs`).
+pub(super) struct SeqLu {
+    symbolic: lu::SymbolicLu<usize>,
+    numeric: lu::NumericLu<usize, f64>,
+}
+
+impl SeqLu {
+    /// The factors of `mat`, or None where it is singular or memory is short.
+    fn new(mat: SparseColMatRef<'_, usize, f64>) -> Option<SeqLu> {
+        let symbolic = lu::factorize_symbolic_lu(mat.symbolic(), Default::default()).ok()?;
+        let req = symbolic.factorize_numeric_lu_scratch::<f64>(Par::Seq, Default::default());
+        let mut buf = MemBuffer::try_new(req).ok()?;
+        let mut numeric = lu::NumericLu::new();
+        symbolic
+            .factorize_numeric_lu(
+                &mut numeric,
+                mat,
+                Par::Seq,
+                MemStack::new(&mut buf),
+                Default::default(),
+            )
+            .ok()?;
+        Some(SeqLu { symbolic, numeric })
+    }
+
+    /// The solution of the factored system for the columns of `b` (None where memory for
+    /// the work space is short).
+    pub(super) fn solve(&self, b: &Mat<f64>) -> Option<Mat<f64>> {
+        let mut x = b.clone();
+        let req = self
+            .symbolic
+            .solve_in_place_scratch::<f64>(x.ncols(), Par::Seq);
+        let mut buf = MemBuffer::try_new(req).ok()?;
+        lu::LuRef::new_unchecked(&self.symbolic, &self.numeric).solve_in_place_with_conj(
+            Conj::No,
+            x.as_mut(),
+            Par::Seq,
+            MemStack::new(&mut buf),
+        );
+        Some(x)
     }
 }
