@@ -619,6 +619,7 @@ pub(super) fn step_at(
         let mut s = Session::new(&model_t, &prepared_t).map_err(|e| plan.explain(e))?;
         s.cols = std::mem::take(&mut session.cols);
         s.coupled_after = session.coupled_after;
+        s.last_from_rest = session.last_from_rest.take();
         timings.add("interface_system", t1.elapsed().as_secs_f64());
         // Cohesion follows its expression where the pair has never opened.
         for (k, it) in model_t.interfaces.iter().enumerate() {
@@ -630,6 +631,7 @@ pub(super) fn step_at(
         }
         contact_step(&mut s, ctx, step, f, state, acc, timings);
         session.cols = std::mem::take(&mut s.cols);
+        session.last_from_rest = s.last_from_rest.take();
     }
     *reassembled = Some(prepared_t);
     Ok(())

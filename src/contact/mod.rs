@@ -248,6 +248,9 @@ pub struct Session<'a> {
     pub coupled_after: usize,
     /// The contact stage's bar: each outer iteration of a load step shows on it.
     pub stage: Option<crate::output::progress::Stage>,
+    /// The pairs of the last full-row step solved from rest: the seed of the next step from
+    /// rest where the sparse solver's statuses are not one (a collapse search's trials).
+    pub last_from_rest: Option<Vec<crate::solution::InterfaceResult>>,
 }
 
 impl<'a> Session<'a> {
@@ -260,6 +263,7 @@ impl<'a> Session<'a> {
             sparse: None,
             coupled_after: FRICTION_COUPLED_AFTER,
             stage: None,
+            last_from_rest: None,
         })
     }
 

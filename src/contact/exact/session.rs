@@ -21,7 +21,11 @@ impl crate::contact::Session<'_> {
         record: bool,
     ) -> crate::contact::ContactResult {
         use crate::contact::{ContactResult, Iterate, Solver};
-        let warm = if start.full_anchor.is_empty() {
+        // The seed: the sparse solver's pairs for this step, or where it does not settle
+        // them, those of the last step solved from rest (in a collapse search, the last
+        // trial that stood: where the load changes little, so do the statuses).
+        let from_rest = start.full_anchor.is_empty();
+        let (warm, seeded_by) = if from_rest {
             let x = self.solve_step(
                 start,
                 Solver::Sparse,
@@ -31,9 +35,16 @@ impl crate::contact::Session<'_> {
                 factor,
                 false,
             );
-            (x.converged && x.failure.is_none()).then_some(x.interfaces)
+            if x.converged && x.failure.is_none() {
+                (Some(x.interfaces), "the sparse solver's statuses")
+            } else {
+                (
+                    self.last_from_rest.clone(),
+                    "the statuses of the last step solved from rest (the last trial that stood)",
+                )
+            }
         } else {
-            None
+            (None, "")
         };
         let (model, pb) = (self.model, &self.problem);
         let mut ex = Exact::new(pb);
@@ -89,9 +100,10 @@ impl crate::contact::Session<'_> {
                 if out.programmes == 1 { "" } else { "s" },
                 out.ipm_iterations,
                 match (out.finished, out.programmes) {
-                    (true, 0) => "; settled by the linear solve of the sparse solver's statuses",
-                    (true, _) => "; Coulomb's law settled by the linear solve of the last statuses",
-                    _ => "",
+                    (true, 0) => format!("; settled by the linear solve of {seeded_by}"),
+                    (true, _) =>
+                        "; Coulomb's law settled by the linear solve of the last statuses".into(),
+                    _ => String::new(),
                 }
             ));
         }
@@ -129,6 +141,9 @@ impl crate::contact::Session<'_> {
                 path[r] += (jumps[r] - anchor[r]).abs();
             }
             res.slip = path[r];
+        }
+        if solved && from_rest {
+            self.last_from_rest = Some(interfaces.clone());
         }
         let mut state = start.clone();
         if solved {
