@@ -107,9 +107,9 @@ pub fn load_with(scene_path: &Path, opts: &LoadOptions) -> Result<Loaded> {
             "no such mesh file: mesh the .geo first (make mesh, or gmsh -2 -format msh41 FILE.geo)",
         ));
     }
-    let in_geo = |e| in_geo(e, &mesh_path, geo.as_deref());
-    let mut mesh = mesh::read_msh(&mesh_path).map_err(in_geo)?;
-    let model = model::build(&scene, &mut mesh, &mesh_path).map_err(in_geo)?;
+    let said_of_geo = |e| in_geo(e, &mesh_path, geo.as_deref());
+    let mut mesh = mesh::read_msh(&mesh_path).map_err(said_of_geo)?;
+    let model = model::build(&scene, &mut mesh, &mesh_path).map_err(said_of_geo)?;
     scene.solve.choose_method(
         model.unilateral_pair_count(),
         model.has_unilateral_junction(),
