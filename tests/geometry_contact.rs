@@ -396,13 +396,27 @@ fn pin_in_a_hole_follows_persson() {
 
 /// `geo/stacked_blocks.geo` with `nb` blocks and `[contact]`, the other keys in `rest`.
 fn stack_scene(nb: usize, mesh_extra: &str, rest: &str) -> String {
+    stack_scene_with(nb, mesh_extra, "[0.0, -2.0]", rest)
+}
+
+/// `stack_scene` with the blocks' body force `force`.
+fn stack_scene_with(nb: usize, mesh_extra: &str, force: &str, rest: &str) -> String {
     format!(
         "title = \"stacked blocks found by [contact]\"\nplane = \"strain\"\n\
          [mesh]\nfile = \"{}\"\nnb = {nb}\n{mesh_extra}\n\
-         [defaults.body]\nyoung = 1000.0\npoisson = 0.2\nbody_force = [0.0, -2.0]\n\
+         [defaults.body]\nyoung = 1000.0\npoisson = 0.2\nbody_force = {force}\n\
          [boundary.base]\nux = 0.0\nuy = 0.0\n{rest}",
         geo("stacked_blocks")
     )
+}
+
+/// `sgbem check` of `scene` written into `dir` as `name`, which must refuse it (exit 2): its
+/// message.
+fn refused(dir: &Path, name: &str, scene: &str) -> String {
+    let s = support::write(dir, name, scene);
+    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
+    assert_eq!(code, 2, "{err}");
+    err
 }
 
 /// Five blocks drawn and meshed on their own (no joint with matching nodes, every other
@@ -543,9 +557,7 @@ fn contact_declared_interfaces_win_and_overlaps_are_refused() {
         "sink = 0.01",
         &format!("[contact]\nsearch = 1e-3\n{iface}"),
     );
-    let s = support::write(&dir, "overlap.toml", &scene);
-    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
-    assert_eq!(code, 2, "{err}");
+    let err = refused(&dir, "overlap.toml", &scene);
     assert!(
         err.contains("\"block_0\"")
             && err.contains("\"block_1\"")
@@ -580,9 +592,7 @@ fn contact_declared_interfaces_win_and_overlaps_are_refused() {
          [contact]\nsearch = 1e-3\n{iface}",
         g.display()
     );
-    let s = support::write(&dir, "nested.toml", &scene);
-    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
-    assert_eq!(code, 2, "{err}");
+    let err = refused(&dir, "nested.toml", &scene);
     assert!(
         err.contains("body \"inner\" lies inside body \"outer\"")
             && err.contains("overlap by 0.3")
@@ -592,9 +602,7 @@ fn contact_declared_interfaces_win_and_overlaps_are_refused() {
 
     // No [defaults.interface].
     let scene = stack_scene(2, "", "[contact]\nsearch = 1e-6\n");
-    let s = support::write(&dir, "nodefault.toml", &scene);
-    let (code, _, err) = support::sgbem(&["check", s.to_str().unwrap()]);
-    assert_eq!(code, 2, "{err}");
+    let err = refused(&dir, "nodefault.toml", &scene);
     assert!(err.contains("[defaults.interface]"), "{err}");
 }
 
@@ -1084,13 +1092,14 @@ fn a_wall_drawn_brick_by_brick_matches_the_conforming_one() {
 /// `geo/stacked_blocks.geo` (`nb` blocks, `shift` of every other one) with `[contact]`, the
 /// blocks' body force `force`, the interface law `law` and the rest of the scene `rest`.
 fn found_stack(nb: usize, shift: f64, force: &str, law: &str, rest: &str) -> String {
-    format!(
-        "title = \"stacked blocks found by [contact]\"\nplane = \"strain\"\n\
-         [mesh]\nfile = \"{}\"\nnb = {nb}\nshift = {shift}\n\
-         [defaults.body]\nyoung = 1000.0\npoisson = 0.2\nbody_force = {force}\n\
-         [boundary.base]\nux = 0.0\nuy = 0.0\n[contact]\nsearch = 1e-6\n\
-         [defaults.interface]\nmodel = \"unilateral\"\n{law}\n{rest}\n[output]\nvtk = false\n",
-        geo("stacked_blocks")
+    stack_scene_with(
+        nb,
+        &format!("shift = {shift}"),
+        force,
+        &format!(
+            "[contact]\nsearch = 1e-6\n[defaults.interface]\nmodel = \"unilateral\"\n{law}\n\
+             {rest}\n[output]\nvtk = false\n"
+        ),
     )
 }
 

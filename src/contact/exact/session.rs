@@ -25,7 +25,7 @@ impl crate::contact::Session<'_> {
         // them, those of the last step solved from rest (in a collapse search, the last
         // trial that stood: where the load changes little, so do the statuses).
         let from_rest = start.full_anchor.is_empty();
-        let (warm, seeded_by) = if from_rest {
+        let sparse = if from_rest {
             let x = self.solve_step(
                 start,
                 Solver::Sparse,
@@ -35,16 +35,17 @@ impl crate::contact::Session<'_> {
                 factor,
                 false,
             );
-            if x.converged && x.failure.is_none() {
-                (Some(x.interfaces), "the sparse solver's statuses")
-            } else {
-                (
-                    self.last_from_rest.clone(),
-                    "the statuses of the last step solved from rest (the last trial that stood)",
-                )
-            }
+            (x.converged && x.failure.is_none()).then_some(x.interfaces)
         } else {
-            (None, "")
+            None
+        };
+        let (warm, seeded_by) = match (&sparse, &self.last_from_rest) {
+            (Some(w), _) => (Some(w), "the sparse solver's statuses"),
+            (None, Some(w)) if from_rest => (
+                Some(w),
+                "the statuses of the last step solved from rest (the last trial that stood)",
+            ),
+            _ => (None, ""),
         };
         let (model, pb) = (self.model, &self.problem);
         let mut ex = Exact::new(pb);
@@ -68,7 +69,7 @@ impl crate::contact::Session<'_> {
                 _ => 0.0,
             })
             .collect();
-        let seed = warm.map(|w| ex.seed(model, &w, &cohesion, &anchor));
+        let seed = warm.map(|w| ex.seed(model, w, &cohesion, &anchor));
         let out = ex.step(
             model,
             factor,
