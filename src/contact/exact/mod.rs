@@ -36,6 +36,7 @@ mod fixed_point;
 mod local;
 mod newton;
 mod session;
+mod system;
 
 use fixed_point::{coulomb_residual, SlipBounds, SETTLED};
 pub(crate) use newton::Seed;
