@@ -123,6 +123,8 @@ pub struct Exact<'a> {
     p_vals: Vec<f64>,
     /// The contact bar and the load step (from 0) its messages name, where one is shown.
     progress: Option<(&'a crate::output::progress::Stage, usize)>,
+    /// The pattern of the statuses' linear systems.
+    layout_cell: system::LayoutCell,
 }
 
 impl<'a> Exact<'a> {
@@ -228,6 +230,7 @@ impl<'a> Exact<'a> {
             p_rows,
             p_vals,
             progress: None,
+            layout_cell: system::LayoutCell::default(),
         }
     }
 
