@@ -215,8 +215,7 @@ impl Exact<'_> {
         status: &[Status],
         prox: Option<f64>,
     ) -> Option<Vec<f64>> {
-        let pb = self.problem;
-        let n = pb.n_dofs;
+        let n = self.problem.n_dofs;
         let mut v = vec![0.0; layout.row_idx.len()];
         for (e, &[a, b]) in layout.p_pos.iter().enumerate() {
             v[a] += self.p_vals[e];
@@ -230,70 +229,36 @@ impl Exact<'_> {
             }
         }
         for (r, &s) in status.iter().enumerate() {
-            for (i, val) in self.row_entries(layout, f, r, s, status)? {
-                v[i] += val;
-            }
+            let diag = layout.diag[n + r];
+            let span = layout.coef_start[r]..layout.coef_start[r + 1];
+            let coefs = self.problem.full[r].coefs.iter();
+            // A row with force: its column −a_r in the dofs' equations.
             if s != Status::Off {
-                for (i, val) in self.col_entries(layout, r) {
-                    v[i] += val;
+                for (&(k, c), &p) in coefs.clone().zip(&layout.col_pos[span.clone()]) {
+                    v[p] -= c * self.d[k] / self.rho[r];
+                }
+            }
+            // Its own equation.
+            match s {
+                Status::Off => v[diag] += 1.0,
+                Status::Fixed(_) => {
+                    for (&(k, c), &p) in coefs.zip(&layout.row_pos[span]) {
+                        v[p] += c * self.d[k] / self.rho[r];
+                    }
+                    v[diag] -= COMPLIANCE;
+                }
+                Status::Slip(sense) => {
+                    let nr = f.normal[r]?;
+                    if status[nr] == Status::Off || layout.slip_pos[r] == usize::MAX {
+                        return None;
+                    }
+                    v[diag] += 1.0;
+                    v[layout.slip_pos[r]] -=
+                        sense * self.mu(f.model, r) * self.rho[r] / self.rho[nr];
                 }
             }
         }
         Some(v)
-    }
-
-    /// The entries of row r's equation with the status `s` as (position, value) in
-    /// `layout`; None where it slips and its pair's normal row is open.
-    fn row_entries(
-        &self,
-        layout: &Layout,
-        f: &Finish,
-        r: usize,
-        s: Status,
-        status: &[Status],
-    ) -> Option<Vec<(usize, f64)>> {
-        let i = self.problem.n_dofs + r;
-        Some(match s {
-            Status::Off => vec![(layout.diag[i], 1.0)],
-            Status::Fixed(_) => {
-                let mut e = self.coef_entries(layout, r, &layout.row_pos, 1.0);
-                e.push((layout.diag[i], -COMPLIANCE));
-                e
-            }
-            Status::Slip(sense) => {
-                let nr = f.normal[r]?;
-                if status[nr] == Status::Off || layout.slip_pos[r] == usize::MAX {
-                    return None;
-                }
-                let mu = self.mu(f.model, r);
-                vec![
-                    (layout.diag[i], 1.0),
-                    (layout.slip_pos[r], -sense * mu * self.rho[r] / self.rho[nr]),
-                ]
-            }
-        })
-    }
-
-    /// The entries of row r's column (its force in the dofs' equations), `a_r`.
-    fn col_entries(&self, layout: &Layout, r: usize) -> Vec<(usize, f64)> {
-        self.coef_entries(layout, r, &layout.col_pos, -1.0)
-    }
-
-    /// `sign · c d_k / ρ_r` of row r's coefficients at their positions in `pos`.
-    fn coef_entries(
-        &self,
-        layout: &Layout,
-        r: usize,
-        pos: &[usize],
-        sign: f64,
-    ) -> Vec<(usize, f64)> {
-        let rho = self.rho[r];
-        self.problem.full[r]
-            .coefs
-            .iter()
-            .zip(&pos[layout.coef_start[r]..layout.coef_start[r + 1]])
-            .map(|(&(k, c), &p)| (p, sign * c * self.d[k] / rho))
-            .collect()
     }
 }
 
