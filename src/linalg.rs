@@ -122,9 +122,78 @@ pub(crate) fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f
     Some(x)
 }
 
+/// A triangle (`side`) of a symmetric sparse matrix of order `n` in compressed columns (rows
+/// sorted, each position once), from the entries `(row, col, value)` within it (`row ≥ col`
+/// for the lower one) that `emit` hands to its sink; entries at the same position are summed in the order given.
+/// `emit` runs twice, once to count the entries of each column and once to place them, so
+/// the entries are never held as triplets (whose global sort cost more than the rest of the
+/// assembly). None where an entry lies outside the triangle or the memory cannot be had.
+pub(crate) fn triangle_from_entries(
+    n: usize,
+    side: faer::Side,
+    emit: impl Fn(&mut dyn FnMut(usize, usize, f64)),
+) -> Option<faer::sparse::SparseColMat<usize, f64>> {
+    let mut start = vec![0usize; n + 1];
+    let mut outside = false;
+    let inside = |r: usize, c: usize| match side {
+        faer::Side::Lower => c <= r && r < n,
+        faer::Side::Upper => r <= c && c < n,
+    };
+    emit(&mut |r, c, _| {
+        if inside(r, c) {
+            start[c + 1] += 1;
+        } else {
+            outside = true;
+        }
+    });
+    if outside {
+        return None;
+    }
+    for c in 0..n {
+        start[c + 1] += start[c];
+    }
+    let total = start[n];
+    let (mut rows, mut vals) = (Vec::new(), Vec::new());
+    rows.try_reserve_exact(total).ok()?;
+    vals.try_reserve_exact(total).ok()?;
+    rows.resize(total, 0usize);
+    vals.resize(total, 0.0f64);
+    let mut next = start.clone();
+    emit(&mut |r, c, v| {
+        rows[next[c]] = r;
+        vals[next[c]] = v;
+        next[c] += 1;
+    });
+    // Each column sorted by row (stable: repeated positions keep their order) and merged.
+    let mut col_ptr = Vec::with_capacity(n + 1);
+    col_ptr.push(0);
+    let mut column: Vec<(usize, f64)> = Vec::new();
+    let mut kept = 0;
+    for c in 0..n {
+        column.clear();
+        column.extend((start[c]..start[c + 1]).map(|p| (rows[p], vals[p])));
+        column.sort_by_key(|e| e.0);
+        let first = kept;
+        for &(r, v) in &column {
+            if kept > first && rows[kept - 1] == r {
+                vals[kept - 1] += v;
+            } else {
+                rows[kept] = r;
+                vals[kept] = v;
+                kept += 1;
+            }
+        }
+        col_ptr.push(kept);
+    }
+    rows.truncate(kept);
+    vals.truncate(kept);
+    let symbolic = faer::sparse::SymbolicSparseColMat::new_checked(n, n, col_ptr, None, rows);
+    Some(faer::sparse::SparseColMat::new(symbolic, vals))
+}
+
 #[cfg(test)]
 mod tests {
-    use super::solve3;
+    use super::{solve3, triangle_from_entries};
 
     #[test]
     fn solve3_needs_its_pivoting_and_refuses_a_singular_matrix() {
@@ -141,5 +210,42 @@ mod tests {
             assert!((got[i] - x[i]).abs() < 1e-14, "{got:?}");
         }
         assert!(solve3([[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 1.0, 1.0]], b).is_none());
+    }
+
+    #[test]
+    fn triangle_from_entries_sums_repeats_sorts_rows_and_refuses_the_other_triangle() {
+        // Entries out of order, (2, 0) given three times and (1, 1) twice.
+        let entries = [
+            (2, 0, 1.5),
+            (0, 0, 4.0),
+            (1, 1, 2.0),
+            (2, 0, 0.25),
+            (2, 2, 3.0),
+            (1, 0, -1.0),
+            (1, 1, 0.5),
+            (2, 0, -0.75),
+        ];
+        let m = triangle_from_entries(3, faer::Side::Lower, |sink| {
+            for &(r, c, v) in &entries {
+                sink(r, c, v);
+            }
+        })
+        .expect("inside the lower triangle");
+        let sym = m.symbolic();
+        assert_eq!(sym.col_ptr(), &[0, 3, 4, 5]);
+        assert_eq!(sym.row_idx(), &[0, 1, 2, 1, 2]);
+        assert_eq!(m.val(), &[4.0, -1.0, 1.0, 2.5, 3.0]);
+        // The same entries as an upper triangle, transposed; a lower entry is refused there.
+        let up = triangle_from_entries(3, faer::Side::Upper, |sink| {
+            for &(r, c, v) in &entries {
+                sink(c, r, v);
+            }
+        })
+        .expect("inside the upper triangle");
+        assert_eq!(up.symbolic().col_ptr(), &[0, 1, 3, 5]);
+        assert_eq!(up.symbolic().row_idx(), &[0, 0, 1, 0, 2]);
+        assert_eq!(up.val(), &[4.0, -1.0, 2.5, 1.0, 3.0]);
+        assert!(triangle_from_entries(3, faer::Side::Upper, |sink| sink(2, 0, 1.0)).is_none());
+        assert!(triangle_from_entries(3, faer::Side::Lower, |sink| sink(3, 0, 1.0)).is_none());
     }
 }

@@ -46,7 +46,7 @@
 use std::collections::HashSet;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
-use faer::sparse::linalg::{cholesky, lu, SupernodalThreshold};
+use faer::sparse::linalg::{amd, cholesky, lu, SupernodalThreshold};
 use faer::sparse::{SparseColMat, SparseColMatRef, SymbolicSparseColMatRef, Triplet};
 use faer::{Conj, Mat, Par, Side};
 
@@ -127,33 +127,30 @@ impl Ordered {
     /// The upper triangle, in its elimination order, of H given by its lower triangle; None
     /// where the analysis fails (memory).
     fn new(h: &SparseColMat<usize, f64>) -> Option<Ordered> {
-        let symbolic = cholesky::factorize_symbolic_cholesky(
-            h.symbolic(),
-            Side::Lower,
-            cholesky::SymmetricOrdering::Amd,
-            Default::default(),
-        )
-        .ok()?;
-        let unknown: Vec<usize> = match symbolic.perm() {
-            Some(p) => p.arrays().0.to_vec(),
-            None => (0..h.nrows()).collect(),
-        };
-        drop(symbolic);
-        let mut place = vec![0usize; unknown.len()];
-        for (p, &k) in unknown.iter().enumerate() {
-            place[k] = p;
-        }
+        let n = h.nrows();
+        let nnz = h.val().len();
+        // The order alone: a symbolic factorisation of the whole pattern would also count
+        // its factor, which no status uses.
+        let mut fwd = vec![0usize; n];
+        let mut inv = vec![0usize; n];
+        let req = amd::order_maybe_unsorted_scratch::<usize>(n, nnz);
+        let mut buffer = MemBuffer::try_new(req).ok()?;
+        let stack = MemStack::new(&mut buffer);
+        amd::order_maybe_unsorted(&mut fwd, &mut inv, h.symbolic(), Default::default(), stack)
+            .ok()?;
+        drop(buffer);
+        // H in that order, its upper triangle: entry (i, j) of H goes to (place i, place j).
         let sym = h.symbolic();
         let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), h.val());
-        let mut trip = Vec::with_capacity(val.len());
-        for c in 0..h.ncols() {
-            for q in cp[c]..cp[c + 1] {
-                let (a, b) = (place[ri[q]], place[c]);
-                trip.push(Triplet::new(a.min(b), a.max(b), val[q]));
+        let h = crate::linalg::triangle_from_entries(n, Side::Upper, |sink| {
+            for c in 0..n {
+                for q in cp[c]..cp[c + 1] {
+                    let (a, b) = (inv[ri[q]], inv[c]);
+                    sink(a.min(b), a.max(b), val[q]);
+                }
             }
-        }
-        let n = unknown.len();
-        let h = SparseColMat::try_new_from_triplets(n, n, &trip).ok()?;
+        })?;
+        let unknown = fwd;
         Some(Ordered { h, unknown })
     }
 }
@@ -175,32 +172,36 @@ impl SparseSystem {
     pub fn new(problem: &Problem) -> Result<SparseSystem, String> {
         let (n_glued, n) = (problem.n_glued(), problem.n_open_rows);
         let size = n_glued + n;
-        let mut trip = Vec::new();
-        for (b, op) in problem.ops.iter().enumerate() {
-            let m = op.u_idx.len();
-            let t: Vec<Vec<(usize, f64)>> = (0..m)
-                .map(|l| problem.dof_unknowns(problem.dof_start[b] + l))
-                .collect();
-            for i in 0..m {
-                for j in 0..m {
-                    let sij = op.s[(i, j)];
-                    if sij == 0.0 {
-                        continue;
-                    }
-                    for &(gi, xi) in &t[i] {
-                        for &(gj, xj) in &t[j] {
-                            if gj >= gi {
-                                trip.push(Triplet::new(gj, gi, xi * xj * sij));
+        let h = crate::linalg::triangle_from_entries(size, Side::Lower, |sink| {
+            for (b, op) in problem.ops.iter().enumerate() {
+                let m = op.u_idx.len();
+                let t: Vec<Vec<(usize, f64)>> = (0..m)
+                    .map(|l| problem.dof_unknowns(problem.dof_start[b] + l))
+                    .collect();
+                for i in 0..m {
+                    for j in 0..m {
+                        let sij = op.s[(i, j)];
+                        if sij == 0.0 {
+                            continue;
+                        }
+                        for &(gi, xi) in &t[i] {
+                            for &(gj, xj) in &t[j] {
+                                if gj >= gi {
+                                    sink(gj, gi, xi * xj * sij);
+                                }
                             }
                         }
                     }
                 }
             }
-        }
-        // Every diagonal entry exists, so that every unknown has its place in the pattern.
-        trip.extend((0..size).map(|k| Triplet::new(k, k, 0.0)));
-        let h = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &trip)
-            .map_err(|e| format!("assembling the sparse contact system: {e:?}"))?;
+            // Every diagonal entry exists, so that every unknown has its place in the pattern.
+            for k in 0..size {
+                sink(k, k, 0.0);
+            }
+        })
+        .ok_or_else(|| {
+            format!("assembling the sparse contact system of {size} unknowns: out of memory")
+        })?;
         let ordered = Ordered::new(&h).ok_or_else(|| {
             format!("analysing the sparse contact system of {size} unknowns: out of memory")
         })?;
@@ -548,6 +549,11 @@ impl SparseSystem {
         prox: Option<(f64, &[f64])>,
     ) -> Option<InnerState> {
         let (ng, n) = (self.n_glued, self.n);
+        if prox.is_none() && !inner.follow(open).contains(&true) {
+            // Every row closed: the base state, which the problem's own factor solved (on a
+            // wall from rest the first iterate; its factorisation here cost as much as any).
+            return Some(closed_state(inner));
+        }
         let (open, sg, w) = self.solve_w(inner, c, open, sign, prox)?;
         let grad = self.apply(&w);
         let mut lambda: Vec<f64> = (0..n).map(|r| grad[ng + r] + c[ng + r]).collect();

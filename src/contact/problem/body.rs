@@ -5,7 +5,7 @@
 #![allow(clippy::needless_range_loop)]
 
 use faer::linalg::solvers::Solve;
-use faer::sparse::{SparseColMat, Triplet};
+use faer::sparse::SparseColMat;
 use faer::Mat;
 
 use super::BodyOp;
@@ -127,21 +127,25 @@ pub(super) fn glued_matrix(
     tmap: &[Vec<(usize, f64)>],
     n_glued: usize,
 ) -> Result<SparseColMat<usize, f64>> {
-    let mut trip = Vec::new();
-    for (b, op) in ops.iter().enumerate() {
-        let n = op.u_idx.len();
-        for i in 0..n {
-            for &(gi, xi) in &tmap[dof_start[b] + i] {
-                for j in 0..n {
-                    for &(gj, xj) in &tmap[dof_start[b] + j] {
-                        if gj >= gi {
-                            trip.push(Triplet::new(gj, gi, xi * xj * op.s[(i, j)]));
+    crate::linalg::triangle_from_entries(n_glued, faer::Side::Lower, |sink| {
+        for (b, op) in ops.iter().enumerate() {
+            let n = op.u_idx.len();
+            for i in 0..n {
+                for &(gi, xi) in &tmap[dof_start[b] + i] {
+                    for j in 0..n {
+                        for &(gj, xj) in &tmap[dof_start[b] + j] {
+                            if gj >= gi {
+                                sink(gj, gi, xi * xj * op.s[(i, j)]);
+                            }
                         }
                     }
                 }
             }
         }
-    }
-    SparseColMat::<usize, f64>::try_new_from_triplets(n_glued, n_glued, &trip)
-        .map_err(|e| Error::numerical(format!("assembling the interface system: {e:?}")))
+    })
+    .ok_or_else(|| {
+        Error::numerical(format!(
+            "assembling the interface system of {n_glued} unknowns: out of memory"
+        ))
+    })
 }
