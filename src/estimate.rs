@@ -65,7 +65,7 @@
 //! the columns of the opening stiffness and the factor of A_OO, `8 r m + 4 m²` with m =
 //! min(s, r) rows switched, and the dense LCP / QP matrices of the cross-checks of `both`,
 //! `3 · 8 r²`. The sparse solver (over 3000 unilateral pairs) instead of the glued system and
-//! the columns: `300 Σ_b n_u(b)² + 24 t` bytes, with t the triplets of its system H over
+//! the columns: `280 Σ_b n_u(b)² + 8 t` bytes, with t the entries of its system H over
 //! the glued displacements and the openings, counted from the rows as the run eliminates
 //! them (`contact::problem::pattern`): a joint whose sides were meshed on their own ties a
 //! node to several nodes of the other side, and t then outgrows Σ n_u² (walls drawn brick
@@ -279,7 +279,7 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
         Method::Lcp | Method::Sparse | Method::Exact => 0.0,
         _ => 3.0 * 8.0 * (rows as f64).powi(2),
     };
-    // The sparse glued system: each body's dense block (n_u² values) in triplets, the matrix
+    // The sparse glued system: each body's dense block (n_u² values) as entries, the matrix
     // and its Cholesky factor with fill (about 5 values per block entry, 8 bytes and an
     // index each); with the sparse solver, that and its system of displacements and
     // openings as counted from the rows (`sparse_bytes`). The columns of the opening
@@ -320,31 +320,37 @@ pub fn contact(model: &Model, scene: &Scene, bodies: &[BodySize]) -> Option<Cont
     })
 }
 
-/// Bytes per Σ_b n_u² of the sparse solver besides the triplets of H: the bodies'
+/// Bytes per Σ_b n_u² of the sparse solver besides the entries of H: the bodies'
 /// Steklov–Poincaré operators and traction recoveries with the work matrices that make them
 /// (the allocator keeps most of what these free), the glued system and its factor, H,
 /// its copy in the elimination order with the ordering's work space, and the factor of a
-/// status. Fitted with H's triplets counted apart (`sparse_bytes`): the peak resident memory
-/// of running-bond walls, nj = 6, friction 0.7, self-weight and wind, history "final", no
-/// VTK, less the rest of the estimate, is 235–243 bytes per Σ n_u² drawn brick by brick
-/// (20 × 20, 28 × 28, 45 × 45) and 252–263 conforming; 300 keeps the estimate above the
-/// measure by 7–13 % (docs/performance.md, "Walls drawn brick by brick").
-const SPARSE_OPERATOR_BYTES: f64 = 300.0;
+/// status. Fitted with H's entries counted apart (`sparse_bytes`) on the peak resident
+/// memory of running-bond walls, nj = 6, friction 0.7, self-weight and wind, history
+/// "final" (b1fe7ec, 2026-12-06: conforming 20 × 20 … 64 × 64, 669 MB … 7.18 GB, and the
+/// test's 14 × 14 wall drawn brick by brick, 547–557 MB): 280 keeps the estimate above the
+/// measure by 7–16 % (docs/performance.md).
+const SPARSE_OPERATOR_BYTES: f64 = 280.0;
+
+/// Bytes per entry of H as emitted before its repeated positions are summed
+/// ([`crate::linalg::triangle_from_entries`]: a row index and a value, 16 bytes, while H is
+/// built and ordered). Fitted at half of that: the peak comes later, in the factorisations,
+/// which reuse part of that memory (the drawn wall, 6.2 entries per Σ n_u², measured 14 %
+/// below the estimate with 8 and would be 24 % below with 16).
+const SPARSE_ENTRY_BYTES: f64 = 8.0;
 
 /// The memory of the sparse solver, in bytes, from the rows of `model`
-/// ([`crate::contact::problem::pattern`]); `squares` = Σ_b n_u². H is assembled from
-/// triplets, 24 bytes each (resident: the vector's capacity beyond them is never
-/// touched), all held at once: where the two sides of a joint were meshed on their own a
-/// dof moves several glued unknowns and the triplets outgrow n_u² (the wall drawn brick by
-/// brick, 20 × 20: 16.3 million, 0.39 GB, against 2.4 million on the conforming wall).
+/// ([`crate::contact::problem::pattern`]); `squares` = Σ_b n_u². H is assembled from its
+/// entries as each body's block gives them: where the two sides of a joint were meshed on
+/// their own a dof moves several glued unknowns and the entries outgrow n_u² (the wall drawn
+/// brick by brick, 20 × 20: 16.3 million, against 2.4 million on the conforming wall).
 fn sparse_bytes(model: &Model, squares: f64) -> f64 {
-    let triplets = match crate::contact::problem::pattern(model) {
-        Some(p) => p.triplets(),
+    let entries = match crate::contact::problem::pattern(model) {
+        Some(p) => p.entries(),
         // The run refuses such a model (a component prescribed on one side of a joint):
-        // about one triplet per n_u², as on a conforming wall.
+        // about one entry per n_u², as on a conforming wall.
         None => squares,
     };
-    SPARSE_OPERATOR_BYTES * squares + 24.0 * triplets
+    SPARSE_OPERATOR_BYTES * squares + SPARSE_ENTRY_BYTES * entries
 }
 
 fn k_steps(scene: &Scene) -> f64 {

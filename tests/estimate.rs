@@ -195,8 +195,8 @@ fn child_peak(scene: &Path, msh: &Path, out: &Path) -> f64 {
 /// segment), solved by the sparse solver: each dof of a joint's second side moves several
 /// glued unknowns, so the sparse systems hold more entries than the conforming wall's, and
 /// the estimate counts them from the rows. Within 30 % above the peak of a run in a process
-/// of its own (2026-11-28, busy machine: 20 × 20 1.50 GB against 1.38 GB measured, 28 × 28
-/// and 45 × 45 in docs/performance.md).
+/// of its own (this 14 × 14 wall on 2026-12-06, b1fe7ec: 628 MB against 547–557 MB
+/// measured; larger ones in docs/performance.md).
 #[test]
 fn the_estimate_of_a_wall_drawn_brick_by_brick_follows_its_peak_memory() {
     let dir = tmpdir("estimate-drawn");

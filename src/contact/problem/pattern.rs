@@ -26,10 +26,11 @@ pub(crate) struct SparsityPattern {
 }
 
 impl SparsityPattern {
-    /// The triplets the sparse solver pushes to assemble H: `t(t + 1)/2` in the lower
-    /// triangle of a body's block of t entries, and H's diagonal (the glued stiffness K_g,
-    /// assembled and freed before, has fewer: its dofs move no openings).
-    pub(crate) fn triplets(&self) -> f64 {
+    /// The entries the sparse solver emits to assemble H, before repeated positions are
+    /// summed: `t(t + 1)/2` in the lower triangle of a body's block of t entries, and H's
+    /// diagonal (the glued stiffness K_g, assembled and freed before, has fewer: its dofs
+    /// move no openings).
+    pub(crate) fn entries(&self) -> f64 {
         let half = |t: &usize| (*t as f64) * (*t as f64 + 1.0) / 2.0;
         self.unknowns.iter().map(half).sum::<f64>() + (self.n_glued + self.n_open_rows) as f64
     }
