@@ -7,6 +7,7 @@
 use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMat;
 use faer::Mat;
+use rayon::prelude::*;
 
 use super::BodyOp;
 use crate::bem::assembly::{BodySystem, Unknown};
@@ -98,9 +99,20 @@ pub(super) fn body_operators(model: &Model, prepared: &Operators) -> Result<Body
     let mut dof_start = Vec::with_capacity(model.bodies.len());
     let mut n_dofs = 0;
     let mut node_dofs: Vec<NodeDofMap> = Vec::new();
-    for (b, sys) in prepared.systems.iter().enumerate() {
-        let c = &prepared.condensed[b];
-        let op = body_op(sys, &c.d00, &c.z0, &model.bodies[b].name)?;
+    // Each body's operator on its own (a few dense products and a Cholesky factor of its
+    // traction block), in parallel: 1.9 s of the 4 128-brick wall's set-up in sequence.
+    // The first body that fails is reported, as in sequence.
+    let built: Vec<Result<BodyOp>> = prepared
+        .systems
+        .par_iter()
+        .enumerate()
+        .map(|(b, sys)| {
+            let c = &prepared.condensed[b];
+            body_op(sys, &c.d00, &c.z0, &model.bodies[b].name)
+        })
+        .collect();
+    for (sys, op) in prepared.systems.iter().zip(built) {
+        let op = op?;
         dof_start.push(n_dofs);
         let mut map = NodeDofMap::new();
         for (l, &i) in op.u_idx.iter().enumerate() {
