@@ -1,4 +1,5 @@
-//! Small dense linear algebra shared by the stages.
+//! Small dense linear algebra shared by the stages, and the assembly of a symmetric sparse
+//! matrix from its entries.
 
 use faer::linalg::solvers::Solve;
 use faer::{Mat, MatRef};
@@ -124,10 +125,11 @@ pub(crate) fn solve_small(mut a: Vec<Vec<f64>>, mut b: Vec<f64>) -> Option<Vec<f
 
 /// A triangle (`side`) of a symmetric sparse matrix of order `n` in compressed columns (rows
 /// sorted, each position once), from the entries `(row, col, value)` within it (`row ≥ col`
-/// for the lower one) that `emit` hands to its sink; entries at the same position are summed in the order given.
-/// `emit` runs twice, once to count the entries of each column and once to place them, so
-/// the entries are never held as triplets (whose global sort cost more than the rest of the
-/// assembly). None where an entry lies outside the triangle or the memory cannot be had.
+/// for the lower one) that `emit` hands to its sink; entries at the same position are summed
+/// in the order given. `emit` runs twice, once to count the entries of each column and once
+/// to place them, so the entries are never held as triplets (whose global sort cost more
+/// than the rest of the assembly). None where an entry lies outside the triangle or the
+/// memory cannot be had.
 pub(crate) fn triangle_from_entries(
     n: usize,
     side: faer::Side,

@@ -150,8 +150,7 @@ impl Ordered {
                 }
             }
         })?;
-        let unknown = fwd;
-        Some(Ordered { h, unknown })
+        Some(Ordered { h, unknown: fwd })
     }
 }
 
