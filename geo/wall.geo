@@ -5,7 +5,8 @@
 // Every horizontal line between courses is cut at the head joints of the course below and
 // of the course above, so each piece is shared by exactly one brick below and one above and
 // gmsh meshes it once (the nodes of both sides match). Element size: brick_h / nj on every
-// joint and face (Transfinite Curve), so joints hold nj elements across a brick height.
+// joint and face (Transfinite Curve), so joints hold nj elements across a brick height;
+// inside each brick a structured grid of triangles (Transfinite Surface on its corners).
 //
 // Physical groups (few, for glob and default tables in the scene):
 //   Surfaces  brick_1 .. brick_N, course by course from the base, left to right
@@ -118,6 +119,10 @@ For j In {0:courses - 1}
       nbrick += 1;
       Curve Loop(nbrick) = loop[];
       Plane Surface(nbrick) = {nbrick};
+      // A structured mesh inside (the grid of the interior fields): the boundary's nodes
+      // are those of the curves either way, and gmsh's unstructured 2D mesher took 6 s of a
+      // 45 x 45 wall's 6.5 s (this 0.06 s).
+      Transfinite Surface{nbrick} = {1 + j * np + a, 1 + j * np + b, 1 + (j + 1) * np + b, 1 + (j + 1) * np + a};
       Physical Surface(Sprintf("brick_%g", nbrick)) = {nbrick};
     EndIf
   EndFor

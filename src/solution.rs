@@ -313,6 +313,15 @@ pub struct CollapseTrial {
     /// exists by proof; left out where false.
     #[serde(skip_serializing_if = "std::ops::Not::not")]
     pub by_statics: bool,
+    /// The equal steps of t from the unloaded state the trial was solved in: 1, or 2
+    /// where one step left it undecided; left out where 1 (and 0, not solved, with
+    /// `by_statics`).
+    #[serde(skip_serializing_if = "one_or_none")]
+    pub steps: usize,
+}
+
+fn one_or_none(steps: &usize) -> bool {
+    *steps <= 1
 }
 
 /// The rigid motion of one body in a mechanism: the velocity `translation` of the point

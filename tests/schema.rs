@@ -555,6 +555,7 @@ const SAMPLES: &[(&str, &[&str])] = &[
         &["{ max = 2 }", "{ max = 2.0, tolerance = 0.01 }"],
     ),
     ("solve.quadrature", &[]),
+    ("solve.junctions", &[]),
     ("collapse.max", &["3", "2.5"]),
     ("collapse.tolerance", &["1", "0.01"]),
     ("output.directory", &[r#""probe_out""#]),

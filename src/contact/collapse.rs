@@ -23,6 +23,9 @@ use crate::timings::Timings;
 /// Trials above this multiple of the rigid-block bound are not solved (failing by proof).
 const STATICS_MARGIN: f64 = 1.1;
 
+/// The equal steps a trial that one step leaves undecided is solved in again.
+const TRIAL_PARTS: usize = 2;
+
 /// What the search found: the multiplier, the summary's `contact.collapse` block and the
 /// motion of the mechanism at `collapses_at`, where it was found.
 pub(super) struct Found {
@@ -88,6 +91,7 @@ impl Search<'_, '_> {
                     by_statics: true,
                     stands: false,
                     t,
+                    steps: 0,
                 });
                 let e = Error::numerical(format!(
                     "no equilibrium exists at t = {}: it is above the rigid-block statics' bound \
@@ -104,17 +108,39 @@ impl Search<'_, '_> {
         let t0 = Instant::now();
         // The trial's stages are timed within the search, so that the total counts them once.
         let mut inner = Timings::default();
-        step_at(
-            self.stepper,
-            session,
-            self.ctx,
-            0,
-            (1.0, t),
-            &mut st,
-            &mut a,
-            &mut inner,
-            reassembled,
-        )?;
+        // A trial the solver could not decide in one step from the unloaded state (no
+        // mechanism found: a friction fixed point that did not settle) is solved again along
+        // its load path, in 2 equal steps of t: near collapse the lagged slip bounds
+        // of a large friction coefficient settle from a state nearer the load (the 4 x 5
+        // wall with μ = 1 000 at t = 0.6875: undecided in one step, stands in two).
+        let mut parts = 1;
+        loop {
+            for k in 1..=parts {
+                let tk = t * k as f64 / parts as f64;
+                let at = (1.0, tk);
+                step_at(
+                    self.stepper,
+                    session,
+                    self.ctx,
+                    k - 1,
+                    at,
+                    &mut st,
+                    &mut a,
+                    &mut inner,
+                    reassembled,
+                )?;
+                if a.failure.is_some() {
+                    break;
+                }
+            }
+            let unsettled = a.failure.is_some() && !a.mechanism && a.undecided;
+            if !unsettled || parts >= TRIAL_PARTS || t == 0.0 || !self.stepper.timed {
+                break;
+            }
+            parts *= 2;
+            st = session.initial();
+            a = StepAcc::default();
+        }
         timings.add_within("collapse_search", t0.elapsed().as_secs_f64(), inner);
         // A "no equilibrium" that the rigid-block check leaves undecided fails the trial
         // too (its message says so; the bracket stays [multiplier, upper_bound]).
@@ -139,6 +165,7 @@ impl Search<'_, '_> {
             undecided: undecided || unsettled,
             stands: outcome.is_none(),
             t,
+            steps: parts,
         });
         Ok(outcome)
     }

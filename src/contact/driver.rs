@@ -15,10 +15,13 @@
 //! `[solve] collapse` the largest load multiplier with an equilibrium is searched first
 //! (`collapse`), then the run is made at that multiplier.
 
+use std::collections::HashSet;
 use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
+use crate::contact::cuts::{guess, recut, MAX_RECUTS};
+use crate::contact::problem::{Component, Cuts};
 use crate::contact::statics::Verdict;
 use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
 use crate::error::{Error, Result};
@@ -96,7 +99,16 @@ pub fn solve(
         scene, model, plan, ..
     } = case;
     let t = Instant::now();
-    let mut session = Session::new(model, ops).map_err(|e| plan.explain(e))?;
+    // The sparse solver's problem cuts junction cycles at whole joints (`Cuts::Joints`),
+    // which a wall's T-junctions need to be exact, up to `JOINT_CUTS_MAX_PAIRS`; the others
+    // keep the tangential cut (`Cuts::Tangential`) of the paper's scenes.
+    let joints = crate::contact::cuts::at_joints(scene, model);
+    let cuts = if joints {
+        Cuts::Joints
+    } else {
+        Cuts::Tangential
+    };
+    let mut session = Session::with_cuts(model, ops, cuts).map_err(|e| plan.explain(e))?;
     timings.add("interface_system", t.elapsed().as_secs_f64());
     if plan.problem == ContactProblem::None {
         return solve_linear(case, &session, ops, timings);
@@ -143,7 +155,7 @@ pub fn solve(
             (vec![(1.0, found.multiplier)], Some(found))
         }
     };
-    let acc = load_path(
+    let mut acc = load_path(
         &stepper,
         &mut session,
         &ctx(&checks, &steps),
@@ -151,12 +163,106 @@ pub fn solve(
         timings,
         &mut reassembled,
     )?;
+    let session = if joints && collapse.is_none() {
+        move_cuts(
+            (&stepper, &ctx(&checks, &steps), &steps),
+            session,
+            &mut acc,
+            timings,
+            &mut reassembled,
+        )?
+    } else {
+        session
+    };
     stage.finish();
     let (info, motion) = collapse.map_or((None, None), |f| (Some(f.info), f.motion));
     let mut run = finish(&session, main, steps.len(), acc, info)?;
     run.collapse_mechanism = motion;
     run.operators = reassembled;
     Ok(run)
+}
+
+/// `[solve] junctions = "joints"` after the load path: while implied components of the
+/// state in `acc` break their law, the cuts of their cycles move ([`recut`]) and the path
+/// is solved again on the new cut, from the statuses of the last (up to [`MAX_RECUTS`]
+/// times). A path that does not converge on the new cut leaves the last state, on the
+/// last cut. Returns the session of the state in `acc`.
+fn move_cuts<'a>(
+    (stepper, ctx, steps): (&Stepper, &StepContext, &[(f64, f64)]),
+    session: Session<'a>,
+    acc: &mut StepAcc,
+    timings: &mut Timings,
+    reassembled: &mut Option<Operators>,
+) -> Result<Session<'a>> {
+    let (model, ops, plan) = (session.model, session.prepared, stepper.case.plan);
+    let stage = session.stage.clone();
+    // One session at a time: two problems at once would add to the peak.
+    let fresh = |cuts: &HashSet<Component>, timings: &mut Timings| -> Result<Session<'a>> {
+        let t = Instant::now();
+        let mut s = Session::with_cuts(model, ops, Cuts::At(cuts)).map_err(|e| plan.explain(e))?;
+        s.stage = stage.clone();
+        timings.add("interface_system", t.elapsed().as_secs_f64());
+        Ok(s)
+    };
+    let mut cuts = session.problem.cuts.clone();
+    let mut held = session;
+    for round in 0..=MAX_RECUTS {
+        if acc.failure.is_some() {
+            break;
+        }
+        let Some(sol) = &acc.final_sol else { break };
+        let (broken, moved) = recut(model, &held.problem, &sol.interfaces, &mut cuts);
+        if broken > 0 && (moved == 0 || round == MAX_RECUTS) {
+            acc.notes.push(format!(
+                "junctions: {broken} implied components break their law (slipping ones are \
+                 listed in contact.junctions.implied_slipping), and every other component of \
+                 their cycles carries force there: such a cycle needs every pair's own row \
+                 (method = \"exact\")"
+            ));
+        }
+        if broken == 0 || moved == 0 || round == MAX_RECUTS {
+            break;
+        }
+        let interfaces = sol.interfaces.clone();
+        let last = held.problem.cuts.clone();
+        drop(held);
+        release_freed_memory();
+        let mut next = fresh(&cuts, timings)?;
+        next.guess = Some(guess(model, &next.problem, &interfaces, steps.len() - 1));
+        let again = load_path(stepper, &mut next, ctx, steps, timings, reassembled)?;
+        if again.failure.is_some() {
+            drop(next);
+            acc.notes.push(format!(
+                "junctions: {broken} implied components break their law (see \
+                 contact.junctions.implied_slipping); the load path with their cycles cut at \
+                 {moved} other components did not converge, so this solution is kept"
+            ));
+            return fresh(&last, timings);
+        }
+        let mut notes = std::mem::take(&mut acc.notes);
+        *acc = again;
+        held = next;
+        notes.push(format!(
+            "junctions: {broken} implied components broke their law (a pair sliding at a \
+             junction node without a friction force of its own, or pressing into its \
+             neighbour); their cycles were cut at {moved} other components that carry no \
+             force there, and the load path was solved again"
+        ));
+        notes.append(&mut acc.notes);
+        acc.notes = notes;
+    }
+    Ok(held)
+}
+
+/// Hands the heap's freed pages back to the system: the problem of the last cut was built on
+/// rayon's threads, whose allocator arenas keep its pages after it is dropped, so the next
+/// one's would add to the peak (a 204-brick wall: 554–638 MB in runs alike without this).
+fn release_freed_memory() {
+    #[cfg(all(target_os = "linux", target_env = "gnu"))]
+    // SAFETY: malloc_trim only releases free memory of the heap; it takes no pointer.
+    unsafe {
+        libc::malloc_trim(0);
+    }
 }
 
 /// Whether every step is evaluated and assembled at its own pseudo-time: with `[solve]
@@ -233,7 +339,7 @@ fn solve_linear(
     let junctions = m.junctions();
     let contact = ContactSummary::Linear(LinearSummary {
         junctions: (!junctions.is_empty())
-            .then(|| junctions_summary(m, &junctions, &problem.implied)),
+            .then(|| junctions_summary(m, &junctions, &problem.implied, false)),
         solver: "linear (no unilateral interface)",
     });
     let body_force = m.bodies.iter().map(|b| b.body_force).collect();
@@ -331,7 +437,12 @@ fn finish(
     };
     let junctions = (!junctions.is_empty()).then(|| Junctions {
         implied_slipping: Some(implied_slipping(session.model, implied, &sol.interfaces)),
-        ..junctions_summary(session.model, &junctions, implied)
+        ..junctions_summary(
+            session.model,
+            &junctions,
+            implied,
+            !session.problem.cuts.is_empty(),
+        )
     });
     let contact = ContactSummary::Contact(Box::new(ContactSolveSummary {
         collapse,
@@ -400,6 +511,7 @@ fn junctions_summary(
     model: &Model,
     junctions: &[([f64; 2], Vec<usize>)],
     implied: &[crate::contact::problem::Implied],
+    at_joints: bool,
 ) -> Junctions {
     let mut by_iface: std::collections::BTreeMap<String, Vec<ImpliedComponent>> =
         std::collections::BTreeMap::new();
@@ -420,10 +532,18 @@ fn junctions_summary(
         implied_slipping: None,
         most_bodies_at_a_point: most,
         points: junctions.len(),
-        rule: "at a point where bodies meet in a cycle of pairs, rows are kept bonded first \
-               (normal components first), then unilateral normal, then tangential, while \
-               independent; the others are implied by the kept rows while these are closed, \
-               and carry no force of their own",
+        rule: if at_joints {
+            "at a point where bodies meet in a cycle of pairs, the cycle is cut at a whole \
+             pair where it joins a normal component to tangential ones (at a T-junction the \
+             head joint: each bed joint keeps its friction there), and moved to another \
+             component where an implied one broke its law (solve.junctions); the implied \
+             components carry no force of their own"
+        } else {
+            "at a point where bodies meet in a cycle of pairs, rows are kept bonded first \
+             (normal components first), then unilateral normal, then tangential, while \
+             independent; the others are implied by the kept rows while these are closed, \
+             and carry no force of their own"
+        },
     }
 }
 

@@ -30,6 +30,7 @@
 
 pub(crate) mod active_set;
 mod collapse;
+pub mod cuts;
 pub mod driver;
 pub mod evolutive;
 pub mod exact;
@@ -251,19 +252,60 @@ pub struct Session<'a> {
     /// The pairs of the last full-row step solved from rest: the seed of the next step from
     /// rest where the sparse solver's statuses are not one (a collapse search's trials).
     pub last_from_rest: Option<Vec<crate::solution::InterfaceResult>>,
+    /// Statuses and slip bounds the sparse solver starts its first iterate of a load step
+    /// from (the state of the same step on another cut of the junctions), used once.
+    pub guess: Option<Guess>,
+}
+
+/// A start for the sparse solver at one load step ([`Session::guess`]).
+#[derive(Debug, Clone)]
+pub struct Guess {
+    pub step: usize,
+    pub open: Vec<bool>,
+    pub sign: Vec<f64>,
+    pub bound: Vec<f64>,
+}
+
+impl Guess {
+    /// The step state `st` with the guessed statuses, and the guessed slip bounds in `bound`.
+    fn start(self, st: &StepState, bound: &mut Vec<f64>) -> StepState {
+        *bound = self.bound;
+        StepState {
+            open: self.open,
+            sign: self.sign,
+            ..st.clone()
+        }
+    }
 }
 
 impl<'a> Session<'a> {
+    /// The guess for the sparse solver's load step `load_step` over `n` rows, taken once.
+    fn take_guess(&mut self, load_step: usize, n: usize, method: Solver) -> Option<Guess> {
+        self.guess
+            .take_if(|g| g.step == load_step && g.open.len() == n && method == Solver::Sparse)
+    }
+
     pub fn new(model: &'a Model, prepared: &'a Operators) -> crate::error::Result<Self> {
+        Session::with_cuts(model, prepared, problem::Cuts::Tangential)
+    }
+
+    /// The session whose problem cuts the junction cycles as `cuts` says
+    /// ([`Problem::with_cuts`]).
+    pub fn with_cuts(
+        model: &'a Model,
+        prepared: &'a Operators,
+        cuts: problem::Cuts,
+    ) -> crate::error::Result<Self> {
         Ok(Session {
             model,
             prepared,
-            problem: Problem::new(model, prepared)?,
+            problem: Problem::with_cuts(model, prepared, cuts)?,
             cols: OpeningColumns::default(),
             sparse: None,
             coupled_after: FRICTION_COUPLED_AFTER,
             stage: None,
             last_from_rest: None,
+            guess: None,
         })
     }
 
@@ -644,12 +686,14 @@ impl<'a> Session<'a> {
         let mut lp = StepLoop::new(record);
         // Whether the inner solver may follow Coulomb's law within its iteration.
         let mut coulomb = true;
+        let mut guess = self.take_guess(load_step, n, method);
         loop {
             outer += 1;
             let base = self.problem.base(factor, &st.cohesion, &st.offset);
             if bound.len() != n {
                 bound = self.first_bounds();
             }
+            let guessed = guess.take().map(|g| g.start(&st, &mut bound));
             let rows = self.inner_rows(&st, &bound, &edge_slip);
             let inner = Inner::new(&self.problem, &base, rows, bound.clone(), tol)
                 .with_coulomb(self.coulomb_rows(method, coulomb));
@@ -660,7 +704,7 @@ impl<'a> Session<'a> {
                 &inner,
                 (&mut self.cols, &mut self.sparse),
                 method,
-                &st,
+                guessed.as_ref().unwrap_or(&st),
                 (budget, max_iterations),
                 &mut lp,
             );

@@ -551,6 +551,7 @@ mod tests {
                     by_statics: false,
                     stands: true,
                     t: 0.0,
+                    steps: 1,
                 }],
                 upper_bound: Some(0.8),
                 upper_bound_meaning: "a bound".into(),

@@ -78,7 +78,10 @@ pub(crate) use pattern::pattern;
 pub(crate) use state::FullRowSolution;
 
 use body::{body_operators, glued_matrix, BodyBlocks};
-use rows::{candidates, eliminate, final_rows, glued_maps};
+use std::collections::HashSet;
+
+pub use rows::Component;
+use rows::{candidates, eliminate, final_rows, glued_maps, joint_cuts};
 
 mod body;
 mod mechanism;
@@ -139,13 +142,33 @@ pub struct FullRow {
     pub coefs: Vec<(usize, f64)>,
 }
 
-/// A pair component at a junction left without a row (see [`Problem::new`]).
+/// Where the elimination cuts a junction's cycle of pairs: which of its components are
+/// implied (see [`Problem::new`]).
 #[derive(Debug, Clone, Copy)]
+pub enum Cuts<'a> {
+    /// Rows bonded first, then normal, then tangential: at a T-junction of a running bond,
+    /// the head joint's tangential component and a bed joint's.
+    Tangential,
+    /// As `Tangential`, except that where a cycle joins a normal component to tangential
+    /// ones (at a T-junction: the head joint's normal and the bed joints' tangential
+    /// components), the pair of that normal component is cut whole: at a T-junction the
+    /// head joint has no row at the corner node and each bed joint keeps its friction
+    /// there. Exact wherever the head joint does not press at its corner.
+    Joints,
+    /// The components of this set are taken after every other row, so that a cycle
+    /// through one of them is cut there.
+    At(&'a HashSet<Component>),
+}
+
+/// A pair component at a junction left without a row (see [`Problem::new`]).
+#[derive(Debug, Clone)]
 pub struct Implied {
     pub iface: usize,
     pub pair: usize,
     pub comp: usize,
     pub kind: RowKind,
+    /// The kept components whose openings give its relative displacement (its cycle).
+    pub cycle: Vec<Component>,
 }
 
 /// The contact problem of a model: per-body operators, rows, and the glued base factor.
@@ -172,6 +195,8 @@ pub struct Problem {
     /// fix while they are closed (a cycle of pairs around the point): no row of their own.
     pub implied: Vec<Implied>,
     implied_at: std::collections::HashSet<(usize, usize, usize)>,
+    /// The components the junction cycles were cut at before any other ([`Cuts`]).
+    pub cuts: HashSet<Component>,
     /// Every candidate row, junctions included, over the dofs.
     pub full: Vec<FullRow>,
     /// `full_of[k][j][c]`: the full row of a pair component, if any.
@@ -219,6 +244,12 @@ impl Problem {
     /// holds unchanged. The nodal force of the junction node is carried by the kept rows;
     /// implied components report zero force (each body's balance stays exact).
     pub fn new(model: &Model, prepared: &Operators) -> Result<Problem> {
+        Problem::with_cuts(model, prepared, Cuts::Tangential)
+    }
+
+    /// The problem of [`Problem::new`] with its junction cycles cut as `cuts` says (which
+    /// components are implied; [`Cuts`]).
+    pub fn with_cuts(model: &Model, prepared: &Operators, cuts: Cuts) -> Result<Problem> {
         let bodies = body_operators(model, prepared)?;
         let cands = candidates(model, &bodies.node_dofs)?;
         let full: Vec<FullRow> = cands.iter().map(rows::Candidate::full).collect();
@@ -230,9 +261,17 @@ impl Problem {
         for (r, f) in full.iter().enumerate() {
             full_of[f.row.iface][f.row.pair][f.row.comp] = Some(r);
         }
-        let (expr, kept) = eliminate(&cands, bodies.n_dofs);
-        let set = final_rows(model, &cands, &kept);
-        let glued = glued_maps(&expr, &set.index_of, set.rows.len());
+        let demoted = match cuts {
+            Cuts::Tangential => HashSet::new(),
+            Cuts::Joints => {
+                let first = eliminate(&cands, bodies.n_dofs, &HashSet::new());
+                joint_cuts(&cands, &first)
+            }
+            Cuts::At(set) => set.clone(),
+        };
+        let elim = eliminate(&cands, bodies.n_dofs, &demoted);
+        let set = final_rows(model, &cands, &elim);
+        let glued = glued_maps(&elim.expr, &set.index_of, set.rows.len());
         let mut dof_at = vec![(0, [0.0; 2]); bodies.n_dofs];
         for map in &bodies.node_dofs {
             for (&node, dofs) in map {
@@ -266,6 +305,7 @@ impl Problem {
             row_t: glued.row_t,
             implied: set.implied,
             implied_at: set.implied_at,
+            cuts: demoted,
             full,
             full_of,
             n_glued: glued.n_glued,

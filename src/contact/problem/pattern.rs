@@ -54,9 +54,9 @@ pub fn pattern(model: &Model) -> Option<SparsityPattern> {
         node_dofs.push(map);
     }
     let cands = candidates(model, &node_dofs).ok()?;
-    let (expr, kept) = eliminate(&cands, body_of.len());
-    let set = final_rows(model, &cands, &kept);
-    let maps = glued_maps(&expr, &set.index_of, set.rows.len());
+    let elim = eliminate(&cands, body_of.len(), &Default::default());
+    let set = final_rows(model, &cands, &elim);
+    let maps = glued_maps(&elim.expr, &set.index_of, set.rows.len());
     let mut unknowns = vec![0usize; model.bodies.len()];
     for (d, &b) in body_of.iter().enumerate() {
         let openings = maps.offs[d]

@@ -4,6 +4,8 @@
 // Index loops mirror the block formulas.
 #![allow(clippy::needless_range_loop)]
 
+use std::collections::HashSet;
+
 use super::body::NodeDofMap;
 use super::{Implied, Row, RowKind};
 use crate::error::{Error, Result};
@@ -12,7 +14,7 @@ use crate::input::scene::{InterfaceModel, Tangential};
 
 /// A candidate row before the junction cycles are cut: its coefficients over the dofs.
 pub(super) struct Candidate {
-    row: Row,
+    pub(super) row: Row,
     /// `[u]_r = Σ coef·U_d` (B's dofs positive, A's negative).
     coefs: Vec<(usize, f64)>,
     /// How many of `coefs` are B's (they come first).
@@ -152,10 +154,17 @@ fn candidate(
     Ok(Some(Candidate { row, coefs, n_b }))
 }
 
+/// A pair component: interface, pair, component (0 tangential, 1 normal).
+pub type Component = (usize, usize, usize);
+
 /// The elimination class of a row: bonded (normal components first), then normal, then
-/// tangential.
-fn class(r: &Row) -> usize {
+/// tangential; the unilateral components in `demoted` after all others (normal, then
+/// tangential), so that a cycle is cut there.
+fn class(r: &Row, demoted: &HashSet<Component>) -> usize {
+    let late = r.kind != RowKind::Bonded && demoted.contains(&(r.iface, r.pair, r.comp));
     match (r.kind, r.comp) {
+        (_, 1) if late => 4,
+        _ if late => 5,
         (RowKind::Bonded, 1) => 0,
         (RowKind::Bonded, _) => 1,
         (RowKind::Normal, _) => 2,
@@ -163,19 +172,57 @@ fn class(r: &Row) -> usize {
     }
 }
 
-/// Step 3 of [`Problem::new`]: eliminates the closed rows in class order. Returns the
-/// expression of every eliminated dof and which candidates are kept as rows.
-pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<RowExpr>>, Vec<bool>) {
+/// The cuts of [`super::Cuts::Joints`] from an elimination with the default order: for each
+/// implied tangential component whose cycle holds both normal and tangential components,
+/// both components of the pairs of those normal components.
+pub(super) fn joint_cuts(cands: &[Candidate], first: &Elimination) -> HashSet<Component> {
+    let mut cuts = HashSet::new();
+    for (q, cycle) in first.cycle.iter().enumerate() {
+        if first.kept[q] || cands[q].row.comp != 0 {
+            continue;
+        }
+        if !cycle.iter().any(|&k| cands[k].row.comp == 0) {
+            continue;
+        }
+        for &k in cycle {
+            let r = cands[k].row;
+            if r.comp == 1 && r.kind == RowKind::Normal {
+                cuts.insert((r.iface, r.pair, 1));
+                cuts.insert((r.iface, r.pair, 0));
+            }
+        }
+    }
+    cuts
+}
+
+/// What [`eliminate`] gives: the expression of every eliminated dof, which candidates are
+/// kept as rows, and for each candidate left out the kept candidates its relative
+/// displacement is a combination of (its cycle at the junction).
+pub(super) struct Elimination {
+    pub(super) expr: Vec<Option<RowExpr>>,
+    pub(super) kept: Vec<bool>,
+    pub(super) cycle: Vec<Vec<usize>>,
+}
+
+/// Step 3 of [`Problem::new`]: eliminates the closed rows in class order (see [`class`]).
+pub(super) fn eliminate(
+    cands: &[Candidate],
+    n_dofs: usize,
+    demoted: &HashSet<Component>,
+) -> Elimination {
     let mut order: Vec<usize> = (0..cands.len()).collect();
-    order.sort_by_key(|&q| class(&cands[q].row));
+    order.sort_by_key(|&q| class(&cands[q].row, demoted));
     let mut expr: Vec<Option<RowExpr>> = vec![None; n_dofs];
     let mut refs: Vec<Vec<usize>> = vec![Vec::new(); n_dofs];
     let mut kept = vec![false; cands.len()];
-    let mut normal_dropped = std::collections::HashSet::new();
+    let mut cycle = vec![Vec::new(); cands.len()];
+    let mut normal_dropped = HashSet::new();
     for &q in &order {
         let cand = &cands[q];
         let row = cand.row;
-        if class(&row) == 3 && normal_dropped.contains(&(row.iface, row.pair)) {
+        if matches!(row.kind, RowKind::Stick | RowKind::Friction)
+            && normal_dropped.contains(&(row.iface, row.pair))
+        {
             continue;
         }
         let RowExpr { m: am, r: ar } = reduce(cand, &expr);
@@ -185,6 +232,11 @@ pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<RowEx
             if row.kind == RowKind::Normal {
                 normal_dropped.insert((row.iface, row.pair));
             }
+            cycle[q] = ar
+                .iter()
+                .filter(|c| c.1.abs() > 1e-9 * scale)
+                .map(|c| c.0)
+                .collect();
             continue;
         }
         kept[q] = true;
@@ -209,7 +261,7 @@ pub(super) fn eliminate(cands: &[Candidate], n_dofs: usize) -> (Vec<Option<RowEx
         }
         substitute(&mut expr, &mut refs, p, new);
     }
-    (expr, kept)
+    Elimination { expr, kept, cycle }
 }
 
 /// A candidate's coefficients over the dofs still free (`m`) and the earlier rows'
@@ -271,18 +323,24 @@ pub(super) struct RowSet {
     pub(super) implied_at: std::collections::HashSet<(usize, usize, usize)>,
 }
 
-fn implied_of(row: &Row) -> Implied {
+fn implied_of(cands: &[Candidate], cycle: &[Vec<usize>], q: usize) -> Implied {
+    let row = &cands[q].row;
     Implied {
         iface: row.iface,
         pair: row.pair,
         comp: row.comp,
         kind: row.kind,
+        cycle: cycle[q]
+            .iter()
+            .map(|&k| (cands[k].row.iface, cands[k].row.pair, cands[k].row.comp))
+            .collect(),
     }
 }
 
 /// Step 4 of [`Problem::new`]: the final rows, those kept, the rows that can open first (in
 /// interface order), then the bonded ones; the others are implied.
-pub(super) fn final_rows(model: &Model, cands: &[Candidate], kept: &[bool]) -> RowSet {
+pub(super) fn final_rows(model: &Model, cands: &[Candidate], elim: &Elimination) -> RowSet {
+    let kept = &elim.kept;
     let mut index_of = vec![usize::MAX; cands.len()];
     let mut rows: Vec<Row> = Vec::new();
     let mut implied = Vec::new();
@@ -295,13 +353,13 @@ pub(super) fn final_rows(model: &Model, cands: &[Candidate], kept: &[bool]) -> R
                 index_of[q] = rows.len();
                 rows.push(cand.row);
             } else if !bonded {
-                implied.push(implied_of(&cand.row));
+                implied.push(implied_of(cands, &elim.cycle, q));
             }
         }
     }
     for (q, cand) in cands.iter().enumerate() {
         if cand.row.kind == RowKind::Bonded && !kept[q] {
-            implied.push(implied_of(&cand.row));
+            implied.push(implied_of(cands, &elim.cycle, q));
         }
     }
     let n_open_rows = rows

@@ -262,6 +262,24 @@ pub struct SolveSpec {
     /// equilibrium exists, by bisection.
     pub collapse: Option<Collapse>,
     pub quadrature: Quadrature,
+    /// `[solve] junctions`: where the cycles of pairs at junction points are cut.
+    pub junctions: JunctionCuts,
+}
+
+/// `[solve] junctions`: how a junction's cycle of pairs is cut (which pair components get
+/// no row of their own; docs/scene.md).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum JunctionCuts {
+    /// `"joints"` for the sparse solver without a collapse search up to 20 000 pairs,
+    /// `"tangential"` otherwise.
+    Auto,
+    /// At whole joints, moved where an implied component breaks its law to a component of
+    /// its cycle that carries no force, and the load path solved again (exact wherever the
+    /// cycle has such a component).
+    Joints,
+    /// Bonded rows first, then normal, then tangential (the paper's solvers): implied
+    /// components that slip are reported (`implied_slipping`).
+    Tangential,
 }
 
 /// The collapse search: t in [0, max], bisected to `tolerance` (absolute, in t).

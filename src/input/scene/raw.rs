@@ -69,6 +69,7 @@ pub(super) struct RawSolve {
     pub(super) time: Option<Vec<f64>>,
     pub(super) collapse: Option<RawCollapse>,
     pub(super) quadrature: Option<String>,
+    pub(super) junctions: Option<String>,
 }
 
 #[derive(Deserialize)]
@@ -145,7 +146,7 @@ pub(super) const INTERFACE_KEYS: [&str; 7] = [
     "friction",
     "between",
 ];
-pub(super) const SOLVE_KEYS: [&str; 7] = [
+pub(super) const SOLVE_KEYS: [&str; 8] = [
     "method",
     "tolerance",
     "max_iterations",
@@ -153,6 +154,7 @@ pub(super) const SOLVE_KEYS: [&str; 7] = [
     "time",
     "collapse",
     "quadrature",
+    "junctions",
 ];
 pub(super) const OUTPUT_KEYS: [&str; 9] = [
     "directory",

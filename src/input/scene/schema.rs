@@ -230,6 +230,13 @@ fn solve() -> Value {
                 "quadrature",
                 choice(&["fast", "standard", "accurate"], "Galerkin quadrature"),
             ),
+            (
+                "junctions",
+                choice(
+                    &["auto", "joints", "tangential"],
+                    "where cycles of pairs at junction points are cut",
+                ),
+            ),
         ],
         &[],
     );

@@ -373,34 +373,64 @@ pub(super) fn contact_spec(raw: RawContact, path: &Path) -> Result<ContactSpec> 
     })
 }
 
+/// The value of the choice `got` of `key` among `options` (name, value), `default` where it
+/// is not given; the message of [`choice_error`] where it is none of them.
+fn one_of<T: Copy>(
+    got: Option<&str>,
+    key: &str,
+    default: T,
+    options: &[(&str, T)],
+) -> std::result::Result<T, String> {
+    let Some(got) = got else {
+        return Ok(default);
+    };
+    options
+        .iter()
+        .find(|o| o.0 == got)
+        .map(|o| o.1)
+        .ok_or_else(|| {
+            let names: Vec<&str> = options.iter().map(|o| o.0).collect();
+            choice_error(key, got, &names)
+        })
+}
+
 pub(super) fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
     let err = |msg: String| Error::input(path, msg);
-    let method = match raw.method.as_deref() {
-        None | Some("lcp") => Method::Lcp,
-        Some("qp") => Method::Qp,
-        Some("both") => Method::Both,
-        Some("sparse") => Method::Sparse,
-        Some("exact") => Method::Exact,
-        Some(other) => {
-            return Err(err(choice_error(
-                "solve.method",
-                other,
-                &["lcp", "qp", "both", "sparse", "exact"],
-            )))
-        }
-    };
-    let quadrature = match raw.quadrature.as_deref() {
-        None | Some("standard") => Quadrature::Standard,
-        Some("fast") => Quadrature::Fast,
-        Some("accurate") => Quadrature::Accurate,
-        Some(other) => {
-            return Err(err(choice_error(
-                "solve.quadrature",
-                other,
-                &["fast", "standard", "accurate"],
-            )))
-        }
-    };
+    let method = one_of(
+        raw.method.as_deref(),
+        "solve.method",
+        Method::Lcp,
+        &[
+            ("lcp", Method::Lcp),
+            ("qp", Method::Qp),
+            ("both", Method::Both),
+            ("sparse", Method::Sparse),
+            ("exact", Method::Exact),
+        ],
+    )
+    .map_err(err)?;
+    let junctions = one_of(
+        raw.junctions.as_deref(),
+        "solve.junctions",
+        super::JunctionCuts::Auto,
+        &[
+            ("auto", super::JunctionCuts::Auto),
+            ("joints", super::JunctionCuts::Joints),
+            ("tangential", super::JunctionCuts::Tangential),
+        ],
+    )
+    .map_err(err)?;
+    let quadrature = one_of(
+        raw.quadrature.as_deref(),
+        "solve.quadrature",
+        Quadrature::Standard,
+        &[
+            ("fast", Quadrature::Fast),
+            ("standard", Quadrature::Standard),
+            ("accurate", Quadrature::Accurate),
+        ],
+    )
+    .map_err(err)?;
     let tolerance = raw.tolerance.unwrap_or(1e-10);
     if !(tolerance.is_finite() && tolerance > 0.0 && tolerance < 1.0) {
         return Err(err(format!(
@@ -509,6 +539,7 @@ pub(super) fn solve_spec(raw: RawSolve, path: &Path) -> Result<SolveSpec> {
         time,
         collapse,
         quadrature,
+        junctions,
     })
 }
 
