@@ -29,7 +29,7 @@
 //! `contact` the contact stage's memory below, and 64 MB is the program itself with its
 //! mesh. No dense matrix over all interfaces is counted: the engine forms none (except the
 //! cross-checks' LCP and QP matrices of `both`). Time: the Galerkin pair loop costs about
-//! `c_q` per element pair of each body or shape shared by bodies (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
+//! `c_q` per element pair (`c_q` ≈ 4, 10, 30 µs for fast, standard, accurate quadrature on
 //! one core of a 2020s machine), and the LU condensation `(2/3) n_x³ + 2 n_x² n_x0` flops at
 //! about 1 Gflop/s; post-processing about 1 µs per (interior-field node or section point,
 //! boundary element) (example 2: 525 000 such pairs in 0.3 s of CPU; a section sampled at
@@ -459,22 +459,13 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
     let mut work = 0.0f64;
     let mut flops = 0.0;
     let mut pairs = 0.0;
-    // Bodies of one shape share its pair integrals (bem::shapes): counted once.
-    let mut copies = vec![false; bodies.len()];
-    for g in crate::bem::shapes::groups(model, scene.plane, 1.0) {
-        for &bi in &g[1..] {
-            copies[bi] = true;
-        }
-    }
-    for (s, copy) in bodies.iter().zip(copies) {
+    for s in &bodies {
         let (nx, nx0) = (s.n_x as f64, s.n_x0 as f64);
         let n = nx + nx0;
         kept += 8.0 * (n * n + nx * nx0 + nx0 * nx0);
         work = work.max(8.0 * (2.0 * nx * nx + 4.0 * nx * (nx0 + 1.0) + 2.0 * nx0 * nx0));
         flops += 2.0 / 3.0 * nx * nx * nx + 2.0 * nx * nx * nx0;
-        if !copy {
-            pairs += (s.elements as f64) * (s.elements as f64);
-        }
+        pairs += (s.elements as f64) * (s.elements as f64);
     }
     // The paper's mixed interface operators of the final status, archived (dense, several
     // copies) only for scenes of up to 3000 interface unknowns and no junctions.
@@ -520,17 +511,18 @@ pub fn estimate(model: &Model, scene: &Scene) -> Estimate {
 /// the room left under the process's cgroup memory limit (SLURM, containers: v2
 /// `memory.max`, v1 `memory.limit_in_bytes`, of its cgroup and every parent), with where it
 /// comes from; None when none can be read.
-pub(crate) fn available_memory() -> Option<(f64, &'static str)> {
+pub(crate) fn available_memory() -> Option<(f64, String)> {
     if let Some(b) = std::env::var("SGBEM_MEMORY_LIMIT")
         .ok()
         .and_then(|v| memory_limit(&v))
     {
-        return Some((b, "SGBEM_MEMORY_LIMIT"));
+        return Some((b, "SGBEM_MEMORY_LIMIT".into()));
     }
-    let mut limits: Vec<(f64, &'static str)> = Vec::new();
-    limits.extend(meminfo_available().map(|b| (b, "MemAvailable in /proc/meminfo")));
-    limits.extend(address_space_left().map(|b| (b, "the address space left under ulimit -v")));
-    limits.extend(cgroup_room().map(|b| (b, "the room left under the cgroup's memory limit")));
+    let mut limits: Vec<(f64, String)> = Vec::new();
+    limits.extend(meminfo_available().map(|b| (b, "MemAvailable in /proc/meminfo".into())));
+    limits.extend(address_space_left());
+    limits
+        .extend(cgroup_room().map(|b| (b, "the room left under the cgroup's memory limit".into())));
     limits.into_iter().min_by(|a, b| a.0.total_cmp(&b.0))
 }
 
@@ -573,8 +565,9 @@ fn meminfo_available() -> Option<f64> {
 }
 
 /// RLIMIT_AS (the soft limit of `ulimit -v`, from /proc/self/limits) less the address
-/// space the process already maps (VmSize); None when unlimited.
-fn address_space_left() -> Option<f64> {
+/// space the process already maps (VmSize) and what its threads will reserve, with the
+/// words that say so; None when unlimited.
+fn address_space_left() -> Option<(f64, String)> {
     let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
     let soft = limits
         .lines()
@@ -605,9 +598,60 @@ fn address_space_left() -> Option<f64> {
         .unwrap_or(1);
     let spare = 2usize.saturating_sub(running.saturating_sub(1));
     let arenas = 64.0 * 1024.0 * 1024.0 * (threads + spare) as f64;
+    // The dense matrix products (faer's x86 kernels) reserve, in every thread that calls
+    // them (the workers and the main thread), a buffer of twice the last-level cache the
+    // system reports: untouched address space, but under `ulimit -v` it counts (a virtual
+    // machine that reports a 260 MiB L3 reserves 545 MB per thread).
+    let products = matmul_reserve_per_thread() * (threads + 1) as f64;
+    let mut source = "the address space left under ulimit -v".to_string();
+    if products > 0.0 {
+        source.push_str(&format!(
+            ", less the {} that the matrix products reserve in {} threads (twice the \
+             processor's {} last-level cache each)",
+            fmt_bytes(products),
+            threads + 1,
+            fmt_bytes(products / (2 * (threads + 1)) as f64)
+        ));
+    }
     // Address space is not memory in use: freed blocks, thread stacks and the libraries'
     // buffers map more than the estimate counts (measured: about 1.3 times at the peak).
-    Some(((soft - used - arenas) / 1.5).max(0.0))
+    Some((((soft - used - arenas - products) / 1.5).max(0.0), source))
+}
+
+/// The address space faer's x86 matrix products reserve in each thread that calls them:
+/// twice the level-3 cache of /sys/devices/system/cpu/cpu0/cache (0 where none is read,
+/// or on other processors).
+fn matmul_reserve_per_thread() -> f64 {
+    if !cfg!(target_arch = "x86_64") {
+        return 0.0;
+    }
+    let Ok(dirs) = std::fs::read_dir("/sys/devices/system/cpu/cpu0/cache") else {
+        return 0.0;
+    };
+    let read = |d: &std::path::Path, f: &str| std::fs::read_to_string(d.join(f)).ok();
+    let mut l3 = 0.0f64;
+    for d in dirs.flatten().map(|e| e.path()) {
+        let level = read(&d, "level").and_then(|t| t.trim().parse::<u32>().ok());
+        let kind = read(&d, "type").unwrap_or_default();
+        if level != Some(3) || !matches!(kind.trim(), "Data" | "Unified") {
+            continue;
+        }
+        let size = read(&d, "size").and_then(|t| cache_bytes(&t));
+        l3 = l3.max(size.unwrap_or(0.0));
+    }
+    2.0 * l3
+}
+
+/// The bytes of a sysfs cache size: `266240K`, `32M` or a bare number.
+fn cache_bytes(text: &str) -> Option<f64> {
+    let t = text.trim();
+    let (num, unit) = match t.char_indices().last()? {
+        (i, 'K') => (&t[..i], 1024.0),
+        (i, 'M') => (&t[..i], 1024.0 * 1024.0),
+        (i, 'G') => (&t[..i], 1024.0 * 1024.0 * 1024.0),
+        _ => (t, 1.0),
+    };
+    num.parse::<f64>().ok().map(|v| v * unit)
 }
 
 /// The least room (limit less usage) under the memory limits of the process's cgroup and
@@ -820,5 +864,14 @@ mod tests {
         assert_eq!(fmt_bytes(1.55e14), "155.0 TB");
         assert_eq!(fmt_seconds(30.0), "30.0 s");
         assert_eq!(fmt_seconds(7200.0), "2.0 h");
+    }
+
+    #[test]
+    fn sysfs_cache_sizes() {
+        assert_eq!(cache_bytes("266240K\n"), Some(266240.0 * 1024.0));
+        assert_eq!(cache_bytes("32M"), Some(32.0 * 1024.0 * 1024.0));
+        assert_eq!(cache_bytes("4096"), Some(4096.0));
+        assert_eq!(cache_bytes("K"), None);
+        assert_eq!(cache_bytes(""), None);
     }
 }

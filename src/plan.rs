@@ -191,14 +191,6 @@ pub fn plan(scene: &Scene, model: &Model) -> Result<Plan> {
     if !fx.loaded.is_empty() {
         assemble.push_str(&format!("; body-force loads for {}", named(&fx.loaded)));
     }
-    let shapes = crate::bem::shapes::groups(model, scene.plane, 1.0);
-    if !shapes.is_empty() {
-        let sharing: usize = shapes.iter().map(Vec::len).sum();
-        assemble.push_str(&format!(
-            "; {sharing} bodies are copies of {} shapes, each integrated once",
-            shapes.len()
-        ));
-    }
     stages.push(("assemble", assemble));
     stages.push(("condense", condense_stage(model, scene.solve.method)));
     let steps_note = if steps > 1 {

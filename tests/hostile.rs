@@ -869,6 +869,25 @@ fn with_limit(kb: Option<u64>, limit: Option<&str>, args: &[&str]) -> std::proce
     cmd.output().expect("sh")
 }
 
+/// The kB of address space faer's x86 matrix products reserve per thread: twice the level-3
+/// cache that sysfs reports for cpu0 (0 where there is none).
+fn matmul_reserve_kb() -> u64 {
+    let Ok(dirs) = std::fs::read_dir("/sys/devices/system/cpu/cpu0/cache") else {
+        return 0;
+    };
+    let mut l3 = 0;
+    for d in dirs.flatten().map(|e| e.path()) {
+        let level = std::fs::read_to_string(d.join("level")).unwrap_or_default();
+        let size = std::fs::read_to_string(d.join("size")).unwrap_or_default();
+        if level.trim() == "3" {
+            if let Some(k) = size.trim().strip_suffix('K') {
+                l3 = l3.max(k.parse::<u64>().unwrap_or(0));
+            }
+        }
+    }
+    2 * l3
+}
+
 // --- 3. Memory limits the process really has ---------------------------------------------------
 
 #[test]
@@ -880,12 +899,16 @@ fn a_run_under_ulimit_v_is_refused_or_ends_in_a_message_never_a_crash() {
     let out = dir.join("out");
     // (ulimit -v in kB, SGBEM_MEMORY_LIMIT, expected exit): refused by the estimate; the
     // estimate overridden by the user, so that the allocations themselves fail; enough.
+    // Enough: 1.5 GB, and the buffers the matrix products reserve in each of the three
+    // threads that call them (twice the last-level cache: 545 MB each where a virtual
+    // machine reports a 260 MiB L3), which the run counts against `ulimit -v`.
+    let enough = 1_500_000 + 3 * matmul_reserve_kb();
     let cases: [(u64, Option<&str>, i32); 5] = [
         (300_000, None, 2),
         (450_000, None, 2),
         (300_000, Some("1e12"), 1),
         (350_000, Some("1e12"), 1),
-        (1_500_000, None, 0),
+        (enough, None, 0),
     ];
     for (kb, limit, want) in cases {
         let o = run_with_limit(Some(kb), limit, &sc, &msh, &out);

@@ -43,7 +43,6 @@ use crate::bem::galerkin::{
 };
 use crate::bem::kernels::{boundary_area, Material};
 use crate::bem::quadrature::QuadratureSettings;
-use crate::bem::shapes::ShapeIntegrals;
 use crate::error::{Error, Result};
 use crate::input::model::{Body, DofClass, Model, Role};
 use crate::input::scene::{Condition, Frame, Plane};
@@ -234,23 +233,8 @@ pub fn assemble_body(
     load_factor: f64,
     scene_file: &std::path::Path,
 ) -> Result<BodySystem> {
-    assemble_body_shared(model, bi, plane, settings, load_factor, scene_file, None)
-}
-
-/// [`assemble_body`] with the body's shape-only integrals taken from `shared` where given
-/// (`bem::shapes`: computed once for every body of that shape).
-pub fn assemble_body_shared(
-    model: &Model,
-    bi: usize,
-    plane: Plane,
-    settings: &QuadratureSettings,
-    load_factor: f64,
-    scene_file: &std::path::Path,
-    shared: Option<&ShapeIntegrals>,
-) -> Result<BodySystem> {
     let s = scaling(&model.bodies[bi]);
-    let at = (plane, settings, load_factor, scene_file);
-    assemble(model, bi, at, s, shared)
+    assemble_body_scaled(model, bi, plane, settings, load_factor, scene_file, s)
 }
 
 /// [`assemble_body`] with the integration coordinates given (a [`Scaling`], or `(c, L)` for
@@ -264,19 +248,7 @@ pub fn assemble_body_scaled(
     scene_file: &std::path::Path,
     scaling: impl Into<Scaling>,
 ) -> Result<BodySystem> {
-    let at = (plane, settings, load_factor, scene_file);
-    assemble(model, bi, at, scaling.into(), None)
-}
-
-/// The assembly of body `bi` for `(plane, quadrature, load factor, scene file)` in the
-/// coordinates of `scaling`, with its shape-only integrals from `shared` where given.
-fn assemble(
-    model: &Model,
-    bi: usize,
-    (plane, settings, load_factor, scene_file): (Plane, &QuadratureSettings, f64, &std::path::Path),
-    scaling: Scaling,
-    shared: Option<&ShapeIntegrals>,
-) -> Result<BodySystem> {
+    let scaling: Scaling = scaling.into();
     let length = scaling.length;
     let body = &model.bodies[bi];
     let mat = material(body, plane);
@@ -296,7 +268,20 @@ fn assemble(
     let held = held_components(body, n_sys, &mut entries, &node_elems);
 
     // --- Scaled geometry ----------------------------------------------------------------------
-    let elems = scaled_elements(body, &scaling);
+    let scaled = |p: [f64; 2]| scaling.scaled(p);
+    let elems: Vec<ElementRef> = body
+        .elements
+        .iter()
+        .map(|e| {
+            ElementRef::new(
+                Segment::new(
+                    scaled(body.nodes[e.nodes[0]]),
+                    scaled(body.nodes[e.nodes[1]]),
+                ),
+                e.nodes,
+            )
+        })
+        .collect();
     let boundary: Vec<Segment> = elems.iter().map(|e| e.seg).collect();
     let area = boundary_area(&boundary);
     let body_force = body
@@ -319,7 +304,6 @@ fn assemble(
         body_force,
         length,
         n,
-        shared,
     };
     let (mut g, mut load) = pair_loop.assemble(ne);
     // (P, F) = (W, −U)ᵀ, the held rows included.
@@ -665,8 +649,6 @@ struct PairLoop<'a> {
     body_force: Option<[f64; 2]>,
     length: f64,
     n: usize,
-    /// The body's shape-only integrals, where its shape is shared.
-    shared: Option<&'a ShapeIntegrals>,
 }
 
 impl PairLoop<'_> {
@@ -714,10 +696,7 @@ impl PairLoop<'_> {
         let te = known_t[ei];
         let t_nonzero = te.iter().any(|t| t[0] != 0.0 || t[1] != 0.0);
         for (fi, f) in elems.iter().enumerate() {
-            let raw: PairBlocks = match self.shared {
-                Some(t) => t.pair(ei, fi),
-                None => pair_blocks(mat, e, f, settings),
-            };
+            let raw: PairBlocks = pair_blocks(mat, e, f, settings);
             let (v, k, d) = (scale4(&raw.v, l2), scale4(&raw.k, length), raw.d);
             let same = ei == fi;
             let tf = known_t[fi];
@@ -771,10 +750,7 @@ impl PairLoop<'_> {
             }
         }
         if let Some(b) = self.body_force {
-            let bl = match self.shared.and_then(|t| t.body_force.as_ref()) {
-                Some(loads) => loads[ei],
-                None => body_force_loads(mat, &e.seg, self.boundary, b, self.area, settings),
-            };
+            let bl = body_force_loads(mat, &e.seg, self.boundary, b, self.area, settings);
             for r in &rows {
                 let (w, p) = (bl.w[r.end], bl.p[r.end]);
                 ld[r.index] += if r.traction {
@@ -907,17 +883,6 @@ impl From<([f64; 2], f64)> for Scaling {
             length,
         }
     }
-}
-
-/// The elements of `body` in the coordinates of `scaling`, with their body-local nodes.
-pub(crate) fn scaled_elements(body: &Body, scaling: &Scaling) -> Vec<ElementRef> {
-    body.elements
-        .iter()
-        .map(|e| {
-            let [a, b] = e.nodes.map(|k| scaling.scaled(body.nodes[k]));
-            ElementRef::new(Segment::new(a, b), e.nodes)
-        })
-        .collect()
 }
 
 /// The [`Scaling`] of a body: about its first boundary node, the centroid of its boundary

@@ -7,6 +7,5 @@ pub mod galerkin;
 pub mod kernels;
 pub mod operators;
 pub mod quadrature;
-pub mod shapes;
 
 pub use operators::{prepare, Operators};

@@ -8,10 +8,9 @@
 
 use std::time::Instant;
 
-use crate::bem::assembly::{assemble_body_shared, check_single_layer, BodySystem, Unknown};
+use crate::bem::assembly::{assemble_body, check_single_layer, BodySystem, Unknown};
 use crate::bem::condensation::{condense, Condensed};
 use crate::bem::quadrature::QuadratureSettings;
-use crate::bem::shapes::SharedShapes;
 use crate::error::Result;
 use crate::input::model::Model;
 use crate::input::scene::Plane;
@@ -38,8 +37,6 @@ pub fn prepare(
 ) -> Result<Operators> {
     let t_start = Instant::now();
     use rayon::prelude::*;
-    // Bodies of one shape share its integrals, computed once (a wall's bricks: a few shapes).
-    let shapes = SharedShapes::new(model, plane, settings, load_factor);
     // Bodies are independent: assembled and condensed in parallel (a wall of many small
     // bricks keeps both cores busy; a large body's assembly is parallel inside too).
     let done: Vec<Result<(BodySystem, Condensed, f64, f64)>> = (0..model.bodies.len())
@@ -47,9 +44,7 @@ pub fn prepare(
         .map(|bi| {
             let body = &model.bodies[bi];
             let t0 = Instant::now();
-            let shared = shapes.of(bi);
-            let sys =
-                assemble_body_shared(model, bi, plane, settings, load_factor, scene_file, shared)?;
+            let sys = assemble_body(model, bi, plane, settings, load_factor, scene_file)?;
             check_single_layer(&sys, &body.name)?;
             let ta = t0.elapsed().as_secs_f64();
             let t1 = Instant::now();

@@ -151,8 +151,21 @@ pub fn solve(
                 timings,
                 &mut reassembled,
             )?;
-            stage.count_steps(1);
-            (vec![(1.0, found.multiplier)], Some(found))
+            // The run follows the load path of the trial that stood at the multiplier: in
+            // the steps of t that trial was solved in (two where one left it undecided).
+            let m = found.multiplier;
+            let parts = found
+                .info
+                .trials
+                .iter()
+                .rev()
+                .find(|x| x.stands && x.t == m)
+                .map_or(1, |x| x.steps.max(1));
+            stage.count_steps(parts as u64);
+            let path = (1..=parts)
+                .map(|k| (1.0, m * k as f64 / parts as f64))
+                .collect();
+            (path, Some(found))
         }
     };
     let mut acc = load_path(
