@@ -62,8 +62,9 @@ pub(super) fn guess(
 /// Measured on running-bond walls (history "final", one run each, 2026-12-07): 20 × 20
 /// (8 050 pairs) exact at once, 4.7 s whole run against 5.2 s with the tangential cut;
 /// 28 × 28 (15 974 pairs) exact, 13.6 s against 11.3 s; 45 × 45 (≈ 40 000 pairs) exact but
-/// 68 s against 41 s; 64 × 64: the sparse iteration's Coulomb phase does not settle on the
-/// joint cut. Above, the tangential cut, with `implied_slipping` reported.
+/// 68 s against 41 s (d52498f: 64 s against 41 s, 47 iterations against 25); 64 × 64: the
+/// sparse iteration's Coulomb phase does not settle on the joint cut. Above, the tangential
+/// cut, with `implied_slipping` reported.
 pub const JOINT_CUTS_MAX_PAIRS: usize = 20_000;
 
 /// Whether `scene` on `model` cuts its junction cycles at whole joints and moves the cuts
