@@ -20,7 +20,7 @@ use std::time::Instant;
 
 use crate::bem::quadrature::QuadratureSettings;
 use crate::bem::{prepare, Operators};
-use crate::contact::cuts::{guess, recut, MAX_RECUTS};
+use crate::contact::cuts::{at_joints, guess, recut, MAX_RECUTS};
 use crate::contact::problem::{Component, Cuts};
 use crate::contact::statics::Verdict;
 use crate::contact::{status_differences, ContactResult, Iterate, Session, Solver, StepState};
@@ -102,7 +102,7 @@ pub fn solve(
     // The sparse solver's problem cuts junction cycles at whole joints (`Cuts::Joints`),
     // which a wall's T-junctions need to be exact, up to `JOINT_CUTS_MAX_PAIRS`; the others
     // keep the tangential cut (`Cuts::Tangential`) of the paper's scenes.
-    let joints = crate::contact::cuts::at_joints(scene, model);
+    let joints = at_joints(scene, model);
     let cuts = if joints {
         Cuts::Joints
     } else {

@@ -819,17 +819,7 @@ fn iterate(
             Vec::new()
         };
         if regularised && !cur.problem.cuts.is_empty() {
-            // A free body thrown past what stops it: of the open rows it moved, only the
-            // first it reached switches.
-            let first = first_stops(&cur, &st, &center, &moving);
-            let kept: Vec<Violation> = v
-                .iter()
-                .filter(|x| !st.open[x.row] || !moving[x.row] || first.contains(&x.row))
-                .cloned()
-                .collect();
-            if !kept.is_empty() {
-                v = kept;
-            }
+            keep_first_stops(&cur, &st, &center, &moving, &mut v);
         }
         let mut take = if damping == 0 {
             v.len()
@@ -851,6 +841,23 @@ fn iterate(
         }
         last = Some(st);
         iterations += 1;
+    }
+}
+
+/// A free body thrown past what stops it: of the open rows it moved (`moving`), only the
+/// first it reached ([`first_stops`]) keeps its violation in `v`; the other violations
+/// stay. Where none would be left, `v` stays whole.
+fn keep_first_stops(
+    cur: &Inner,
+    st: &InnerState,
+    center: &[f64],
+    moving: &[bool],
+    v: &mut Vec<Violation>,
+) {
+    let first = first_stops(cur, st, center, moving);
+    let keep = |x: &Violation| !st.open[x.row] || !moving[x.row] || first.contains(&x.row);
+    if v.iter().any(keep) {
+        v.retain(keep);
     }
 }
 
