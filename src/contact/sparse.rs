@@ -44,6 +44,7 @@
 //! σμ times row k, not symmetric, one sparse LU per status; docs/formulation.md §6.5).
 
 use std::collections::HashSet;
+use std::sync::Arc;
 
 use faer::dyn_stack::{MemBuffer, MemStack, StackReq};
 use faer::sparse::linalg::{amd, cholesky, lu, SupernodalThreshold};
@@ -72,6 +73,8 @@ pub struct SparseSystem {
     work: Work,
     /// The storage of the last factor that failed, for the next.
     spare: Vec<f64>,
+    /// The analysis of the last status factored.
+    analysis: Option<Arc<Analysis>>,
     /// The values of the last LU of the Newton attempt, whose storage the next reuses.
     lu: lu::NumericLu<usize, f64>,
 }
@@ -80,12 +83,24 @@ pub struct SparseSystem {
 type Factored = (Vec<bool>, f64, Option<Reduced>);
 
 /// The factor of H over the unknowns a status leaves free: the glued displacements and the
-/// openings of its open rows (`kept`, in order); the closed rows' openings are fixed.
+/// openings of its open rows; the closed rows' openings are fixed.
 struct Reduced {
-    kept: Vec<usize>,
-    symbolic: cholesky::SymbolicCholesky<usize>,
+    analysis: Arc<Analysis>,
     /// The values of the factor L.
     l: Vec<f64>,
+}
+
+/// The unknowns a status keeps (`kept`, in the elimination order) and the symbolic
+/// factorisation of H over them. It depends on the open rows alone, so a status solved
+/// again with another proximal weight, or proximally after its exact factorisation failed,
+/// reuses it (45 × 45 wall: 0.11–0.19 s of 0.75–1.2 s per factorisation).
+struct Analysis {
+    open: Vec<bool>,
+    kept: Vec<usize>,
+    /// Places in `kept` of the unknowns in the elimination order (`usize::MAX` where left
+    /// out).
+    index: Vec<usize>,
+    symbolic: cholesky::SymbolicCholesky<usize>,
 }
 
 /// Work space of the factorisations and solves, kept between them (a fresh one per
@@ -154,7 +169,8 @@ impl Ordered {
     }
 }
 
-/// The storage of the matrix of a status, kept between factorisations.
+/// The storage of the matrix of a status, kept between factorisations: its pattern is the one
+/// of the last [`Analysis`] made, its values those of the last factorisation.
 #[derive(Default)]
 struct Work {
     col_ptr: Vec<usize>,
@@ -221,6 +237,7 @@ impl SparseSystem {
             scratch: Scratch::default(),
             work: Work::default(),
             spare: Vec::new(),
+            analysis: None,
             lu: lu::NumericLu::new(),
         })
     }
@@ -233,25 +250,18 @@ impl SparseSystem {
     /// is the one of the factor it replaces.
     fn factor(&mut self, open: &[bool], reg: f64) -> Option<Reduced> {
         let ng = self.n_glued;
+        let analysis = match self.analysis.take() {
+            Some(a) if a.open == open => a,
+            _ => Arc::new(self.analyse(open)?),
+        };
+        self.analysis = Some(Arc::clone(&analysis));
         let ord = &self.ordered;
-        let size = ord.unknown.len();
-        let keep = |k: usize| k < ng || open[k - ng];
-        let mut index = vec![usize::MAX; size];
-        let mut kept = Vec::new();
-        for p in 0..size {
-            if keep(ord.unknown[p]) {
-                index[p] = kept.len();
-                kept.push(ord.unknown[p]);
-            }
-        }
+        let index = &analysis.index;
         let sym = ord.h.symbolic();
         let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), ord.h.val());
         let w = &mut self.work;
-        w.col_ptr.clear();
-        w.row_idx.clear();
         w.values.clear();
-        w.col_ptr.push(0);
-        for p in (0..size).filter(|&p| index[p] != usize::MAX) {
+        for p in (0..index.len()).filter(|&p| index[p] != usize::MAX) {
             for q in cp[p]..cp[p + 1] {
                 let row = ri[q];
                 if index[row] == usize::MAX {
@@ -261,20 +271,12 @@ impl SparseSystem {
                 if row == p && ord.unknown[p] >= ng && reg > 0.0 {
                     v += reg * v.abs().max(f64::MIN_POSITIVE);
                 }
-                w.row_idx.push(index[row]);
                 w.values.push(v);
             }
-            w.col_ptr.push(w.row_idx.len());
         }
-        let m = kept.len();
+        let symbolic = &analysis.symbolic;
+        let m = analysis.kept.len();
         let pattern = SymbolicSparseColMatRef::new_checked(m, m, &w.col_ptr, None, &w.row_idx);
-        let symbolic = cholesky::factorize_symbolic_cholesky(
-            pattern,
-            Side::Upper,
-            cholesky::SymmetricOrdering::Identity,
-            Default::default(),
-        )
-        .ok()?;
         let mut l = std::mem::take(&mut self.spare);
         l.clear();
         l.resize(symbolic.len_val(), 0.0);
@@ -296,11 +298,58 @@ impl SparseSystem {
             )
             .is_ok();
         if ok {
-            Some(Reduced { kept, symbolic, l })
+            Some(Reduced { analysis, l })
         } else {
             self.spare = l;
             None
         }
+    }
+
+    /// The unknowns the status `open` keeps, the pattern of H over them (in `work`) and its
+    /// symbolic factorisation in the elimination order of the whole pattern; None where the
+    /// memory cannot be had.
+    fn analyse(&mut self, open: &[bool]) -> Option<Analysis> {
+        let ng = self.n_glued;
+        let ord = &self.ordered;
+        let size = ord.unknown.len();
+        let keep = |k: usize| k < ng || open[k - ng];
+        let mut index = vec![usize::MAX; size];
+        let mut kept = Vec::new();
+        for p in 0..size {
+            if keep(ord.unknown[p]) {
+                index[p] = kept.len();
+                kept.push(ord.unknown[p]);
+            }
+        }
+        let sym = ord.h.symbolic();
+        let (cp, ri) = (sym.col_ptr(), sym.row_idx());
+        let w = &mut self.work;
+        w.col_ptr.clear();
+        w.row_idx.clear();
+        w.col_ptr.push(0);
+        for p in (0..size).filter(|&p| index[p] != usize::MAX) {
+            for q in cp[p]..cp[p + 1] {
+                if index[ri[q]] != usize::MAX {
+                    w.row_idx.push(index[ri[q]]);
+                }
+            }
+            w.col_ptr.push(w.row_idx.len());
+        }
+        let m = kept.len();
+        let pattern = SymbolicSparseColMatRef::new_checked(m, m, &w.col_ptr, None, &w.row_idx);
+        let symbolic = cholesky::factorize_symbolic_cholesky(
+            pattern,
+            Side::Upper,
+            cholesky::SymmetricOrdering::Identity,
+            Default::default(),
+        )
+        .ok()?;
+        Some(Analysis {
+            open: open.to_vec(),
+            kept,
+            index,
+            symbolic,
+        })
     }
 
     /// `H x` with the full symmetric H from its triangle in the elimination order.
@@ -387,17 +436,18 @@ impl SparseSystem {
             self.last = Some((open.clone(), reg, llt));
         }
         let red = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
-        let mut sol = Mat::<f64>::from_fn(red.kept.len(), 1, |i, _| rhs[red.kept[i]]);
-        let req = red.symbolic.solve_in_place_scratch::<f64>(1, PAR);
+        let an = &red.analysis;
+        let mut sol = Mat::<f64>::from_fn(an.kept.len(), 1, |i, _| rhs[an.kept[i]]);
+        let req = an.symbolic.solve_in_place_scratch::<f64>(1, PAR);
         let stack = self.scratch.stack(req)?;
-        cholesky::LltRef::new(&red.symbolic, &red.l).solve_in_place_with_conj(
+        cholesky::LltRef::new(&an.symbolic, &red.l).solve_in_place_with_conj(
             Conj::No,
             sol.as_mut(),
             PAR,
             stack,
         );
         let mut w = x;
-        for (i, &k) in red.kept.iter().enumerate() {
+        for (i, &k) in an.kept.iter().enumerate() {
             w[k] = sol[(i, 0)];
         }
         // A factorisation can pass on a matrix that is singular up to roundoff (a body left
