@@ -61,7 +61,6 @@
 // Index loops mirror the block formulas.
 #![allow(clippy::needless_range_loop)]
 
-use faer::linalg::solvers::Solve;
 use faer::sparse::SparseColMat;
 use faer::Mat;
 
@@ -202,7 +201,7 @@ pub struct Problem {
     /// `full_of[k][j][c]`: the full row of a pair component, if any.
     pub full_of: Vec<Vec<[Option<usize>; 2]>>,
     n_glued: usize,
-    factor: faer::sparse::linalg::solvers::Llt<usize, f64>,
+    factor: crate::linalg::SparseLlt,
     /// Each global dof's node (body-local) and direction.
     dof_at: Vec<(usize, [f64; 2])>,
 }
@@ -287,7 +286,7 @@ impl Problem {
             ..
         } = bodies;
         let kg = glued_matrix(&ops, &dof_start, &glued.tmap, glued.n_glued)?;
-        let factor = kg.sp_cholesky(faer::Side::Lower).map_err(|_| {
+        let factor = crate::linalg::SparseLlt::new(&kg).ok_or_else(|| {
             Error::numerical(format!(
                 "the interface system with every pair closed is singular: {}",
                 mechanism_hint(model, &ops, &set.rows, &dof_start)
