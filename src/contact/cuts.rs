@@ -61,11 +61,11 @@ pub(super) fn guess(
 /// moves the cuts where an implied component breaks its law (`recut`): exact junctions.
 /// Measured on running-bond walls (history "final", one run each, 2026-12-07): 20 × 20
 /// (8 050 pairs) exact at once, 4.7 s whole run against 5.2 s with the tangential cut;
-/// 28 × 28 (15 974 pairs) exact, 13.6 s against 11.3 s; 45 × 45 (≈ 40 000 pairs) exact but
-/// 68 s against 41 s (d52498f: 64 s against 41 s, 47 iterations against 25); 64 × 64: the
-/// sparse iteration's Coulomb phase does not settle on the joint cut. Above, the tangential
-/// cut, with `implied_slipping` reported.
-pub const JOINT_CUTS_MAX_PAIRS: usize = 20_000;
+/// 28 × 28 (15 974 pairs) exact, 13.6 s against 11.3 s; 45 × 45 (41 734 pairs) exact in
+/// 60 s against 41 s (39 iterations against 25, since the proximal weight became a trust
+/// region; 68 s and 47 before); 64 × 64: the sparse iteration's Coulomb phase does not settle
+/// on the joint cut. Above, the tangential cut, with `implied_slipping` reported.
+pub const JOINT_CUTS_MAX_PAIRS: usize = 45_000;
 
 /// Whether `scene` on `model` cuts its junction cycles at whole joints and moves the cuts
 /// (`[solve] junctions`; "auto": the sparse solver without a collapse search up to

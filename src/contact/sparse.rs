@@ -26,8 +26,10 @@
 //! everywhere: its place is fixed only by the one row that should stick). Such an iterate
 //! gets a proximal spring `ε H_rr (s_r − s̄_r)` on its open rows, anchored at the last
 //! iterate s̄: the free body moves a finite step towards what stops it, and the rows it
-//! reaches switch. While the statuses hold the weight ε falls tenfold per iterate (from
-//! 1e-2), so a body under a small unbalanced force reaches its stop in a few iterates; a
+//! reaches switch. The weight ε is a trust region: from 1e-2, it falls tenfold after an
+//! iterate whose statuses hold or whose switches touch no row that moves with a free body,
+//! so a body under a small unbalanced force reaches its stop in a few iterates, and rises
+//! tenfold after one that switches many rows (a body thrown too far); a
 //! state whose spring forces are within the tolerance is a solution (the free body's place
 //! is then not unique). A repeated status halves the step; the iteration limit or a repeated
 //! status ends it without a verdict (`stalled`), and the driver hands over to the evolutive
@@ -643,7 +645,7 @@ fn open_target(inner: &Inner, r: usize, open: &[bool], sg: &[f64]) -> f64 {
 /// lightest it is made while the statuses hold and the free bodies still drift.
 const REGULARISATION: f64 = 1e-2;
 const REGULARISATION_MIN: f64 = 1e-10;
-/// Switches after a proximal iterate up to which its weight is kept.
+/// Switches after a proximal iterate up to which its weight is not made heavier.
 const FEW_SWITCHES: usize = 16;
 
 /// Iterations of one inner solve, and halvings of the step after repeated statuses, before
@@ -882,12 +884,19 @@ fn iterate(
         }
         free = regularised && v[..take].iter().all(|x| !moving[x.row]);
         (open, sign) = switched(&st, &v[..take]);
-        // The proximal weight is a trust region: a proximal iterate that switched a few rows
-        // keeps its weight (the free bodies go on towards what stops them at the same
-        // pace); one that switched many, which a free body thrown too far does, and an
-        // exact one start again from the heaviest.
-        if !regularised || take > FEW_SWITCHES {
+        // The proximal weight is a trust region. An exact iterate starts again from the
+        // heaviest. A proximal iterate that switched many rows, which a free body thrown too
+        // far does, makes it tenfold heavier; one that switched none that moved with a free
+        // body (the body reached nothing) tenfold lighter, so that it reaches its stop
+        // sooner; one that switched a few, some of them moving with a free body, keeps it
+        // (measured against a reset to the heaviest after many switches, 45 × 45 wall on
+        // joint cuts: 47 → 39 iterations, 62 → 50 factorisations; 28 × 28: 20 → 17).
+        if !regularised {
             reg = REGULARISATION;
+        } else if take > FEW_SWITCHES {
+            reg = (reg * 10.0).min(REGULARISATION);
+        } else if free {
+            reg = (reg * 0.1).max(REGULARISATION_MIN);
         }
         last = Some(st);
         iterations += 1;
