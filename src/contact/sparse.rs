@@ -888,22 +888,29 @@ fn iterate(
         }
         free = regularised && v[..take].iter().all(|x| !moving[x.row]);
         (open, sign) = switched(&st, &v[..take]);
-        // The proximal weight is a trust region. An exact iterate starts again from the
-        // heaviest. A proximal iterate that switched many rows, which a free body thrown too
-        // far does, makes it tenfold heavier; one that switched none that moved with a free
-        // body (the body reached nothing) tenfold lighter, so that it reaches its stop
-        // sooner; one that switched a few, some of them moving with a free body, keeps it
-        // (measured against a reset to the heaviest after many switches, 45 × 45 wall on
-        // joint cuts: 47 → 39 iterations, 62 → 50 factorisations; 28 × 28: 20 → 17).
-        if !regularised {
-            reg = REGULARISATION;
-        } else if take > FEW_SWITCHES {
-            reg = (reg * 10.0).min(REGULARISATION);
-        } else if free {
-            reg = (reg * 0.1).max(REGULARISATION_MIN);
-        }
+        reg = next_weight(reg, regularised, take, free);
         last = Some(st);
         iterations += 1;
+    }
+}
+
+/// The proximal weight after an iterate that switched `take` rows (`free`: none of them
+/// moved with a free body). The weight is a trust region. An exact iterate starts again from
+/// the heaviest. A proximal iterate that switched many rows, which a free body thrown too
+/// far does, makes it tenfold heavier; one that switched none that moved with a free body
+/// (the body reached nothing) tenfold lighter, so that it reaches its stop sooner; one that
+/// switched a few, some of them moving with a free body, keeps it (measured against a reset
+/// to the heaviest after many switches, 45 × 45 wall on joint cuts: 47 → 39 iterations,
+/// 62 → 50 factorisations; 28 × 28: 20 → 17).
+fn next_weight(reg: f64, regularised: bool, take: usize, free: bool) -> f64 {
+    if !regularised {
+        REGULARISATION
+    } else if take > FEW_SWITCHES {
+        (reg * 10.0).min(REGULARISATION)
+    } else if free {
+        (reg * 0.1).max(REGULARISATION_MIN)
+    } else {
+        reg
     }
 }
 
