@@ -5,6 +5,9 @@
 # other core idle (full_rows' collapse searches take over a minute each); running binaries
 # side by side keeps both cores busy. The heaviest binaries start first. Each binary's
 # output goes to out/test-logs/NAME.log; a failing binary's log is printed whole.
+# Each binary writes its scratch runs (tests/support's tmpdir, about 2 GB for the whole suite)
+# under a TMPDIR of its own, removed when the binary passes and kept, with its path printed,
+# when it fails: repeated runs do not fill the disk.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 cargo=${CARGO:-cargo}
@@ -31,14 +34,18 @@ done
 logs=out/test-logs
 rm -rf "$logs"
 mkdir -p "$logs"
-export logs
+scratch=$(mktemp -d "${TMPDIR:-/tmp}/sgbem-tests.XXXXXX")
+export logs scratch
 one() {
-  local n
+  local n t
   n=$(basename "$1")
-  if "$1" >"$logs/$n.log" 2>&1; then
+  t="$scratch/$n"
+  mkdir -p "$t"
+  if TMPDIR="$t" "$1" >"$logs/$n.log" 2>&1; then
+    rm -rf "$t"
     echo "ok     $n: $(grep -h '^test result' "$logs/$n.log" | tail -1)"
   else
-    echo "FAILED $n"
+    echo "FAILED $n (its scratch runs are kept in $t)"
     touch "$logs/$n.failed"
   fi
 }
@@ -54,5 +61,6 @@ if [ -n "$failed" ]; then
   echo "run_binaries: failed: $(for f in $failed; do basename "${f%.failed}"; done | tr '\n' ' ')" >&2
   exit 1
 fi
+rmdir "$scratch"
 echo "run_binaries: ${#ordered[@]} test binaries passed in $(( $(date +%s) - start )) s"
 "$cargo" test --release --doc
