@@ -309,7 +309,7 @@ fn a_stick_joint_that_starts_open_ties_as_it_closes() {
 /// The collapse multiplier of a 4-course, 5-brick running-bond wall under a lateral body
 /// force grows with the friction coefficient and stays below that of stick joints (the
 /// limit μ → ∞): the Tresca fixed point settles at μ = 10 (it oscillated without the
-/// relaxation of its bounds).
+/// relaxation of its bounds). The junctions are exact at every multiplier.
 #[test]
 fn collapse_multipliers_grow_with_friction_towards_stick() {
     let dir = tmpdir("sparse-collapse-mu");
@@ -354,6 +354,24 @@ fn collapse_multipliers_grow_with_friction_towards_stick() {
             .as_f64()
             .expect("a multiplier");
         multipliers.push((name, m));
+        // The search cuts the junction cycles at whole joints: with friction, at the
+        // multiplier no implied component slides against its law (the tangential cut left
+        // 21, 24 and 18 with μ = 1, 3 and 10), and the joints obey Coulomb's law row by row.
+        // (Stick joints: 2 head joints slide at a corner node without normal force, where
+        // every other component of their cycles carries force; the tangential cut left 17.)
+        let j = &s["contact"]["junctions"];
+        assert!(
+            j["rule"]
+                .as_str()
+                .is_some_and(|r| r.contains("at a whole pair")),
+            "{name}: {j}"
+        );
+        if name != "stick" {
+            assert_eq!(j["implied_slipping"]["count"], 0, "{name}: {j}");
+            let mu: f64 = name[2..].parse().expect("mu");
+            let slipping = assert_coulomb(name, &out, mu);
+            println!("{name}: {slipping} rows slip at the multiplier");
+        }
     }
     println!("{multipliers:?}");
     for w in multipliers.windows(2) {

@@ -176,7 +176,7 @@ pub fn solve(
         timings,
         &mut reassembled,
     )?;
-    let session = if joints && collapse.is_none() {
+    let session = if joints {
         move_cuts(
             (&stepper, &ctx(&checks, &steps), &steps),
             session,
@@ -449,7 +449,12 @@ fn finish(
         &session.problem.implied
     };
     let junctions = (!junctions.is_empty()).then(|| Junctions {
-        implied_slipping: Some(implied_slipping(session.model, implied, &sol.interfaces)),
+        implied_slipping: Some(implied_slipping(
+            session.model,
+            &session.problem,
+            implied,
+            &sol.interfaces,
+        )),
         ..junctions_summary(
             session.model,
             &junctions,
@@ -561,23 +566,26 @@ fn junctions_summary(
 }
 
 /// The implied tangential components of closed pairs with friction (`friction` or `stick`)
-/// whose tangential jump is not zero (above 1e-9 of the model's size) in the final state:
-/// there the pair slides at its junction node without a friction force of its own, since an
-/// implied component has no row (it slides by the opening of a joint of its cycle, e.g. a
-/// bed joint beside a head joint that opens). A one-node approximation of each such joint,
-/// counted and located so that it is seen.
+/// whose tangential jump is not zero (above 1e-9 of the model's size) in the final state,
+/// where that breaks the pair's law (`cuts::slip_breaks_law`: a stick pair, or a friction
+/// pair whose normal component has a row): there the pair slides at its junction node
+/// without a friction force of its own, since an implied component has no row (it slides by
+/// the opening of a joint of its cycle, e.g. a bed joint beside a head joint that opens). A
+/// one-node approximation of each such joint, counted and located so that it is seen. A
+/// friction pair whose normal component is implied too carries no force at that node, and
+/// its slip there obeys Coulomb's law: not listed.
 fn implied_slipping(
     model: &Model,
+    problem: &crate::contact::problem::Problem,
     implied: &[crate::contact::problem::Implied],
     interfaces: &[InterfaceResult],
 ) -> ImpliedSlipping {
-    use crate::input::scene::Tangential;
     let tol = 1e-9 * model.scale;
     let mut at = Vec::new();
     let mut largest = 0.0f64;
     for i in implied.iter().filter(|i| i.comp == 0) {
         let it = &model.interfaces[i.iface];
-        if !matches!(it.spec.tangential, Tangential::Friction | Tangential::Stick) {
+        if !crate::contact::cuts::slip_breaks_law(model, problem, i) {
             continue;
         }
         let Some(p) = interfaces.get(i.iface).and_then(|r| r.pairs.get(i.pair)) else {
@@ -598,7 +606,8 @@ fn implied_slipping(
         at,
         largest_slip: largest,
         meaning: "closed pairs whose tangential component is implied at a junction and slips \
-                  there: at that node the pair slides without a friction force of its own",
+                  there while the pair presses there (its normal component has a row) or \
+                  sticks: at that node the pair slides without a friction force of its own",
     }
 }
 

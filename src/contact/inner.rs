@@ -84,6 +84,17 @@ pub(super) fn inner_solve(
                 ));
                 return Ok(out);
             }
+            if out.stalled && !inner.problem.cuts.is_empty() {
+                // Junction cycles cut at whole joints: the evolutive path's opening stiffness
+                // is then not positive definite (its least-index rule cycles on the 4 x 5
+                // wall), so the step ends here, undecided, with the reason in its notes.
+                out.notes.push(
+                    "the evolutive path does not take over where junction cycles are cut at \
+                     whole joints (junctions = \"joints\")"
+                        .into(),
+                );
+                return Ok(out);
+            }
             Ok(if out.stalled {
                 // The evolutive path starts again from the step's statuses, with the whole
                 // budget: the sparse iterates may have gone far from a solution.
