@@ -18,7 +18,9 @@
 //! their couplings would only add fill). H is stored once in a fill-reducing order of its
 //! whole pattern (approximate minimum degree, every row open); a status's matrix is a
 //! principal submatrix in that order, so each factorisation skips the ordering, and the
-//! factor's storage and work space are reused from one factorisation to the next.
+//! factor's storage and work space are reused from one factorisation to the next. A status
+//! within a few rows of the last factor with its proximal weight is solved from that
+//! factor by bordering (`border`), without a factorisation of its own.
 //!
 //! The statuses are found by the primal–dual active set iteration (semismooth Newton,
 //! Hintermüller–Ito–Kunisch): every violated row switches at once. A status met on the way
@@ -58,6 +60,8 @@ use crate::contact::lcp::{
 };
 use crate::contact::problem::Problem;
 
+mod border;
+
 /// H over w = (v, s) (lower triangle) and its symbolic factorisation.
 pub struct SparseSystem {
     n_glued: usize,
@@ -75,6 +79,12 @@ pub struct SparseSystem {
     work: Work,
     /// The storage of the last factor that failed, for the next.
     spare: Vec<f64>,
+    /// The last factor that succeeded, with its status and weight, kept while an exact
+    /// attempt is made from a proximal one: where that fails (a body left free), the next
+    /// iterate solves the same status proximally, bordered from it.
+    held: Option<(Vec<bool>, f64, Reduced)>,
+    /// The bordered solve of the last status solved from the factor of another.
+    border: Option<border::Border>,
     /// The analysis of the last status factored.
     analysis: Option<Arc<Analysis>>,
     /// The values of the last LU of the Newton attempt, whose storage the next reuses.
@@ -90,6 +100,18 @@ struct Reduced {
     analysis: Arc<Analysis>,
     /// The values of the factor L.
     l: Vec<f64>,
+}
+
+impl Reduced {
+    /// Replaces `x` (one column per right-hand side, over the status's unknowns in `kept`
+    /// order) by the solution; None where the work space cannot be had.
+    fn solve_in_place(&self, scratch: &mut Scratch, x: faer::MatMut<'_, f64>) -> Option<()> {
+        let symbolic = &self.analysis.symbolic;
+        let req = symbolic.solve_in_place_scratch::<f64>(x.ncols().max(1), PAR);
+        let stack = scratch.stack(req)?;
+        cholesky::LltRef::new(symbolic, &self.l).solve_in_place_with_conj(Conj::No, x, PAR, stack);
+        Some(())
+    }
 }
 
 /// The unknowns a status keeps (`kept`, in the elimination order) and the symbolic
@@ -138,6 +160,8 @@ struct Ordered {
     h: SparseColMat<usize, f64>,
     /// The unknown at each place of the order.
     unknown: Vec<usize>,
+    /// The place of each unknown in the order.
+    place: Vec<usize>,
 }
 
 impl Ordered {
@@ -167,7 +191,11 @@ impl Ordered {
                 }
             }
         })?;
-        Some(Ordered { h, unknown: fwd })
+        Some(Ordered {
+            h,
+            unknown: fwd,
+            place: inv,
+        })
     }
 }
 
@@ -219,6 +247,17 @@ impl SparseSystem {
         .ok_or_else(|| {
             format!("assembling the sparse contact system of {size} unknowns: out of memory")
         })?;
+        Self::from_matrix(h, n_glued, n)
+    }
+
+    /// The system of H (lower triangle) over `n_glued` glued displacements and `n` rows that
+    /// can open, in this order.
+    fn from_matrix(
+        h: SparseColMat<usize, f64>,
+        n_glued: usize,
+        n: usize,
+    ) -> Result<SparseSystem, String> {
+        let size = n_glued + n;
         let ordered = Ordered::new(&h).ok_or_else(|| {
             format!("analysing the sparse contact system of {size} unknowns: out of memory")
         })?;
@@ -239,6 +278,8 @@ impl SparseSystem {
             scratch: Scratch::default(),
             work: Work::default(),
             spare: Vec::new(),
+            held: None,
+            border: None,
             analysis: None,
             lu: lu::NumericLu::new(),
         })
@@ -428,30 +469,7 @@ impl SparseSystem {
                 }
             })
             .collect();
-        let same = matches!(&self.last, Some((o, g, _)) if *o == open && *g == reg);
-        if !same {
-            // The old factor's storage is reused: two at once would double the peak memory.
-            if let Some(f) = self.last.take().and_then(|(_, _, f)| f) {
-                self.spare = f.l;
-            }
-            let llt = self.factor(&open, reg);
-            self.last = Some((open.clone(), reg, llt));
-        }
-        let red = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
-        let an = &red.analysis;
-        let mut sol = Mat::<f64>::from_fn(an.kept.len(), 1, |i, _| rhs[an.kept[i]]);
-        let req = an.symbolic.solve_in_place_scratch::<f64>(1, PAR);
-        let stack = self.scratch.stack(req)?;
-        cholesky::LltRef::new(&an.symbolic, &red.l).solve_in_place_with_conj(
-            Conj::No,
-            sol.as_mut(),
-            PAR,
-            stack,
-        );
-        let mut w = x;
-        for (i, &k) in an.kept.iter().enumerate() {
-            w[k] = sol[(i, 0)];
-        }
+        let w = self.solve_status(&open, reg, &rhs, x)?;
         // A factorisation can pass on a matrix that is singular up to roundoff (a body left
         // free): its displacements then run to about 1/ε of the loaded state's.
         let size = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
@@ -460,6 +478,65 @@ impl SparseSystem {
             return None;
         }
         Some((open, sg, w))
+    }
+
+    /// `w` of the status `open` with the proximal weight `reg`: the closed rows' openings as
+    /// given in `w`, the other unknowns solved with the right-hand side `rhs` — by the factor
+    /// of this status where it is the last one made, else bordered from the factor of
+    /// another status with the same weight that differs in a few rows ([`border`]), else by
+    /// a factorisation. None where the status's matrix is not positive definite (a body left
+    /// free) or the memory cannot be had.
+    fn solve_status(
+        &mut self,
+        open: &[bool],
+        reg: f64,
+        rhs: &[f64],
+        mut w: Vec<f64>,
+    ) -> Option<Vec<f64>> {
+        let same = matches!(&self.last, Some((o, g, _)) if *o == open && *g == reg);
+        if !same {
+            if let Some(w) = border::solve(self, open, reg, rhs, &w) {
+                return Some(w);
+            }
+            self.refactor(open, reg);
+        }
+        let red = self.last.as_ref().and_then(|(_, _, f)| f.as_ref())?;
+        let an = &red.analysis;
+        let mut sol = Mat::<f64>::from_fn(an.kept.len(), 1, |i, _| rhs[an.kept[i]]);
+        red.solve_in_place(&mut self.scratch, sol.as_mut())?;
+        for (i, &k) in an.kept.iter().enumerate() {
+            w[k] = sol[(i, 0)];
+        }
+        Some(w)
+    }
+
+    /// Factors the status `open` with the weight `reg` into `last`. The factor it replaces
+    /// gives its storage to the new one (two at once would double the peak memory), except
+    /// that an exact attempt from a proximal factor keeps that factor in `held` until the
+    /// attempt succeeds.
+    fn refactor(&mut self, open: &[bool], reg: f64) {
+        self.border = None;
+        if let Some((o, g, Some(f))) = self.last.take() {
+            if reg == 0.0 && g > 0.0 {
+                if let Some(h) = self.held.replace((o, g, f)) {
+                    self.spare = h.2.l;
+                }
+            } else {
+                self.spare = f.l;
+            }
+        }
+        if reg > 0.0 {
+            if let Some(h) = self.held.take() {
+                if self.spare.is_empty() {
+                    self.spare = h.2.l;
+                }
+            }
+        }
+        let llt = self.factor(open, reg);
+        if llt.is_some() {
+            self.held = None;
+        }
+        self.last = Some((open.to_vec(), reg, llt));
     }
 
     /// The unknowns `w` of the status `open` where slipping rows follow Coulomb's law within
