@@ -758,7 +758,10 @@ pub(super) fn step_at(
     timings.add("condense", prepared_t.condense_seconds);
     let t1 = Instant::now();
     {
-        let mut s = Session::new(&model_t, &prepared_t).map_err(|e| plan.explain(e))?;
+        // The same cut of the junction cycles as the run's own session (`Cuts::At` of its
+        // cut components reproduces `Cuts::Joints`, and of none `Cuts::Tangential`).
+        let cuts = Cuts::At(&session.problem.cuts);
+        let mut s = Session::with_cuts(&model_t, &prepared_t, cuts).map_err(|e| plan.explain(e))?;
         s.cols = std::mem::take(&mut session.cols);
         s.coupled_after = session.coupled_after;
         s.last_from_rest = session.last_from_rest.take();

@@ -84,30 +84,28 @@ pub(super) fn inner_solve(
                 ));
                 return Ok(out);
             }
-            if out.stalled && !inner.problem.cuts.is_empty() {
-                // Junction cycles cut at whole joints: the evolutive path's opening stiffness
-                // is then not positive definite (its least-index rule cycles on the 4 x 5
-                // wall), so the step ends here, undecided, with the reason in its notes.
-                out.notes.push(
-                    "the evolutive path does not take over where junction cycles are cut at \
-                     whole joints (junctions = \"joints\")"
-                        .into(),
-                );
-                return Ok(out);
-            }
             Ok(if out.stalled {
                 // The evolutive path starts again from the step's statuses, with the whole
                 // budget: the sparse iterates may have gone far from a solution.
                 out.state.open = st.open.clone();
                 out.state.sign = st.sign.clone();
                 let budget = budget + out.iterations;
-                hand_over(
+                let mut taken = hand_over(
                     inner,
                     cols,
                     out,
                     budget,
                     "sparse active-set iteration stopped",
-                )
+                );
+                if !taken.converged && !inner.problem.cuts.is_empty() {
+                    // Junction cycles cut at whole joints: the evolutive path's opening
+                    // stiffness may then not be positive definite (its least-index rule cycles
+                    // on the 4 x 5 wall), so where it finds nothing either the step ends
+                    // undecided, not at a mechanism.
+                    taken.stalled = true;
+                    taken.blocked.clear();
+                }
+                taken
             } else {
                 out
             })
