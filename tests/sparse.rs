@@ -176,18 +176,9 @@ fn sparse_solver_obeys_coulomb_row_by_row() {
 #[test]
 fn wall_collapse_stands_where_coulomb_has_an_equilibrium() {
     let dir = tmpdir("sparse-wall-collapse");
-    let scene = root().join("pipelines/wall_collapse.toml");
     let multiplier = |method: &str| {
         let out = dir.join(method);
-        let (code, _, err) = sgbem(&[
-            "run",
-            scene.to_str().unwrap(),
-            "--out",
-            out.to_str().unwrap(),
-            "--method",
-            method,
-            "--quiet",
-        ]);
+        let (code, err) = run("wall_collapse", None, &out, method);
         assert_eq!(code, 0, "{method}: {err}");
         let s = summary(&out);
         let c = &s["contact"]["collapse"];

@@ -727,9 +727,7 @@ impl<'a> Session<'a> {
             coulomb &= !(asked_coulomb && outcome.bound.is_none());
             let residual = inner.residual(&outcome.state);
             let ok = outcome.converged;
-            // A sparse iteration that stopped without a verdict (its limit, a repeated status,
-            // a body left free that no proximal step placed) where nothing took over.
-            lp.undecided |= !ok && outcome.stalled;
+            lp.undecided |= !ok && outcome.stalled; // stopped without a verdict, not taken over
             let outcome_blocked = outcome.blocked.clone();
             let state = outcome.state;
             if !ok {

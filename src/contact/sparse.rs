@@ -516,21 +516,16 @@ impl SparseSystem {
     /// attempt succeeds.
     fn refactor(&mut self, open: &[bool], reg: f64) {
         self.border = None;
-        if let Some((o, g, Some(f))) = self.last.take() {
-            if reg == 0.0 && g > 0.0 {
-                if let Some(h) = self.held.replace((o, g, f)) {
-                    self.spare = h.2.l;
-                }
-            } else {
-                self.spare = f.l;
-            }
-        }
+        let freed = match self.last.take() {
+            Some((o, g, Some(f))) if reg == 0.0 && g > 0.0 => self.held.replace((o, g, f)),
+            Some((o, g, Some(f))) => Some((o, g, f)),
+            _ => None,
+        };
         if reg > 0.0 {
-            if let Some(h) = self.held.take() {
-                if self.spare.is_empty() {
-                    self.spare = h.2.l;
-                }
-            }
+            self.held = None;
+        }
+        if let Some((_, _, f)) = freed {
+            self.spare = f.l;
         }
         let llt = self.factor(open, reg);
         if llt.is_some() {

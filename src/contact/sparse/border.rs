@@ -85,6 +85,7 @@ pub(super) fn solve(
         .as_ref()
         .is_some_and(|b| b.open == open && b.reg == reg);
     if !cached {
+        // The old one's memory goes first.
         sys.border = None;
         sys.border = Some(build(sys, open, reg)?);
     }
