@@ -63,10 +63,11 @@ pub(super) fn guess(
 /// (8 050 pairs) exact at once, 4.7 s whole run against 5.2 s with the tangential cut;
 /// 28 × 28 (15 974 pairs) exact, 13.6 s against 11.3 s; 45 × 45 (41 734 pairs) exact in
 /// 60 s against 41 s (39 iterations against 25, since the proximal weight became a trust
-/// region; 68 s and 47 before); 64 × 64 (84 896 pairs) exact but in 61 iterations
-/// against 32 (337 s with a test run beside it). Above, the tangential cut, with
+/// region; 68 s and 47 before); 64 × 64 (84 896 pairs) exact in 61 iterations against 32,
+/// 142 s whole against 95 s since the sparse iteration skips its doomed exact attempts
+/// (218 s before). Above, the tangential cut (not measured on joints), with
 /// `implied_slipping` reported.
-pub const JOINT_CUTS_MAX_PAIRS: usize = 45_000;
+pub const JOINT_CUTS_MAX_PAIRS: usize = 90_000;
 
 /// Whether `scene` on `model` cuts its junction cycles at whole joints and moves the cuts
 /// (`[solve] junctions`; "auto": the sparse solver up to [`JOINT_CUTS_MAX_PAIRS`] pairs,

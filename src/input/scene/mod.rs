@@ -270,7 +270,7 @@ pub struct SolveSpec {
 /// no row of their own; docs/scene.md).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum JunctionCuts {
-    /// `"joints"` for the sparse solver up to 45 000 pairs (collapse searches included),
+    /// `"joints"` for the sparse solver up to 90 000 pairs (collapse searches included),
     /// `"tangential"` otherwise.
     Auto,
     /// At whole joints, moved where an implied component breaks its law to a component of
