@@ -862,6 +862,9 @@ fn iterate(
     let (mut skip, mut backoff) = (0u32, 0u32);
     loop {
         let attempt = !free && skip == 0;
+        // The exact attempt skipped after a failed one: this status is not known to leave a
+        // body free.
+        let skipped = !free && !attempt;
         skip = skip.saturating_sub(1);
         let exact = if attempt {
             sys.state(&cur, &c, &open, &sign, None)
@@ -943,9 +946,13 @@ fn iterate(
                 return stalled(st, iterations, "a status leaves a body free");
             }
             // The free bodies drift by a step inversely proportional to the proximal weight:
-            // a lighter weight lets them reach what stops them sooner.
+            // a lighter weight lets them reach what stops them sooner. A status whose exact
+            // attempt was skipped is tried now: it may hold every body.
             reg = (reg * 0.1).max(REGULARISATION_MIN);
-            free = true;
+            free = !skipped;
+            if skipped {
+                skip = 0;
+            }
             last = Some(st);
             iterations += 1;
             continue;
