@@ -63,7 +63,7 @@ pub(super) fn guess(
 /// (8 050 pairs) exact at once, 4.7 s whole run against 5.2 s with the tangential cut;
 /// 28 × 28 (15 974 pairs) exact, 13.6 s against 11.3 s; 45 × 45 (41 734 pairs) exact in
 /// 60 s against 41 s (39 iterations against 25, since the proximal weight became a trust
-/// region; 68 s and 47 before); 64 × 64 (84 896 pairs) exact in 61 iterations against 32,
+/// region; 68 s and 47 before); 64 × 64 (84 896 pairs) exact in 61 iterations against 34,
 /// 142 s whole against 95 s since the sparse iteration skips its doomed exact attempts
 /// (218 s before). Above, the tangential cut (not measured on joints), with
 /// `implied_slipping` reported.

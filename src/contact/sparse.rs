@@ -858,27 +858,15 @@ fn iterate(
     // no row that moved with a free body (the exact attempt, a factorisation that fails,
     // cost 0.13-0.28 s of the 45 x 45 wall's 0.75 s per iterate, 36 times).
     let mut free = false;
-    // Iterates left that skip the exact attempt, and the last such count (`MAX_BACKOFF`).
-    let (mut skip, mut backoff) = (0u32, 0u32);
+    let mut attempts = ExactAttempts::default();
     loop {
-        let attempt = !free && skip == 0;
-        // The exact attempt skipped after a failed one: this status is not known to leave a
-        // body free.
-        let skipped = !free && !attempt;
-        skip = skip.saturating_sub(1);
-        let exact = if attempt {
-            sys.state(&cur, &c, &open, &sign, None)
-        } else {
+        // Skipped after a failed attempt (counted every iterate): not known to be free.
+        let skipped = attempts.skips() & !free;
+        let exact = if free || skipped {
             None
+        } else {
+            attempts.record(sys.state(&cur, &c, &open, &sign, None))
         };
-        if attempt {
-            if exact.is_some() {
-                backoff = 0;
-            } else {
-                backoff = (backoff * 2).clamp(1, MAX_BACKOFF);
-                skip = backoff;
-            }
-        }
         let mut center = Vec::new();
         let (st, regularised) = match exact {
             Some(st) => (st, false),
@@ -951,7 +939,7 @@ fn iterate(
             reg = (reg * 0.1).max(REGULARISATION_MIN);
             free = !skipped;
             if skipped {
-                skip = 0;
+                attempts.skip = 0;
             }
             last = Some(st);
             iterations += 1;
@@ -990,6 +978,36 @@ fn iterate(
         reg = next_weight(reg, regularised, take, free);
         last = Some(st);
         iterations += 1;
+    }
+}
+
+/// The exact attempts of [`iterate`]: after one fails, the next 1, 2, then up to
+/// `MAX_BACKOFF` iterates skip theirs; one that succeeds resets the count.
+#[derive(Default)]
+struct ExactAttempts {
+    /// Iterates left that skip their attempt.
+    skip: u32,
+    /// The last such count.
+    backoff: u32,
+}
+
+impl ExactAttempts {
+    /// Whether this iterate skips its attempt (counted).
+    fn skips(&mut self) -> bool {
+        let skips = self.skip > 0;
+        self.skip = self.skip.saturating_sub(1);
+        skips
+    }
+
+    /// Counts the outcome of an attempt, and passes it on.
+    fn record(&mut self, state: Option<InnerState>) -> Option<InnerState> {
+        if state.is_some() {
+            self.backoff = 0;
+        } else {
+            self.backoff = (self.backoff * 2).clamp(1, MAX_BACKOFF);
+            self.skip = self.backoff;
+        }
+        state
     }
 }
 
