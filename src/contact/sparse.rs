@@ -28,7 +28,9 @@
 //! everywhere: its place is fixed only by the one row that should stick). Such an iterate
 //! gets a proximal spring `ε H_rr (s_r − s̄_r)` on its open rows, anchored at the last
 //! iterate s̄: the free body moves a finite step towards what stops it, and the rows it
-//! reaches switch. The weight ε is a trust region: from 1e-2, it falls tenfold after an
+//! reaches switch. Whether a status leaves a body free is told before its factorisation,
+//! from the bodies' rigid motions alone (`rigid`: a factor of order three times the
+//! bodies), so that the exact form is attempted only where its closed rows hold every body. The weight ε is a trust region: from 1e-2, it falls tenfold after an
 //! iterate whose statuses hold or whose switches touch no row that moves with a free body,
 //! so a body under a small unbalanced force reaches its stop in a few iterates, and rises
 //! tenfold after one that switches many rows (a body thrown too far); a
@@ -61,6 +63,7 @@ use crate::contact::lcp::{
 use crate::contact::problem::Problem;
 
 mod border;
+mod rigid;
 
 /// H over w = (v, s) (lower triangle) and its symbolic factorisation.
 pub struct SparseSystem {
@@ -89,6 +92,8 @@ pub struct SparseSystem {
     analysis: Option<Arc<Analysis>>,
     /// The values of the last LU of the Newton attempt, whose storage the next reuses.
     lu: lu::NumericLu<usize, f64>,
+    /// The rows' rigid-motion rows: whether a status holds every body, without H.
+    rigid: rigid::RigidRows,
 }
 
 /// A status (open rows, regularisation) and its factorisation, if positive definite.
@@ -247,15 +252,16 @@ impl SparseSystem {
         .ok_or_else(|| {
             format!("assembling the sparse contact system of {size} unknowns: out of memory")
         })?;
-        Self::from_matrix(h, n_glued, n)
+        Self::from_matrix(h, n_glued, n, rigid::RigidRows::new(problem))
     }
 
     /// The system of H (lower triangle) over `n_glued` glued displacements and `n` rows that
-    /// can open, in this order.
+    /// can open, in this order, with the rows' rigid-motion rows `rigid`.
     fn from_matrix(
         h: SparseColMat<usize, f64>,
         n_glued: usize,
         n: usize,
+        rigid: rigid::RigidRows,
     ) -> Result<SparseSystem, String> {
         let size = n_glued + n;
         let ordered = Ordered::new(&h).ok_or_else(|| {
@@ -282,7 +288,15 @@ impl SparseSystem {
             border: None,
             analysis: None,
             lu: lu::NumericLu::new(),
+            rigid,
         })
+    }
+
+    /// Whether the status `open` may hold every body: false where its closed rows leave a
+    /// rigid motion free ([`rigid`]), so that its exact form is singular and only its
+    /// proximal form can be solved.
+    fn may_hold(&self, inner: &Inner, open: &[bool]) -> bool {
+        self.rigid.holds(&inner.follow(open)).unwrap_or(true)
     }
 
     /// The factorisation of H over the glued displacements and the `open` rows, with `reg`
@@ -853,16 +867,13 @@ fn iterate(
     } else {
         max_iterations.min(MAX_ITERATIONS)
     };
-    // Whether this iterate's status is known to leave a body free, so that only its proximal
-    // form is solved: the last iterate was proximal and either kept its status or switched
-    // no row that moved with a free body (the exact attempt, a factorisation that fails,
-    // cost 0.13-0.28 s of the 45 x 45 wall's 0.75 s per iterate, 36 times).
-    let mut free = false;
     let mut attempts = ExactAttempts::default();
     loop {
-        // Skipped after a failed attempt (counted every iterate): not known to be free.
-        let skipped = attempts.skips() & !free;
-        let exact = if free || skipped {
+        // The exact form is tried where the closed rows hold every body (a status that
+        // leaves one free fails part-way through its factorisation: 1.2-3.3 s each, 11 times
+        // on the 64 x 64 wall), unless a factorisation failed just before.
+        let skipped = attempts.skips();
+        let exact = if skipped || !sys.may_hold(&cur, &open) {
             None
         } else {
             attempts.record(sys.state(&cur, &c, &open, &sign, None))
@@ -910,7 +921,6 @@ fn iterate(
             if regularised {
                 reg = (reg * 0.1).max(REGULARISATION_MIN);
             }
-            free = regularised;
             last = Some(st);
             iterations += 1;
             continue;
@@ -937,7 +947,6 @@ fn iterate(
             // a lighter weight lets them reach what stops them sooner. A status whose exact
             // attempt was skipped is tried now: it may hold every body.
             reg = (reg * 0.1).max(REGULARISATION_MIN);
-            free = !skipped;
             if skipped {
                 attempts.skip = 0;
             }
@@ -973,7 +982,7 @@ fn iterate(
             // The Newton iteration's globalisation: the largest violations first.
             take = take.min(COUPLED_SWITCHES);
         }
-        free = regularised && v[..take].iter().all(|x| !moving[x.row]);
+        let free = regularised && v[..take].iter().all(|x| !moving[x.row]);
         (open, sign) = switched(&st, &v[..take]);
         reg = next_weight(reg, regularised, take, free);
         last = Some(st);

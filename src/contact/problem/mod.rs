@@ -204,6 +204,10 @@ pub struct Problem {
     factor: crate::linalg::SparseLlt,
     /// Each global dof's node (body-local) and direction.
     dof_at: Vec<(usize, [f64; 2])>,
+    /// What each global dof moves by under its body's rigid modes (x, y translation,
+    /// rotation about the centroid scaled by the model's size); zero on a body held by a
+    /// displacement condition, which has no rigid mode.
+    dof_rigid: Vec<[f64; 3]>,
 }
 
 /// The all-closed state for one load factor and cohesion: glued displacements v⁰ and row
@@ -285,6 +289,7 @@ impl Problem {
             n_dofs,
             ..
         } = bodies;
+        let dof_rigid = rigid_dofs(model, &dof_start, n_dofs, &dof_at);
         let kg = glued_matrix(&ops, &dof_start, &glued.tmap, glued.n_glued)?;
         let factor = crate::linalg::SparseLlt::new(&kg).ok_or_else(|| {
             Error::numerical(format!(
@@ -310,6 +315,7 @@ impl Problem {
             n_glued: glued.n_glued,
             factor,
             dof_at,
+            dof_rigid,
         };
         problem.check_base(&kg, model)?;
         Ok(problem)
@@ -448,6 +454,32 @@ impl Problem {
                 translation: c.translation_at_point([q[0], q[1]], rotation),
                 rotation,
             });
+        }
+        out
+    }
+
+    /// The rigid-motion row of row `r` (of `rows`): per body that has rigid modes, what its
+    /// translation and rotation ([`Problem::dof_rigid`]) move the row's relative
+    /// displacement by, from the row's coefficients over the dofs (its full row: at a
+    /// junction node, the dofs of its first pair's frame). A status holds every body iff the
+    /// closed rows' rigid-motion rows leave no rigid motion free.
+    pub(crate) fn row_rigid(&self, r: usize) -> Vec<(usize, [f64; 3])> {
+        let row = &self.rows[r];
+        let Some(f) = self.full_of[row.iface][row.pair][row.comp] else {
+            return Vec::new();
+        };
+        let mut out: Vec<(usize, [f64; 3])> = Vec::new();
+        for &(d, x) in &self.full[f].coefs {
+            let m = self.dof_rigid[d];
+            if m == [0.0; 3] {
+                continue;
+            }
+            let (b, _) = self.body_of(d);
+            let add = [x * m[0], x * m[1], x * m[2]];
+            match out.iter_mut().find(|e| e.0 == b) {
+                Some(e) => (0..3).for_each(|i| e.1[i] += add[i]),
+                None => out.push((b, add)),
+            }
         }
         out
     }
@@ -649,4 +681,32 @@ pub fn solve_all_closed(model: &Model, ops: &Operators) -> Result<StatusSolution
     let n = problem.n_open_rows;
     let (fields, interfaces, _) = problem.state(model, ops, 1.0, &vec![0.0; n], &vec![false; n]);
     Ok(StatusSolution { fields, interfaces })
+}
+
+/// [`Problem::dof_rigid`]: per global dof (`dof_at`: its body-local node and direction), what
+/// its body's rigid modes move it by; zero on bodies held by a displacement condition.
+fn rigid_dofs(
+    model: &Model,
+    dof_start: &[usize],
+    n_dofs: usize,
+    dof_at: &[(usize, [f64; 2])],
+) -> Vec<[f64; 3]> {
+    let scale = model.scale.max(f64::MIN_POSITIVE);
+    let mut out = vec![[0.0; 3]; n_dofs];
+    for (b, body) in model.bodies.iter().enumerate() {
+        if mechanism::body_has_support(model, b) {
+            continue;
+        }
+        let (lo, hi) = (
+            dof_start[b],
+            dof_start.get(b + 1).copied().unwrap_or(n_dofs),
+        );
+        let c = mechanism::centroid(&body.nodes);
+        for d in lo..hi.min(n_dofs) {
+            let (node, dir) = dof_at[d];
+            let x = body.nodes.get(node).copied().unwrap_or(c.point());
+            out[d] = mechanism::rigid_row(x, &c, dir, scale);
+        }
+    }
+    out
 }

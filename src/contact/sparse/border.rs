@@ -261,7 +261,8 @@ mod tests {
             .collect();
         let m = SparseColMat::<usize, f64>::try_new_from_triplets(size, size, &entries)
             .expect("matrix");
-        SparseSystem::from_matrix(m, 5, 6).expect("system")
+        SparseSystem::from_matrix(m, 5, 6, crate::contact::sparse::rigid::RigidRows::none())
+            .expect("system")
     }
 
     /// A status that opens two rows and closes one of a factored status, with the same
