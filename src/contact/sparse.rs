@@ -30,7 +30,8 @@
 //! iterate s̄: the free body moves a finite step towards what stops it, and the rows it
 //! reaches switch. Whether a status leaves a body free is told before its factorisation,
 //! from the bodies' rigid motions alone (`rigid`: a factor of order three times the
-//! bodies), so that the exact form is attempted only where its closed rows hold every body. The weight ε is a trust region: from 1e-2, it falls tenfold after an
+//! bodies), so that the exact form is attempted only where its closed rows hold every
+//! body. The weight ε is a trust region: from 1e-2, it falls tenfold after an
 //! iterate whose statuses hold or whose switches touch no row that moves with a free body,
 //! so a body under a small unbalanced force reaches its stop in a few iterates, and rises
 //! tenfold after one that switches many rows (a body thrown too far); a

@@ -202,12 +202,12 @@ pub struct Problem {
     pub full_of: Vec<Vec<[Option<usize>; 2]>>,
     n_glued: usize,
     factor: crate::linalg::SparseLlt,
-    /// Each global dof's node (body-local) and direction.
-    dof_at: Vec<(usize, [f64; 2])>,
     /// What each global dof moves by under its body's rigid modes (x, y translation,
-    /// rotation about the centroid scaled by the model's size); zero on a body held by a
-    /// displacement condition, which has no rigid mode.
+    /// rotation about the centroid scaled by the model's size).
     dof_rigid: Vec<[f64; 3]>,
+    /// Per body, whether it has rigid modes in the contact problem (no displacement
+    /// condition holds it).
+    floating: Vec<bool>,
 }
 
 /// The all-closed state for one load factor and cohesion: glued displacements v⁰ and row
@@ -289,7 +289,10 @@ impl Problem {
             n_dofs,
             ..
         } = bodies;
-        let dof_rigid = rigid_dofs(model, &dof_start, n_dofs, &dof_at);
+        let dof_rigid = rigid_dofs(model, &ops, &dof_start, &dof_at);
+        let floating = (0..ops.len())
+            .map(|b| !mechanism::body_has_support(model, b))
+            .collect();
         let kg = glued_matrix(&ops, &dof_start, &glued.tmap, glued.n_glued)?;
         let factor = crate::linalg::SparseLlt::new(&kg).ok_or_else(|| {
             Error::numerical(format!(
@@ -314,8 +317,8 @@ impl Problem {
             full_of,
             n_glued: glued.n_glued,
             factor,
-            dof_at,
             dof_rigid,
+            floating,
         };
         problem.check_base(&kg, model)?;
         Ok(problem)
@@ -423,17 +426,14 @@ impl Problem {
         let scale = model.scale.max(f64::MIN_POSITIVE);
         let mut out = Vec::with_capacity(self.ops.len());
         for (b, op) in self.ops.iter().enumerate() {
-            let nodes = &model.bodies[b].nodes;
-            let c = mechanism::centroid(nodes);
+            let c = mechanism::centroid(&model.bodies[b].nodes);
             // Normal equations of d·(t + ω k × (x − c)) = U over the body's dofs.
             let mut g = [[0.0f64; 3]; 3];
             let mut h = [0.0f64; 3];
             for l in 0..op.u_idx.len() {
                 let d = self.dof_start[b] + l;
                 let u = du[d];
-                let (node, e) = self.dof_at[d];
-                let x = nodes.get(node).copied().unwrap_or(c.point());
-                let a = mechanism::rigid_row(x, &c, e, scale);
+                let a = self.dof_rigid[d];
                 for i in 0..3 {
                     h[i] += a[i] * u;
                     for j in 0..3 {
@@ -458,11 +458,11 @@ impl Problem {
         out
     }
 
-    /// The rigid-motion row of row `r` (of `rows`): per body that has rigid modes, what its
-    /// translation and rotation ([`Problem::dof_rigid`]) move the row's relative
-    /// displacement by, from the row's coefficients over the dofs (its full row: at a
-    /// junction node, the dofs of its first pair's frame). A status holds every body iff the
-    /// closed rows' rigid-motion rows leave no rigid motion free.
+    /// The rigid-motion row of row `r` (of `rows`): per body that has rigid modes
+    /// (`floating`), what its translation and rotation ([`Problem::dof_rigid`]) move the
+    /// row's relative displacement by, from the row's coefficients over the dofs (its full
+    /// row: at a junction node, the dofs of its first pair's frame). A status holds every
+    /// body iff the closed rows' rigid-motion rows leave no rigid motion free.
     pub(crate) fn row_rigid(&self, r: usize) -> Vec<(usize, [f64; 3])> {
         let row = &self.rows[r];
         let Some(f) = self.full_of[row.iface][row.pair][row.comp] else {
@@ -470,11 +470,11 @@ impl Problem {
         };
         let mut out: Vec<(usize, [f64; 3])> = Vec::new();
         for &(d, x) in &self.full[f].coefs {
-            let m = self.dof_rigid[d];
-            if m == [0.0; 3] {
+            let (b, _) = self.body_of(d);
+            if !self.floating[b] {
                 continue;
             }
-            let (b, _) = self.body_of(d);
+            let m = self.dof_rigid[d];
             let add = [x * m[0], x * m[1], x * m[2]];
             match out.iter_mut().find(|e| e.0 == b) {
                 Some(e) => (0..3).for_each(|i| e.1[i] += add[i]),
@@ -684,27 +684,21 @@ pub fn solve_all_closed(model: &Model, ops: &Operators) -> Result<StatusSolution
 }
 
 /// [`Problem::dof_rigid`]: per global dof (`dof_at`: its body-local node and direction), what
-/// its body's rigid modes move it by; zero on bodies held by a displacement condition.
+/// its body's rigid modes move it by.
 fn rigid_dofs(
     model: &Model,
+    ops: &[BodyOp],
     dof_start: &[usize],
-    n_dofs: usize,
     dof_at: &[(usize, [f64; 2])],
 ) -> Vec<[f64; 3]> {
     let scale = model.scale.max(f64::MIN_POSITIVE);
-    let mut out = vec![[0.0; 3]; n_dofs];
-    for (b, body) in model.bodies.iter().enumerate() {
-        if mechanism::body_has_support(model, b) {
-            continue;
-        }
-        let (lo, hi) = (
-            dof_start[b],
-            dof_start.get(b + 1).copied().unwrap_or(n_dofs),
-        );
-        let c = mechanism::centroid(&body.nodes);
-        for d in lo..hi.min(n_dofs) {
+    let mut out = vec![[0.0; 3]; dof_at.len()];
+    for (b, op) in ops.iter().enumerate() {
+        let nodes = &model.bodies[b].nodes;
+        let c = mechanism::centroid(nodes);
+        for d in dof_start[b]..dof_start[b] + op.u_idx.len() {
             let (node, dir) = dof_at[d];
-            let x = body.nodes.get(node).copied().unwrap_or(c.point());
+            let x = nodes.get(node).copied().unwrap_or(c.point());
             out[d] = mechanism::rigid_row(x, &c, dir, scale);
         }
     }
