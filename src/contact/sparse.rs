@@ -73,6 +73,8 @@ pub struct SparseSystem {
     n: usize,
     /// H in its elimination order.
     ordered: Ordered,
+    /// The rows of H of the rows' openings (both triangles).
+    rows: RowsOfH,
     /// The diagonal of H.
     diag: Vec<f64>,
     /// The factorisation of the last status solved, with that status (`None` where it
@@ -89,6 +91,8 @@ pub struct SparseSystem {
     held: Option<(Vec<bool>, f64, Reduced)>,
     /// The bordered solve of the last status solved from the factor of another.
     border: Option<border::Border>,
+    /// The storage of the last bordered solve's columns, for the next.
+    border_spare: Mat<f64>,
     /// The analysis of the last status factored.
     analysis: Option<Arc<Analysis>>,
     /// The values of the last LU of the Newton attempt, whose storage the next reuses.
@@ -159,9 +163,10 @@ impl Scratch {
 }
 
 /// H with its unknowns in a fill-reducing elimination order (approximate minimum degree of
-/// the whole pattern, every row open), upper triangle: a status's matrix is a principal
-/// submatrix, factored in this order without another analysis of the order (faer reads
-/// a matrix in its own order as an upper triangle).
+/// the whole pattern, every row open), lower triangle: a status's matrix is a principal
+/// submatrix, factored in this order without another analysis of the order. faer's
+/// supernodal factorisation reads the lower triangle as it is (an upper one it transposes
+/// first, every factorisation).
 struct Ordered {
     h: SparseColMat<usize, f64>,
     /// The unknown at each place of the order.
@@ -171,7 +176,7 @@ struct Ordered {
 }
 
 impl Ordered {
-    /// The upper triangle, in its elimination order, of H given by its lower triangle; None
+    /// The lower triangle, in its elimination order, of H given by its lower triangle; None
     /// where the analysis fails (memory).
     fn new(h: &SparseColMat<usize, f64>) -> Option<Ordered> {
         let n = h.nrows();
@@ -186,14 +191,14 @@ impl Ordered {
         amd::order_maybe_unsorted(&mut fwd, &mut inv, h.symbolic(), Default::default(), stack)
             .ok()?;
         drop(buffer);
-        // H in that order, its upper triangle: entry (i, j) of H goes to (place i, place j).
+        // H in that order, its lower triangle: entry (i, j) of H goes to (place i, place j).
         let sym = h.symbolic();
         let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), h.val());
-        let h = crate::linalg::triangle_from_entries(n, Side::Upper, |sink| {
+        let h = crate::linalg::triangle_from_entries(n, Side::Lower, |sink| {
             for c in 0..n {
                 for q in cp[c]..cp[c + 1] {
                     let (a, b) = (inv[ri[q]], inv[c]);
-                    sink(a.min(b), a.max(b), val[q]);
+                    sink(a.max(b), a.min(b), val[q]);
                 }
             }
         })?;
@@ -202,6 +207,89 @@ impl Ordered {
             unknown: fwd,
             place: inv,
         })
+    }
+}
+
+/// The rows of H of the rows' openings, whole (both triangles), by row: the rows' forces
+/// (H w)_s of a state and the products with the closed rows' fixed openings cost a pass over
+/// these instead of over H (on the 45 × 45 wall about a third of its entries).
+struct RowsOfH {
+    start: Vec<usize>,
+    col: Vec<u32>,
+    val: Vec<f64>,
+}
+
+impl RowsOfH {
+    /// From H in its elimination order; None where the memory cannot be had or an unknown's
+    /// index does not fit 32 bits.
+    fn new(ord: &Ordered, ng: usize, n: usize) -> Option<RowsOfH> {
+        let size = ord.unknown.len();
+        u32::try_from(size).ok()?;
+        let sym = ord.h.symbolic();
+        let (cp, ri, val) = (sym.col_ptr(), sym.row_idx(), ord.h.val());
+        // Each entry (i, j) of the triangle, and (j, i) off the diagonal, where its row is
+        // an opening.
+        let each = |f: &mut dyn FnMut(usize, usize, f64)| {
+            for b in 0..size {
+                for q in cp[b]..cp[b + 1] {
+                    let (i, j) = (ord.unknown[ri[q]], ord.unknown[b]);
+                    if i >= ng {
+                        f(i - ng, j, val[q]);
+                    }
+                    if j >= ng && i != j {
+                        f(j - ng, i, val[q]);
+                    }
+                }
+            }
+        };
+        let mut start = vec![0usize; n + 1];
+        each(&mut |r, _, _| start[r + 1] += 1);
+        for r in 0..n {
+            start[r + 1] += start[r];
+        }
+        let total = start[n];
+        let (mut col, mut vals) = (Vec::new(), Vec::new());
+        col.try_reserve_exact(total).ok()?;
+        vals.try_reserve_exact(total).ok()?;
+        col.resize(total, 0u32);
+        vals.resize(total, 0.0f64);
+        let mut next = start[..n].to_vec();
+        each(&mut |r, j, v| {
+            col[next[r]] = j as u32;
+            vals[next[r]] = v;
+            next[r] += 1;
+        });
+        Some(RowsOfH {
+            start,
+            col,
+            val: vals,
+        })
+    }
+
+    /// (H w) over the openings.
+    fn times(&self, w: &[f64]) -> Vec<f64> {
+        (0..self.start.len() - 1)
+            .map(|r| {
+                let e = self.start[r]..self.start[r + 1];
+                self.col[e.clone()]
+                    .iter()
+                    .zip(&self.val[e])
+                    .map(|(&j, &v)| v * w[j as usize])
+                    .sum()
+            })
+            .collect()
+    }
+
+    /// H x over all `size` unknowns for an x that is zero but on the openings (`xs`).
+    fn times_transposed(&self, xs: &[f64], size: usize) -> Vec<f64> {
+        let mut y = vec![0.0; size];
+        for (r, &x) in xs.iter().enumerate().filter(|(_, &x)| x != 0.0) {
+            let e = self.start[r]..self.start[r + 1];
+            for (&j, &v) in self.col[e.clone()].iter().zip(&self.val[e]) {
+                y[j as usize] += v * x;
+            }
+        }
+        y
     }
 }
 
@@ -268,6 +356,9 @@ impl SparseSystem {
         let ordered = Ordered::new(&h).ok_or_else(|| {
             format!("analysing the sparse contact system of {size} unknowns: out of memory")
         })?;
+        let rows = RowsOfH::new(&ordered, n_glued, n).ok_or_else(|| {
+            format!("storing the rows of the sparse contact system's {n} openings: out of memory")
+        })?;
         let (cp, ri) = (h.symbolic().col_ptr(), h.symbolic().row_idx());
         let diag = (0..size)
             .map(|k| {
@@ -280,6 +371,7 @@ impl SparseSystem {
             n_glued,
             n,
             ordered,
+            rows,
             diag,
             last: None,
             scratch: Scratch::default(),
@@ -287,6 +379,7 @@ impl SparseSystem {
             spare: Vec::new(),
             held: None,
             border: None,
+            border_spare: Mat::new(),
             analysis: None,
             lu: lu::NumericLu::new(),
             rigid,
@@ -336,7 +429,12 @@ impl SparseSystem {
         let m = analysis.kept.len();
         let pattern = SymbolicSparseColMatRef::new_checked(m, m, &w.col_ptr, None, &w.row_idx);
         let mut l = std::mem::take(&mut self.spare);
-        l.clear();
+        // faer's supernodal factorisation clears the factor's storage itself; its simplicial
+        // one writes every entry of the pattern.
+        l.truncate(symbolic.len_val());
+        if l.try_reserve_exact(symbolic.len_val() - l.len()).is_err() {
+            return None;
+        }
         l.resize(symbolic.len_val(), 0.0);
         let req = symbolic.factorize_numeric_llt_scratch::<f64>(PAR, Default::default());
         let Some(stack) = self.scratch.stack(req) else {
@@ -348,7 +446,7 @@ impl SparseSystem {
             .factorize_numeric_llt(
                 &mut l,
                 mat,
-                Side::Upper,
+                Side::Lower,
                 Default::default(),
                 PAR,
                 stack,
@@ -394,7 +492,24 @@ impl SparseSystem {
             w.col_ptr.push(w.row_idx.len());
         }
         let m = kept.len();
-        let pattern = SymbolicSparseColMatRef::new_checked(m, m, &w.col_ptr, None, &w.row_idx);
+        // The analysis in the matrix's own order reads an upper triangle: the transposed
+        // pattern (each column's rows come out sorted).
+        let mut up_ptr = vec![0usize; m + 1];
+        for &r in &w.row_idx {
+            up_ptr[r + 1] += 1;
+        }
+        for c in 0..m {
+            up_ptr[c + 1] += up_ptr[c];
+        }
+        let mut next = up_ptr[..m].to_vec();
+        let mut up_idx = vec![0usize; w.row_idx.len()];
+        for c in 0..m {
+            for &r in &w.row_idx[w.col_ptr[c]..w.col_ptr[c + 1]] {
+                up_idx[next[r]] = c;
+                next[r] += 1;
+            }
+        }
+        let pattern = SymbolicSparseColMatRef::new_checked(m, m, &up_ptr, None, &up_idx);
         let symbolic = cholesky::factorize_symbolic_cholesky(
             pattern,
             Side::Upper,
@@ -462,7 +577,7 @@ impl SparseSystem {
                 x[ng + r] = inner.base.offset[r];
             }
         }
-        let hx = self.apply(&x);
+        let hx = self.rows.times_transposed(&x[ng..], ng + n);
         let target = |r: usize| open_target(inner, r, &open, &sg);
         if (0..n).any(|r| inner.coupling(r, &open).is_some()) {
             let w = self.solve_coupled(inner, c, (&open, &sg), (&x, &hx), prox)?;
@@ -530,23 +645,36 @@ impl SparseSystem {
     /// that an exact attempt from a proximal factor keeps that factor in `held` until the
     /// attempt succeeds.
     fn refactor(&mut self, open: &[bool], reg: f64) {
-        self.border = None;
+        if let Some(b) = self.border.take() {
+            self.border_spare = b.into_storage();
+        }
         let freed = match self.last.take() {
             Some((o, g, Some(f))) if reg == 0.0 && g > 0.0 => self.held.replace((o, g, f)),
             Some((o, g, Some(f))) => Some((o, g, f)),
             _ => None,
         };
         if reg > 0.0 {
-            self.held = None;
+            let held = self.held.take().map(|h| h.2);
+            self.recycle(held);
         }
-        if let Some((_, _, f)) = freed {
-            self.spare = f.l;
-        }
+        self.recycle(freed.map(|f| f.2));
         let llt = self.factor(open, reg);
         if llt.is_some() {
-            self.held = None;
+            let held = self.held.take().map(|h| h.2);
+            self.recycle(held);
         }
         self.last = Some((open.to_vec(), reg, llt));
+    }
+
+    /// Keeps the storage of a factor no longer used for the next factorisation, where it
+    /// is larger than the one kept (fresh storage costs its pages again: on the 45 × 45
+    /// wall the kernel's clearing of fresh pages was a tenth of the contact stage).
+    fn recycle(&mut self, f: Option<Reduced>) {
+        if let Some(f) = f {
+            if f.l.capacity() > self.spare.capacity() {
+                self.spare = f.l;
+            }
+        }
     }
 
     /// The unknowns `w` of the status `open` where slipping rows follow Coulomb's law within
@@ -693,8 +821,8 @@ impl SparseSystem {
             return Some(closed_state(inner));
         }
         let (open, sg, w) = self.solve_w(inner, c, open, sign, prox)?;
-        let grad = self.apply(&w);
-        let mut lambda: Vec<f64> = (0..n).map(|r| grad[ng + r] + c[ng + r]).collect();
+        let hw = self.rows.times(&w);
+        let mut lambda: Vec<f64> = (0..n).map(|r| hw[r] + c[ng + r]).collect();
         for r in 0..n {
             if open[r] {
                 lambda[r] = match inner.coupling(r, &open) {

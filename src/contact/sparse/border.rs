@@ -51,6 +51,13 @@ pub(super) struct Border {
     s: Mat<f64>,
 }
 
+impl Border {
+    /// The storage of its columns, for the next bordered solve.
+    pub(super) fn into_storage(self) -> Mat<f64> {
+        self.p
+    }
+}
+
 /// The factor a status with the weight `reg` can be bordered from: the last one made where
 /// it has that weight, else the one held while an exact attempt failed.
 fn base<'a>(
@@ -85,8 +92,9 @@ pub(super) fn solve(
         .as_ref()
         .is_some_and(|b| b.open == open && b.reg == reg);
     if !cached {
-        // The old one's memory goes first.
-        sys.border = None;
+        if let Some(old) = sys.border.take() {
+            sys.border_spare = old.into_storage();
+        }
         sys.border = Some(build(sys, open, reg)?);
     }
     let ng = sys.n_glued;
@@ -214,7 +222,11 @@ fn build(sys: &mut SparseSystem, open: &[bool], reg: f64) -> Option<Border> {
         }
     }
     let m = an.kept.len();
-    let mut p = Mat::<f64>::zeros(m, k);
+    // The storage of the last bordered solve's columns, cleared (fresh storage costs its
+    // pages again: up to 64 columns of the factor's order each time).
+    let mut p = std::mem::replace(&mut sys.border_spare, Mat::new());
+    p.resize_with(m, k, |_, _| 0.0);
+    p.fill(0.0);
     for (j, col) in cols.iter().enumerate() {
         for &(i, v) in col {
             p[(i, j)] += v;
