@@ -1098,7 +1098,10 @@ pub fn differing_pairs(a: &[InterfaceResult], b: &[InterfaceResult]) -> usize {
 /// size `length`. A degenerate pair is closed with no normal force (below 1e-8 of the
 /// largest) in one result and open with no opening (below 1e-12 of `length`) in the
 /// other: touching without pressing, like the head joints of a wall under vertical load.
-/// Both statuses solve the LCP there, with the same forces and gaps.
+/// Or it is closed in both, sticking in one and slipping in the other with the same
+/// tractions (within 1e-8 of the largest normal one): at its friction bound, where the slip
+/// is a motion that no force resists or drives (a block exactly at its friction angle).
+/// Both statuses solve the LCP there, with the same forces.
 pub(crate) fn status_differences(
     a: &[InterfaceResult],
     b: &[InterfaceResult],
@@ -1125,6 +1128,14 @@ fn compare_pairs(a: &[InterfaceResult], b: &[InterfaceResult], u_tol: f64) -> (u
             let (closed, open) = match (p.status, q.status) {
                 (PairStatus::Closed, PairStatus::Open) => (p, q),
                 (PairStatus::Open, PairStatus::Closed) => (q, p),
+                (PairStatus::Closed, PairStatus::Closed) => {
+                    // Stick against slip at the friction bound.
+                    let same = (0..2).all(|k| (p.traction[k] - q.traction[k]).abs() <= t_tol);
+                    if u_tol > 0.0 && same {
+                        degenerate += 1;
+                    }
+                    continue;
+                }
                 _ => continue,
             };
             if u_tol > 0.0
@@ -1137,4 +1148,48 @@ fn compare_pairs(a: &[InterfaceResult], b: &[InterfaceResult], u_tol: f64) -> (u
         }
     }
     (all, degenerate)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::status_differences;
+    use crate::solution::{InterfaceResult, PairResult, PairStatus};
+
+    fn pair(status: PairStatus, traction: [f64; 2], jump: [f64; 2], slipping: bool) -> PairResult {
+        PairResult {
+            status,
+            traction,
+            jump,
+            slipping: Some(slipping),
+            slip: jump[0].abs(),
+        }
+    }
+
+    fn one(p: PairResult) -> Vec<InterfaceResult> {
+        vec![InterfaceResult {
+            pairs: vec![pair(PairStatus::Closed, [0.0, -4.0], [0.0, 0.0], false), p],
+        }]
+    }
+
+    /// Touching without pressing, and sticking or slipping at the friction bound with the
+    /// same tractions, are degenerate differences; a different traction is not.
+    #[test]
+    fn degenerate_differences_are_those_with_the_same_forces() {
+        let stick = pair(PairStatus::Closed, [-1.0, -2.0], [0.0, 0.0], false);
+        let slip = pair(PairStatus::Closed, [-1.0, -2.0], [2.3e-10, 0.0], true);
+        assert_eq!(status_differences(&one(stick), &one(slip), 1.0), (1, 1));
+        let harder = pair(
+            PairStatus::Closed,
+            [-1.0 - 1e-6, -2.0],
+            [2.3e-10, 0.0],
+            true,
+        );
+        assert_eq!(status_differences(&one(stick), &one(harder), 1.0), (1, 0));
+        let touching = pair(PairStatus::Closed, [0.0, 0.0], [0.0, 0.0], false);
+        let open = pair(PairStatus::Open, [0.0, 0.0], [0.0, 1e-13], false);
+        assert_eq!(status_differences(&one(touching), &one(open), 1.0), (1, 1));
+        let gap = pair(PairStatus::Open, [0.0, 0.0], [0.0, 1e-6], false);
+        assert_eq!(status_differences(&one(touching), &one(gap), 1.0), (1, 0));
+        assert_eq!(status_differences(&one(stick), &one(stick), 1.0), (0, 0));
+    }
 }
