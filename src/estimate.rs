@@ -343,8 +343,10 @@ const SPARSE_OPERATOR_BYTES: f64 = 280.0;
 /// ([`crate::linalg::triangle_from_entries`]: a row index and a value, 16 bytes, while H is
 /// built and ordered). Fitted at half of that: the peak comes later, in the factorisations,
 /// which reuse part of that memory (the drawn wall, 6.2 entries per Σ n_u², measured 14 %
-/// below the estimate with 8 and would be 24 % below with 16).
-const SPARSE_ENTRY_BYTES: f64 = 8.0;
+/// below the estimate with 8 and would be 24 % below with 16); plus 4 for the rows of H of
+/// the openings that the iterates' products read (about a third of the entries, 12 bytes
+/// each; 61630dd: the peaks of the 20 × 20 … 64 × 64 walls 20–46 MB higher).
+const SPARSE_ENTRY_BYTES: f64 = 12.0;
 
 /// The memory of the sparse solver, in bytes, from the rows of `model`
 /// ([`crate::contact::problem::pattern`]); `squares` = Σ_b n_u². H is assembled from its
