@@ -50,7 +50,9 @@ use crate::bem::Operators;
 use crate::error::Error;
 use crate::input::model::Model;
 use crate::input::scene::InterfaceModel;
-use crate::solution::{BodyField, BodyMotion, HistoryRow, InterfaceResult, PairStatus, SolverInfo};
+use crate::solution::{
+    BodyField, BodyMotion, HistoryRow, InterfaceResult, PairResult, PairStatus, SolverInfo,
+};
 use inner::*;
 use lcp::{
     bound_change, status_key, Inner, InnerFailure, InnerOutcome, InnerState, OpeningColumns,
@@ -1125,29 +1127,33 @@ fn compare_pairs(a: &[InterfaceResult], b: &[InterfaceResult], u_tol: f64) -> (u
                 continue;
             }
             all += 1;
-            let (closed, open) = match (p.status, q.status) {
-                (PairStatus::Closed, PairStatus::Open) => (p, q),
-                (PairStatus::Open, PairStatus::Closed) => (q, p),
-                (PairStatus::Closed, PairStatus::Closed) => {
-                    // Stick against slip at the friction bound.
-                    let same = (0..2).all(|k| (p.traction[k] - q.traction[k]).abs() <= t_tol);
-                    if u_tol > 0.0 && same {
-                        degenerate += 1;
-                    }
-                    continue;
-                }
-                _ => continue,
-            };
-            if u_tol > 0.0
-                && closed.traction[1].abs() <= t_tol
-                && (open.jump[1] - closed.jump[1]).abs() <= u_tol
-                && (open.traction[0] - closed.traction[0]).abs() <= t_tol
-            {
+            if u_tol > 0.0 && same_forces(p, q, t_tol, u_tol) {
                 degenerate += 1;
             }
         }
     }
     (all, degenerate)
+}
+
+/// Whether two differing statuses of one pair solve the LCP with the same forces: closed
+/// with no normal force against open with no opening (within `t_tol`, `u_tol`), or stick
+/// against slip with the same tractions (at the friction bound).
+fn same_forces(p: &PairResult, q: &PairResult, t_tol: f64, u_tol: f64) -> bool {
+    let same = |k: usize| (p.traction[k] - q.traction[k]).abs() <= t_tol;
+    match (p.status, q.status) {
+        (PairStatus::Closed, PairStatus::Closed) => same(0) && same(1),
+        (PairStatus::Closed, PairStatus::Open) | (PairStatus::Open, PairStatus::Closed) => {
+            let (closed, open) = if p.status == PairStatus::Closed {
+                (p, q)
+            } else {
+                (q, p)
+            };
+            closed.traction[1].abs() <= t_tol
+                && (open.jump[1] - closed.jump[1]).abs() <= u_tol
+                && same(0)
+        }
+        (PairStatus::Open, PairStatus::Open) => false,
+    }
 }
 
 #[cfg(test)]

@@ -645,9 +645,7 @@ impl SparseSystem {
     /// that an exact attempt from a proximal factor keeps that factor in `held` until the
     /// attempt succeeds.
     fn refactor(&mut self, open: &[bool], reg: f64) {
-        if let Some(b) = self.border.take() {
-            self.border_spare = b.into_storage();
-        }
+        self.release_border();
         let freed = match self.last.take() {
             Some((o, g, Some(f))) if reg == 0.0 && g > 0.0 => self.held.replace((o, g, f)),
             Some((o, g, Some(f))) => Some((o, g, f)),
@@ -664,6 +662,13 @@ impl SparseSystem {
             self.recycle(held);
         }
         self.last = Some((open.to_vec(), reg, llt));
+    }
+
+    /// Lets the last bordered solve go, keeping the storage of its columns for the next.
+    fn release_border(&mut self) {
+        if let Some(b) = self.border.take() {
+            self.border_spare = b.into_storage();
+        }
     }
 
     /// Keeps the storage of a factor no longer used for the next factorisation, where it

@@ -92,9 +92,7 @@ pub(super) fn solve(
         .as_ref()
         .is_some_and(|b| b.open == open && b.reg == reg);
     if !cached {
-        if let Some(old) = sys.border.take() {
-            sys.border_spare = old.into_storage();
-        }
+        sys.release_border();
         sys.border = Some(build(sys, open, reg)?);
     }
     let ng = sys.n_glued;
